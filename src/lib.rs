@@ -1,0 +1,16 @@
+//! gradtrace: a CPU path tracer that renders a scene file to a multi-layer EXR.
+//!
+//! The pipeline, one module per stage (see `ARCHITECTURE.md`):
+//! `scene` (TOML + OBJ → plain data) → `accel` (obvhs BVH + analytic spheres) →
+//! `render` (path tracer, per-pixel estimates) → `output` (EXR layers, PNG).
+//! `brdf` holds the materials, `math` the shared numerics (frames, warps, samplers).
+
+pub mod accel;
+pub mod brdf;
+pub mod error;
+pub mod math;
+pub mod output;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Result};

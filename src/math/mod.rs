@@ -1,0 +1,129 @@
+//! Shared numerics: rays, orthonormal frames, sample warps, the low-discrepancy
+//! sampler and piecewise-constant distributions. Everything here is pure and `Copy`
+//! where possible so that it can be used from any thread without state.
+
+pub mod distribution;
+pub mod sampler;
+pub mod warp;
+
+pub use glam::{Vec2, Vec3, Vec3A};
+
+/// A ray `o + t d`, valid for `t` in `[t_min, t_max]`. `d` need not be normalised
+/// for intersection, but every producer in this crate normalises it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub t_min: f32,
+    pub t_max: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self {
+            origin,
+            dir,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+        }
+    }
+
+    pub fn segment(origin: Vec3, dir: Vec3, t_max: f32) -> Self {
+        Self {
+            origin,
+            dir,
+            t_min: 0.0,
+            t_max,
+        }
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// An orthonormal basis; `n` is the local +z axis. BRDFs work in this local frame,
+/// where `cos θ = v.z`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    pub s: Vec3,
+    pub t: Vec3,
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// Builds a frame around a unit normal (Duff et al. 2017, "Building an
+    /// Orthonormal Basis, Revisited": branchless and without the singularity at -z).
+    pub fn from_normal(n: Vec3) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        Self { s, t, n }
+    }
+
+    /// Builds a frame from a normal and a (not necessarily orthogonal) tangent hint;
+    /// falls back to [`Frame::from_normal`] when the hint is parallel to `n`.
+    pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
+        let s = tangent - n * n.dot(tangent);
+        let len2 = s.length_squared();
+        if !(len2 > 1e-12) {
+            return Self::from_normal(n);
+        }
+        let s = s / len2.sqrt();
+        Self { s, t: n.cross(s), n }
+    }
+
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+/// Rec.709 luminance of a linear RGB value.
+pub fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// Reflects `v` about `n` (both pointing away from the surface).
+pub fn reflect(v: Vec3, n: Vec3) -> Vec3 {
+    2.0 * v.dot(n) * n - v
+}
+
+/// Replaces NaN/Inf components by zero: the last guard before a value is accumulated,
+/// so that one bad sample can never poison an output layer.
+pub fn finite_or_zero(c: Vec3) -> Vec3 {
+    Vec3::new(
+        if c.x.is_finite() { c.x } else { 0.0 },
+        if c.y.is_finite() { c.y } else { 0.0 },
+        if c.z.is_finite() { c.z } else { 0.0 },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_for_all_octants() {
+        for &n in &[
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.3, -0.4, -0.866).normalize(),
+            Vec3::new(-1e-7, 1e-7, -1.0).normalize(),
+        ] {
+            let f = Frame::from_normal(n);
+            assert!((f.s.length() - 1.0).abs() < 1e-5);
+            assert!((f.t.length() - 1.0).abs() < 1e-5);
+            assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5);
+            assert!((f.s.cross(f.t) - n).length() < 1e-5, "right-handed");
+            let v = Vec3::new(0.1, 0.7, -0.2);
+            assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
+        }
+    }
+}

@@ -1,0 +1,151 @@
+//! Warps from the unit square to directions and points, each with its density.
+//! Densities are with respect to solid angle (directions) or area (points).
+
+use super::{Vec2, Vec3};
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// Concentric (Shirley–Chiu) map from the square to the unit disk: low distortion,
+/// so stratification of the input survives.
+pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (
+            o.y,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y),
+        )
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// Cosine-weighted hemisphere around +z (Malley's method).
+pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = square_to_disk_concentric(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+pub fn cosine_hemisphere_pdf(v: Vec3) -> f32 {
+    if v.z > 0.0 {
+        v.z * FRAC_1_PI
+    } else {
+        0.0
+    }
+}
+
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
+
+/// Uniform direction in the cone of half-angle acos(cos_max) around +z.
+pub fn square_to_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
+    let cos_t = 1.0 - u.x * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+}
+
+pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * (1.0 - cos_max))
+}
+
+/// Barycentric coordinates (b1, b2) uniform over a triangle (Heitz 2019, low distortion).
+pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
+    let (b0, b1);
+    if u.x < u.y {
+        b0 = u.x / 2.0;
+        b1 = u.y - b0;
+    } else {
+        b1 = u.y / 2.0;
+        b0 = u.x - b1;
+    }
+    Vec2::new(b0, b1)
+}
+
+/// Samples a von Mises–Fisher lobe around +z with concentration `kappa`
+/// (Wenzel Jakob, "Numerically stable sampling of the vMF distribution", 2012),
+/// stable for kappa up to 1e6 and down to 0.
+pub fn square_to_vmf(u: Vec2, kappa: f32) -> Vec3 {
+    if kappa < 1e-4 {
+        return square_to_uniform_sphere(u);
+    }
+    // cos θ = 1 + log(u + (1-u) e^{-2κ}) / κ, written stably.
+    let w = 1.0 + (u.x + (1.0 - u.x) * (-2.0 * kappa).exp()).max(1e-30).ln() / kappa;
+    let w = w.clamp(-1.0, 1.0);
+    let r = (1.0 - w * w).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), w)
+}
+
+/// Density of [`square_to_vmf`] for a direction with `cos θ = cos_theta` to +z.
+pub fn vmf_pdf(cos_theta: f32, kappa: f32) -> f32 {
+    if kappa < 1e-4 {
+        return UNIFORM_SPHERE_PDF;
+    }
+    // κ / (2π (1 - e^{-2κ})) · e^{κ (cos θ - 1)}
+    kappa / (2.0 * PI * (-(-2.0 * kappa).exp_m1())) * (kappa * (cos_theta - 1.0)).exp()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Monte Carlo check that a warp's density integrates to one over its image: a
+    /// uniform-sphere estimate of ∫ pdf dω must be 1.
+    fn integrates_to_one(pdf: impl Fn(Vec3) -> f32) -> f32 {
+        let n = 200_000;
+        let mut sum = 0.0f64;
+        for i in 0..n {
+            let u = Vec2::new(
+                sobol_burley::sample(i, 0, 7),
+                sobol_burley::sample(i, 1, 7),
+            );
+            sum += (pdf(square_to_uniform_sphere(u)) / UNIFORM_SPHERE_PDF) as f64;
+        }
+        (sum / n as f64) as f32
+    }
+
+    #[test]
+    fn densities_are_normalised() {
+        assert!((integrates_to_one(cosine_hemisphere_pdf) - 1.0).abs() < 5e-3);
+        for kappa in [0.5f32, 5.0, 50.0] {
+            let s = integrates_to_one(|v| vmf_pdf(v.z, kappa));
+            assert!((s - 1.0).abs() < 2e-2, "kappa {kappa}: {s}");
+        }
+        let cos_max = 0.8;
+        let s = integrates_to_one(|v| {
+            if v.z >= cos_max {
+                uniform_cone_pdf(cos_max)
+            } else {
+                0.0
+            }
+        });
+        assert!((s - 1.0).abs() < 1e-2);
+    }
+
+    #[test]
+    fn warps_land_in_their_domain() {
+        for i in 0..1000u32 {
+            let u = Vec2::new(
+                sobol_burley::sample(i, 0, 1),
+                sobol_burley::sample(i, 1, 1),
+            );
+            assert!(square_to_disk_concentric(u).length() <= 1.0 + 1e-6);
+            let h = square_to_cosine_hemisphere(u);
+            assert!(h.z >= 0.0 && (h.length() - 1.0).abs() < 1e-5);
+            let b = square_to_uniform_triangle(u);
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
+            let v = square_to_vmf(u, 1e5);
+            assert!(v.is_finite() && (v.length() - 1.0).abs() < 1e-4);
+        }
+    }
+}

@@ -1,0 +1,112 @@
+//! Distant lighting at infinity: constant, lat-long image, or an analytic
+//! "gaussian sky" (a Gaussian lobe around a direction plus a constant — the
+//! lighting used throughout the first-order paper, Fig. 9 and Fig. 13).
+//!
+//! Lat-long convention (the same as Mitsuba 3's `envmap`, so scenes compare
+//! exactly): for a world direction d = (x, y, z) with y up,
+//! u = atan2(x, −z) / 2π wrapped to [0, 1), v = acos(y) / π; row 0 is the zenith
+//! and u = 0 looks along −z.
+
+use crate::math::{Vec2, Vec3};
+use std::f32::consts::{PI, TAU};
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    Constant {
+        radiance: Vec3,
+    },
+    /// An equirectangular image, row-major, `width × height` linear RGB texels,
+    /// multiplied by `scale`.
+    Image {
+        width: usize,
+        height: usize,
+        texels: Vec<Vec3>,
+        scale: f32,
+    },
+    /// L(ω) = ambient + peak · exp(sharpness · (ω·direction − 1)).
+    GaussianSky {
+        direction: Vec3,
+        sharpness: f32,
+        peak: Vec3,
+        ambient: Vec3,
+    },
+}
+
+/// Direction → lat-long (u, v) ∈ [0,1)².
+pub fn direction_to_latlong(d: Vec3) -> Vec2 {
+    let mut u = d.x.atan2(-d.z) / TAU;
+    if u < 0.0 {
+        u += 1.0;
+    }
+    let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+    Vec2::new(u.min(1.0 - f32::EPSILON), v.min(1.0 - f32::EPSILON))
+}
+
+/// Lat-long (u, v) → unit direction; inverse of [`direction_to_latlong`].
+pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
+    let phi = uv.x * TAU;
+    let theta = uv.y * PI;
+    let (sp, cp) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    Vec3::new(sp * st, ct, -cp * st)
+}
+
+impl Environment {
+    /// Radiance arriving from direction `d` (unit, pointing away from the scene).
+    pub fn eval(&self, d: Vec3) -> Vec3 {
+        match self {
+            Environment::Constant { radiance } => *radiance,
+            Environment::Image {
+                width,
+                height,
+                texels,
+                scale,
+            } => *scale * bilinear(texels, *width, *height, direction_to_latlong(d)),
+            Environment::GaussianSky {
+                direction,
+                sharpness,
+                peak,
+                ambient,
+            } => *ambient + *peak * (*sharpness * (d.dot(*direction) - 1.0)).exp(),
+        }
+    }
+}
+
+/// Bilinear lookup with texel centres at (i + ½)/width, wrapping in u and clamping
+/// in v.
+pub fn bilinear(texels: &[Vec3], width: usize, height: usize, uv: Vec2) -> Vec3 {
+    let x = uv.x * width as f32 - 0.5;
+    let y = (uv.y * height as f32 - 0.5).clamp(0.0, (height - 1) as f32);
+    let x0 = x.floor();
+    let y0 = y.floor();
+    let fx = x - x0;
+    let fy = y - y0;
+    let xi0 = (x0 as i64).rem_euclid(width as i64) as usize;
+    let xi1 = (xi0 + 1) % width;
+    let yi0 = y0 as usize;
+    let yi1 = (yi0 + 1).min(height - 1);
+    let t = |xx: usize, yy: usize| texels[yy * width + xx];
+    (t(xi0, yi0) * (1.0 - fx) + t(xi1, yi0) * fx) * (1.0 - fy)
+        + (t(xi0, yi1) * (1.0 - fx) + t(xi1, yi1) * fx) * fy
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latlong_round_trip_and_mitsuba_convention() {
+        for &d in &[
+            Vec3::new(0.3, 0.5, -0.8).normalize(),
+            Vec3::new(-0.7, -0.1, 0.2).normalize(),
+            Vec3::new(0.0, 0.2, 1.0).normalize(),
+        ] {
+            let back = latlong_to_direction(direction_to_latlong(d));
+            assert!((back - d).length() < 1e-5, "{d:?} -> {back:?}");
+        }
+        // u = 0 looks along −z; v = 0 is +y.
+        assert!((latlong_to_direction(Vec2::new(0.0, 0.5)) - Vec3::NEG_Z).length() < 1e-6);
+        assert!((latlong_to_direction(Vec2::new(0.25, 0.5)) - Vec3::X).length() < 1e-6);
+        assert!(latlong_to_direction(Vec2::new(0.7, 0.0)).y > 0.999);
+    }
+}

@@ -1,0 +1,164 @@
+//! scene file (TOML) + OBJ/MTL → [`Scene`]: plain data in world space, indices not
+//! pointers. Parsing and validation live in `parse`; everything downstream
+//! (accel, render, output) reads only the types defined here.
+
+pub mod bump;
+pub mod camera;
+pub mod environment;
+mod obj;
+mod parse;
+
+use crate::brdf::Material;
+use crate::math::{Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
+pub use bump::Bump;
+pub use camera::Camera;
+pub use environment::Environment;
+
+/// Loads a scene file and every asset it references. Errors name the file, the key
+/// (and line when known) and what was expected.
+pub fn load(path: &Path) -> crate::Result<Scene> {
+    parse::load_scene(path)
+}
+
+/// Parses a scene from TOML text; `path` is used for error messages and as the base
+/// directory of relative asset paths.
+pub fn load_from_str(text: &str, path: &Path) -> crate::Result<Scene> {
+    parse::scene_from_str(text, path)
+}
+
+/// Which estimator the renderer runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// Unidirectional path tracing with next-event estimation and MIS.
+    Path,
+    /// Direct lighting only (one bounce of emitted light, with MIS); later stages
+    /// analyse exactly this quantity.
+    Direct,
+}
+
+/// The `[render]` table: defaults that command-line options may override.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub spp: u32,
+    /// Longest path, in segments from the camera (1 = only directly visible emitters).
+    pub max_depth: u32,
+    pub seed: u32,
+    pub integrator: Integrator,
+    /// Path depth from which Russian roulette may terminate paths.
+    pub rr_depth: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            spp: 16,
+            max_depth: 8,
+            seed: 0,
+            integrator: Integrator::Path,
+            rr_depth: 5,
+        }
+    }
+}
+
+/// A rectangle `corner + s·edge_u + t·edge_v`, s,t ∈ [0,1]; kept for rectangular
+/// area lights whose analytic form later stages need (solid angle, edges).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rect {
+    pub corner: Vec3,
+    pub edge_u: Vec3,
+    pub edge_v: Vec3,
+}
+
+impl Rect {
+    pub fn normal(&self) -> Vec3 {
+        self.edge_u.cross(self.edge_v).normalize()
+    }
+    pub fn area(&self) -> f32 {
+        self.edge_u.cross(self.edge_v).length()
+    }
+}
+
+/// A triangle mesh in world space. Quads (rectangles) are two-triangle meshes
+/// with `rect` set; OBJ files give one mesh per OBJ object/group.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (world space, unit); empty when the mesh has none.
+    pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates; empty when the mesh has none. They are the
+    /// (u, v) parameterisation of the bump map.
+    pub uvs: Vec<Vec2>,
+    /// Non-degenerate triangles only (degenerate ones are dropped at load time and
+    /// counted in [`SceneStats::degenerate_triangles`]).
+    pub triangles: Vec<[u32; 3]>,
+    pub material: u32,
+    /// Emitted radiance L_e (zero: not an emitter). Emission is one-sided, on the
+    /// side the geometric normal points to (counter-clockwise winding).
+    pub emission: Vec3,
+    pub bump: Option<u32>,
+    pub rect: Option<Rect>,
+    /// 1-based id of the scene-file shape this mesh came from (0 = background).
+    pub object_id: u32,
+}
+
+/// An exact analytic sphere (never tessellated). Its bump map, if any, is
+/// parameterised by (u, v) = (φ / 2π, θ / π) with θ measured from +y.
+#[derive(Clone, Debug)]
+pub struct Sphere {
+    pub name: String,
+    pub center: Vec3,
+    pub radius: f32,
+    pub material: u32,
+    /// Emitted radiance L_e on the outside (zero: not an emitter).
+    pub emission: Vec3,
+    pub bump: Option<u32>,
+    pub object_id: u32,
+}
+
+/// What loading found and dropped; `info` prints it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SceneStats {
+    pub triangles: usize,
+    pub degenerate_triangles: usize,
+    pub meshes_with_normals: usize,
+}
+
+/// A loaded scene. Shapes reference materials and bump maps by index.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file, for messages and for naming outputs.
+    pub path: PathBuf,
+    pub camera: Camera,
+    pub settings: RenderSettings,
+    pub materials: Vec<Material>,
+    pub material_names: Vec<String>,
+    pub meshes: Vec<Mesh>,
+    pub spheres: Vec<Sphere>,
+    pub bumps: Vec<Bump>,
+    pub environment: Option<Environment>,
+    /// Names of the scene-file shapes, indexed by `object_id - 1`.
+    pub object_names: Vec<String>,
+    pub stats: SceneStats,
+}
+
+impl Scene {
+    /// The scene's name: the file stem (`scenes/cornell.toml` → `cornell`).
+    pub fn name(&self) -> String {
+        self.path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into())
+    }
+
+    pub fn emitter_count(&self) -> usize {
+        self.meshes.iter().filter(|m| m.emission != Vec3::ZERO).count()
+            + self
+                .spheres
+                .iter()
+                .filter(|s| s.emission != Vec3::ZERO)
+                .count()
+    }
+}

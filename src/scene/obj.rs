@@ -1,0 +1,1 @@
+//! OWNED BY THE SCENE WORK ITEM — OBJ/MTL loading with tobj (placeholder).
