@@ -9,88 +9,11 @@ use gradtrace::math::{Vec2, Vec3};
 use gradtrace::render::lights::LightSet;
 use gradtrace::render::path::PathTracer;
 use gradtrace::render::{render, RenderOptions};
-use gradtrace::scene::{
-    Camera, Environment, Integrator, Mesh, Rect, RenderSettings, Scene, SceneStats, Sphere,
-};
+use gradtrace::scene::{Camera, Environment, Integrator, Rect, Scene};
 use std::f32::consts::PI;
 
-fn empty_scene(camera: Camera) -> Scene {
-    Scene {
-        path: "test.toml".into(),
-        camera,
-        settings: RenderSettings::default(),
-        materials: vec![],
-        material_names: vec![],
-        meshes: vec![],
-        spheres: vec![],
-        bumps: vec![],
-        environment: None,
-        object_names: vec![],
-        stats: SceneStats::default(),
-    }
-}
-
-fn camera(w: u32, h: u32) -> Camera {
-    Camera::new(
-        Vec3::new(0.0, 1.0, 6.0),
-        Vec3::new(0.0, 0.5, 0.0),
-        Vec3::Y,
-        35.0,
-        w,
-        h,
-    )
-    .unwrap()
-}
-
-fn add_material(s: &mut Scene, m: Material) -> u32 {
-    s.materials.push(m);
-    s.material_names.push(format!("m{}", s.materials.len()));
-    s.materials.len() as u32 - 1
-}
-
-fn add_sphere(s: &mut Scene, center: Vec3, radius: f32, material: u32, emission: Vec3) {
-    s.object_names.push(format!("sphere{}", s.spheres.len()));
-    s.spheres.push(Sphere {
-        name: String::new(),
-        center,
-        radius,
-        material,
-        emission,
-        bump: None,
-        object_id: s.object_names.len() as u32,
-    });
-}
-
-fn add_quad(s: &mut Scene, rect: Rect, material: u32, emission: Vec3) {
-    let c = rect.corner;
-    s.object_names.push(format!("quad{}", s.meshes.len()));
-    s.meshes.push(Mesh {
-        name: String::new(),
-        positions: vec![
-            c,
-            c + rect.edge_u,
-            c + rect.edge_u + rect.edge_v,
-            c + rect.edge_v,
-        ],
-        normals: vec![],
-        uvs: vec![],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        material,
-        emission,
-        bump: None,
-        rect: Some(rect),
-        object_id: s.object_names.len() as u32,
-    });
-}
-
-/// Ground quad facing +y, centred at the origin.
-fn ground(size: f32) -> Rect {
-    Rect {
-        corner: Vec3::new(-size, 0.0, size),
-        edge_u: Vec3::new(2.0 * size, 0.0, 0.0),
-        edge_v: Vec3::new(0.0, 0.0, -2.0 * size),
-    }
-}
+mod scenes;
+use scenes::*;
 
 fn render_scene(s: &Scene, spp: u32, aovs: bool) -> gradtrace::render::RenderOutput {
     let accel = Accel::build(&s.meshes, &s.spheres);
@@ -408,7 +331,7 @@ fn estimator_is_finite_on_hard_configurations() {
             for i in 0..4 {
                 let mut smp = PixelSampler::new(y * w + x, i, 0);
                 let p = Vec2::new(x as f32, y as f32) + smp.next_2d();
-                let r = tracer.li(s.camera.generate_ray(p), &mut smp);
+                let r = tracer.li(s.camera.generate_ray(p), &mut smp, None);
                 if !r.radiance.is_finite() || r.radiance.min_element() < 0.0 {
                     bad += 1;
                 }

@@ -1,6 +1,7 @@
 //! scene + BVH → per-pixel estimates (radiance and AOVs) by path tracing.
 //!
 
+pub mod gradients;
 pub mod interaction;
 pub mod lights;
 pub mod path;
@@ -9,6 +10,8 @@ use crate::accel::Accel;
 use crate::math::sampler::PixelSampler;
 use crate::math::{finite_or_zero, Vec2, Vec3};
 use crate::scene::{Integrator, Scene};
+use gradients::geometry::unit_direction_derivatives;
+use gradients::GradientSample;
 use lights::LightSet;
 use path::{PathTracer, SampleResult};
 use rayon::prelude::*;
@@ -28,6 +31,8 @@ pub struct RenderOptions {
     pub resolution: Option<(u32, u32)>,
     /// Compute the AOV planes (normal, depth, albedo, object id, variance).
     pub aovs: bool,
+    /// Compute the analytic image gradient planes (`grad.*` layers).
+    pub gradients: bool,
 }
 
 /// What a render produced: row-major planes, top row first.
@@ -43,7 +48,64 @@ pub struct RenderOutput {
     pub depth: Option<Vec<f32>>,
     pub albedo: Option<Vec<Vec3>>,
     pub object_id: Option<Vec<f32>>,
+    pub gradients: Option<GradientPlanes>,
     pub stats: RenderStats,
+}
+
+/// Per-pixel analytic gradients of the direct illumination (pixel units; u to
+/// the right, v downwards) and the magnitudes of the first-order paper's terms.
+#[derive(Clone, Debug, Default)]
+pub struct GradientPlanes {
+    /// ∂I/∂u, ∂I/∂v: all terms, including visibility.
+    pub grad_u: Vec<Vec3>,
+    pub grad_v: Vec<Vec3>,
+    /// |SV| = |L_x ⊗ ρ| projected to the image (luminance magnitude over u, v).
+    pub sv: Vec<f32>,
+    /// |DV| = |L_θ ⊗ ρ|: angular gradient of the reflected radiance, per radian.
+    pub dv: Vec<f32>,
+    /// CV = 2|n_x|, per unit length on the surface.
+    pub cv: Vec<f32>,
+    /// |CDV| = |2 n_x (L_θ ⊗ ρ)| projected to the image.
+    pub cdv: Vec<f32>,
+    /// |visibility term| projected to the image.
+    pub vis: Vec<f32>,
+    /// CDV / SV (the paper's Fig. 5e), 0 where both vanish.
+    pub ratio: Vec<f32>,
+}
+
+impl GradientPlanes {
+    fn new(n: usize) -> Self {
+        Self {
+            grad_u: vec![Vec3::ZERO; n],
+            grad_v: vec![Vec3::ZERO; n],
+            sv: vec![0.0; n],
+            dv: vec![0.0; n],
+            cv: vec![0.0; n],
+            cdv: vec![0.0; n],
+            vis: vec![0.0; n],
+            ratio: vec![0.0; n],
+        }
+    }
+
+    /// Stores the mean gradient of one pixel's samples.
+    fn set(&mut self, i: usize, g: &GradientSample) {
+        let t = g.total();
+        self.grad_u[i] = finite_or_zero(t[0]);
+        self.grad_v[i] = finite_or_zero(t[1]);
+        let fin = |x: f32| if x.is_finite() { x } else { 0.0 };
+        let sv = fin(gradients::magnitude(&g.sv));
+        let cdv = fin(gradients::magnitude(&g.cdv));
+        self.sv[i] = sv;
+        self.cdv[i] = cdv;
+        self.dv[i] = fin(gradients::magnitude(&g.dv));
+        self.cv[i] = fin(g.cv);
+        self.vis[i] = fin(gradients::magnitude(&g.vis));
+        self.ratio[i] = if cdv <= 0.0 {
+            0.0
+        } else {
+            (cdv / sv.max(1e-12)).min(1e12)
+        };
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -135,16 +197,14 @@ pub fn render(
         let y0 = ty * TILE;
         let x1 = (x0 + TILE).min(w);
         let y1 = (y0 + TILE).min(h);
-        let mut res = TileResult::new(x0, y0, x1 - x0, y1 - y0, opts.aovs);
+        let mut res = TileResult::new(x0, y0, x1 - x0, y1 - y0, opts.aovs, opts.gradients);
         for y in y0..y1 {
             for x in x0..x1 {
                 let pixel = (y * w + x) as u32;
                 let mut acc = PixelAccumulator::default();
                 for s in 0..spp {
-                    let mut sampler = PixelSampler::new(pixel, s, seed);
-                    let jitter = sampler.next_2d();
-                    let p = Vec2::new(x as f32, y as f32) + jitter;
-                    let r = tracer.li(camera.generate_ray(p), &mut sampler);
+                    let r =
+                        camera_sample(&tracer, &camera, pixel, s, seed, opts.gradients, Vec2::ZERO);
                     acc.add(&r, s == 0);
                 }
                 res.store(x - x0, y - y0, &acc, spp);
@@ -166,6 +226,7 @@ pub fn render(
         depth: opts.aovs.then(|| vec![0.0; w * h]),
         albedo: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
         object_id: opts.aovs.then(|| vec![0.0; w * h]),
+        gradients: opts.gradients.then(|| GradientPlanes::new(w * h)),
         stats: RenderStats::default(),
     };
     let mut rays = 0u64;
@@ -180,6 +241,30 @@ pub fn render(
     Ok(out)
 }
 
+/// One camera sample of pixel `pixel` (linear index): jittered position inside
+/// the pixel (box filter), shifted by `shift` pixels. Tests shift it to take
+/// finite differences with the very same random numbers.
+pub fn camera_sample(
+    tracer: &PathTracer,
+    camera: &crate::scene::Camera,
+    pixel: u32,
+    sample: u32,
+    seed: u32,
+    gradients: bool,
+    shift: Vec2,
+) -> SampleResult {
+    let w = camera.width;
+    let mut sampler = PixelSampler::new(pixel, sample, seed);
+    let jitter = sampler.next_2d();
+    let p = Vec2::new((pixel % w) as f32, (pixel / w) as f32) + jitter + shift;
+    let ray = camera.generate_ray(p);
+    let dd = gradients.then(|| {
+        let d_len = 1.0 / ray.dir.dot(camera.forward());
+        unit_direction_derivatives(ray.dir, d_len, camera.direction_derivatives())
+    });
+    tracer.li(ray, &mut sampler, dd)
+}
+
 /// Running sums of one pixel's samples (f64, so thousands of samples add exactly
 /// enough for the variance estimate).
 #[derive(Default)]
@@ -192,6 +277,7 @@ struct PixelAccumulator {
     object_id: u32,
     hits: u32,
     rays: u64,
+    gradient: GradientSample,
 }
 
 impl PixelAccumulator {
@@ -213,6 +299,9 @@ impl PixelAccumulator {
             }
         }
         self.rays += r.rays as u64;
+        if let Some(g) = &r.gradient {
+            self.gradient.add_scaled(g, 1.0);
+        }
     }
 }
 
@@ -222,17 +311,19 @@ struct TileResult {
     w: usize,
     beauty: Vec<Vec3>,
     aovs: Option<Vec<[f32; 11]>>,
+    gradients: Option<Vec<GradientSample>>,
     rays: u64,
 }
 
 impl TileResult {
-    fn new(x0: usize, y0: usize, w: usize, h: usize, aovs: bool) -> Self {
+    fn new(x0: usize, y0: usize, w: usize, h: usize, aovs: bool, gradients: bool) -> Self {
         Self {
             x0,
             y0,
             w,
             beauty: vec![Vec3::ZERO; w * h],
             aovs: aovs.then(|| vec![[0.0; 11]; w * h]),
+            gradients: gradients.then(|| vec![GradientSample::default(); w * h]),
             rays: 0,
         }
     }
@@ -243,6 +334,11 @@ impl TileResult {
         let mean = [acc.sum[0] / n, acc.sum[1] / n, acc.sum[2] / n];
         self.beauty[i] = Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
         self.rays += acc.rays;
+        if let Some(g) = &mut self.gradients {
+            let mut mean = GradientSample::default();
+            mean.add_scaled(&acc.gradient, 1.0 / spp as f32);
+            g[i] = mean;
+        }
         if let Some(a) = &mut self.aovs {
             // Variance of the pixel mean: unbiased sample variance / n.
             let var = |c: usize| -> f32 {
@@ -278,6 +374,9 @@ impl TileResult {
                 let src = y * self.w + x;
                 let dst = (self.y0 + y) * width + self.x0 + x;
                 out.beauty[dst] = self.beauty[src];
+                if let (Some(g), Some(planes)) = (&self.gradients, &mut out.gradients) {
+                    planes.set(dst, &g[src]);
+                }
                 if let Some(a) = &self.aovs {
                     let a = &a[src];
                     if let Some(v) = &mut out.variance {

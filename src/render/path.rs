@@ -2,6 +2,9 @@
 //! estimation, multiple importance sampling (power heuristic) between light and
 //! BSDF sampling for area lights and the environment, and Russian roulette.
 
+use super::gradients::geometry::{hit_duals, HitDuals};
+use super::gradients::shading::{self, LightPoint};
+use super::gradients::GradientSample;
 use super::interaction::{interaction, offset_origin, segment_between, Interaction};
 use super::lights::LightSet;
 use crate::accel::Accel;
@@ -29,6 +32,8 @@ pub struct PathTracer<'a> {
 pub struct SampleResult {
     pub radiance: Vec3,
     pub first_hit: Option<FirstHit>,
+    /// Analytic image gradient of the direct illumination, when asked for.
+    pub gradient: Option<GradientSample>,
     pub rays: u32,
 }
 
@@ -54,10 +59,19 @@ pub fn power_heuristic(f: f32, g: f32) -> f32 {
 }
 
 impl PathTracer<'_> {
-    /// Radiance arriving at the camera along `ray`.
-    pub fn li(&self, mut ray: Ray, sampler: &mut PixelSampler) -> SampleResult {
+    /// Radiance arriving at the camera along `ray`. With `dd` (the image
+    /// derivatives ∂d/∂u, ∂d/∂v of the ray's unit direction) the result also
+    /// carries the analytic gradient of the direct illumination at the first hit,
+    /// computed from the same light sample and shadow ray as the radiance.
+    pub fn li(
+        &self,
+        mut ray: Ray,
+        sampler: &mut PixelSampler,
+        dd: Option<[Vec3; 2]>,
+    ) -> SampleResult {
         let scene = self.scene;
         let mut out = SampleResult::default();
+        let mut grad: Option<(GradientSample, HitDuals)> = None;
         let mut radiance = Vec3::ZERO;
         let mut beta = Vec3::ONE;
         // Density of the BSDF sample that produced `ray`; infinite for camera rays
@@ -68,6 +82,9 @@ impl PathTracer<'_> {
             sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
             out.rays += 1;
             let Some(hit) = self.accel.intersect(&ray) else {
+                if let (Some(env), Some(dd), 1) = (&scene.environment, dd, depth) {
+                    out.gradient = Some(escaped_ray_gradient(env, ray.dir, dd));
+                }
                 if let Some(env) = &scene.environment {
                     let le = env.eval(ray.dir);
                     let w = if prev_pdf.is_infinite() {
@@ -80,6 +97,14 @@ impl PathTracer<'_> {
                 break;
             };
             let si = interaction(scene, &ray, &hit);
+            if let (Some(dd), 1) = (dd, depth) {
+                let hd = hit_duals(scene, &si, &ray, dd);
+                let g = GradientSample {
+                    cv: hd.cv,
+                    ..Default::default()
+                };
+                grad = Some((g, hd));
+            }
             if depth == 1 {
                 out.first_hit = Some(FirstHit {
                     normal: si.frame.n,
@@ -119,6 +144,12 @@ impl PathTracer<'_> {
                             let bsdf_pdf = material.pdf(wo, wi_local);
                             let w = power_heuristic(ls.pdf, bsdf_pdf);
                             radiance += beta * f * wi_local.z * ls.radiance * (w / ls.pdf);
+                            // The gradient uses this light sample alone (weight 1):
+                            // an unbiased estimate of ∂(direct light) on its own.
+                            if let (Some((g, hd)), 1) = (grad.as_mut(), depth) {
+                                let lp = light_point(&si, &ls);
+                                g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0);
+                            }
                         }
                     }
                 }
@@ -151,6 +182,9 @@ impl PathTracer<'_> {
             }
         }
         out.radiance = radiance;
+        if let Some((g, _)) = grad {
+            out.gradient = Some(g);
+        }
         out
     }
 
@@ -161,4 +195,39 @@ impl PathTracer<'_> {
         };
         !self.accel.occluded(&ray)
     }
+}
+
+/// The light sample in the form the gradient stage differentiates: emitter points
+/// in area measure (so they stay fixed while the shading point moves).
+fn light_point(si: &Interaction, ls: &super::lights::LightSample) -> LightPoint {
+    match ls.point {
+        Some((y, ny)) => {
+            let d = y - si.p;
+            let r2 = d.length_squared();
+            let cos_y = (ny.dot(d) / r2.sqrt()).abs();
+            LightPoint::Area {
+                y,
+                ny,
+                radiance: ls.radiance,
+                pdf_area: ls.pdf * cos_y / r2,
+            }
+        }
+        None => LightPoint::Direction {
+            wi: ls.wi,
+            radiance: ls.radiance,
+            pdf: ls.pdf,
+        },
+    }
+}
+
+/// Gradient of the environment radiance seen by a camera ray that hits nothing.
+fn escaped_ray_gradient(env: &crate::scene::Environment, d: Vec3, dd: [Vec3; 2]) -> GradientSample {
+    let mut lanes = [Vec3::ZERO; super::gradients::LANES];
+    lanes[super::gradients::CAM] = dd[0];
+    lanes[super::gradients::CAM + 1] = dd[1];
+    let l = shading::environment(env, super::gradients::GVec3::with_lanes(d, lanes));
+    let mut g = GradientSample::default();
+    g.add_lanes(&l, 1.0);
+    g.dv = [Vec3::ZERO; 2];
+    g
 }
