@@ -291,6 +291,7 @@ fn per_sample_gradient_matches_shifted_estimator() {
             lights: &lights,
             max_depth: 2,
             rr_depth: 5,
+            lines: None,
         };
         let c = &s.camera;
         let h = 1e-2f32;
@@ -400,6 +401,7 @@ fn converged_gradient_matches_image_differences() {
         lights: &lights,
         max_depth: 2,
         rr_depth: 5,
+        lines: None,
     };
     let mut checked = 0;
     for (px, py) in [(12u32, 9u32), (10, 8), (14, 11), (11, 12)] {

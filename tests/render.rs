@@ -322,6 +322,7 @@ fn estimator_is_finite_on_hard_configurations() {
         lights: &lights,
         max_depth: 8,
         rr_depth: 3,
+        lines: None,
     };
     let (w, h) = (s.camera.width, s.camera.height);
     let mut bad = 0;

@@ -23,6 +23,16 @@ enum Light {
     Environment,
 }
 
+/// A light whose whole angular domain the gradient stage can march (see
+/// `gradients::visibility`), with the probability of choosing it.
+#[derive(Clone, Copy, Debug)]
+pub enum LineLight {
+    Environment,
+    Sphere(u32),
+    /// A rectangle light: the mesh with `rect` set (both its triangles).
+    Rect(u32),
+}
+
 /// A sampled light direction as seen from a shading point.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
@@ -141,6 +151,37 @@ impl LightSet {
         };
         s.pdf *= pick;
         (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
+    }
+
+    /// Picks a light as [`Self::sample`] does (same `u_pick`) and, when it is one
+    /// whose domain can be marched line by line, returns it with the probability of
+    /// choosing it (for a rectangle: of choosing either of its triangles).
+    pub fn pick_line(&self, scene: &Scene, u_pick: f32) -> Option<(LineLight, f32)> {
+        let choose = self.choose.as_ref()?;
+        let idx = choose.sample_discrete(u_pick);
+        match self.lights[idx] {
+            Light::Environment => Some((LineLight::Environment, choose.discrete_pmf(idx))),
+            Light::Sphere(i) => Some((LineLight::Sphere(i), choose.discrete_pmf(idx))),
+            Light::Triangle { mesh, .. } => {
+                scene.meshes[mesh as usize].rect?;
+                let first = self.mesh_first_light[mesh as usize] as usize;
+                let n = scene.meshes[mesh as usize].triangles.len();
+                let pmf = (first..first + n).map(|i| choose.discrete_pmf(i)).sum();
+                Some((LineLight::Rect(mesh), pmf))
+            }
+        }
+    }
+
+    /// Whether light sampling of `prim` would go through [`Self::pick_line`]
+    /// (rectangles and spheres; the environment is handled by the caller).
+    pub fn is_line_light(&self, scene: &Scene, prim: PrimRef) -> bool {
+        match prim {
+            PrimRef::Sphere(i) => self.sphere_light[i as usize] != u32::MAX,
+            PrimRef::Triangle { mesh, .. } => {
+                self.mesh_first_light[mesh as usize] != u32::MAX
+                    && scene.meshes[mesh as usize].rect.is_some()
+            }
+        }
     }
 
     /// Solid-angle density with which [`Self::sample`] would produce the direction

@@ -33,6 +33,11 @@ pub struct RenderOptions {
     pub aovs: bool,
     /// Compute the analytic image gradient planes (`grad.*` layers).
     pub gradients: bool,
+    /// With gradients: shadow rays per φ-line for the first hit's direct light
+    /// (visibility gradients need a line; default 32).
+    pub vis_samples: Option<u32>,
+    /// With gradients: bisection steps that refine each visibility jump (default 0).
+    pub vis_refine: Option<u32>,
 }
 
 /// What a render produced: row-major planes, top row first.
@@ -185,6 +190,10 @@ pub fn render(
         lights: &lights,
         max_depth,
         rr_depth: settings.rr_depth,
+        lines: opts.gradients.then(|| path::LineConfig {
+            n_theta: opts.vis_samples.unwrap_or(32).max(1),
+            refine: opts.vis_refine.unwrap_or(0),
+        }),
     };
 
     let tiles_x = w.div_ceil(TILE);

@@ -4,12 +4,13 @@
 
 use super::gradients::geometry::{hit_duals, HitDuals};
 use super::gradients::shading::{self, LightPoint};
-use super::gradients::GradientSample;
+use super::gradients::visibility::{trace_line, Domain, LinePoint};
+use super::gradients::{GradientSample, SV};
 use super::interaction::{interaction, offset_origin, segment_between, Interaction};
-use super::lights::LightSet;
+use super::lights::{LightSet, LineLight};
 use crate::accel::Accel;
 use crate::math::sampler::PixelSampler;
-use crate::math::{Ray, Vec3};
+use crate::math::{finite_or_zero, Frame, Ray, Vec3};
 use crate::scene::Scene;
 
 /// Sampler dimensions used per path vertex; fixed so that vertex k always reads
@@ -25,6 +26,17 @@ pub struct PathTracer<'a> {
     pub lights: &'a LightSet,
     pub max_depth: u32,
     pub rr_depth: u32,
+    /// With gradients: how the first hit's direct light is sampled (see
+    /// `gradients::visibility`); `None` keeps point sampling everywhere.
+    pub lines: Option<LineConfig>,
+}
+
+/// Line sampling of the first hit's direct light: `n_theta` shadow rays along one
+/// azimuth per camera sample, bisection `refine` steps per visibility jump.
+#[derive(Clone, Copy, Debug)]
+pub struct LineConfig {
+    pub n_theta: u32,
+    pub refine: u32,
 }
 
 /// What one camera sample returns: radiance plus first-hit data for the AOVs.
@@ -78,6 +90,9 @@ impl PathTracer<'_> {
         // and delta lobes (emitters they hit are counted with full weight).
         let mut prev_pdf = f32::INFINITY;
         let mut prev_p = ray.origin;
+        // The previous vertex sampled its direct light by lines: emitters that
+        // lines cover are not counted again when the path hits them.
+        let mut prev_line = false;
         for depth in 1..=self.max_depth {
             sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
             out.rays += 1;
@@ -87,7 +102,9 @@ impl PathTracer<'_> {
                 }
                 if let Some(env) = &scene.environment {
                     let le = env.eval(ray.dir);
-                    let w = if prev_pdf.is_infinite() {
+                    let w = if prev_line {
+                        0.0
+                    } else if prev_pdf.is_infinite() {
                         1.0
                     } else {
                         power_heuristic(prev_pdf, self.lights.pdf_env(scene, ray.dir))
@@ -114,7 +131,9 @@ impl PathTracer<'_> {
                 });
             }
             if si.emission != Vec3::ZERO {
-                let w = if prev_pdf.is_infinite() {
+                let w = if prev_line && self.lights.is_line_light(scene, si.prim) {
+                    0.0
+                } else if prev_pdf.is_infinite() {
                     1.0
                 } else {
                     let light_pdf = self.lights.pdf_emitter(scene, si.prim, prev_p, si.p, si.ng);
@@ -133,7 +152,20 @@ impl PathTracer<'_> {
             // Next-event estimation (one light sample per vertex).
             let u_pick = sampler.next_1d();
             let u_light = sampler.next_2d();
-            if !material.is_delta() {
+            prev_line = false;
+            let line = match (&mut grad, self.lines) {
+                (Some((g, hd)), Some(cfg)) if depth == 1 && !material.is_delta() => self
+                    .lights
+                    .pick_line(scene, u_pick)
+                    .map(|(ll, pmf)| (ll, pmf, g, *hd, cfg)),
+                _ => None,
+            };
+            if let Some((ll, pmf, g, hd, cfg)) = line {
+                let (l, rays) = self.line_direct(&si, wo, material, &hd, ll, pmf, u_light, cfg, g);
+                radiance += l;
+                out.rays += rays;
+                prev_line = true;
+            } else if !material.is_delta() {
                 if let Some(ls) = self.lights.sample(scene, si.p, u_pick, u_light) {
                     let wi_local = si.frame.to_local(ls.wi);
                     let f = material.eval(wo, wi_local);
@@ -186,6 +218,133 @@ impl PathTracer<'_> {
             out.gradient = Some(g);
         }
         out
+    }
+
+    /// Direct light at the first hit from one light, by one φ-line of shadow rays
+    /// (radiance, gradient lanes and the visibility term from the same rays).
+    #[allow(clippy::too_many_arguments)]
+    fn line_direct(
+        &self,
+        si: &Interaction,
+        wo: Vec3,
+        material: &crate::brdf::Material,
+        hd: &HitDuals,
+        light: LineLight,
+        pmf: f32,
+        u: crate::math::Vec2,
+        cfg: LineConfig,
+        g: &mut GradientSample,
+    ) -> (Vec3, u32) {
+        let scene = self.scene;
+        let p = si.p;
+        let (domain, le): (Domain, Vec3) = match light {
+            LineLight::Environment => (
+                Domain::Cone {
+                    frame: Frame::from_normal(si.ng),
+                    theta_max: std::f32::consts::FRAC_PI_2,
+                    sphere: None,
+                },
+                Vec3::ZERO,
+            ),
+            LineLight::Sphere(i) => {
+                let s = &scene.spheres[i as usize];
+                let to_c = s.center - p;
+                let d = to_c.length();
+                if d <= s.radius * 1.0001 {
+                    return (Vec3::ZERO, 0);
+                }
+                (
+                    Domain::Cone {
+                        frame: Frame::from_normal(to_c / d),
+                        theta_max: (s.radius / d).asin(),
+                        sphere: Some((s.center, s.radius)),
+                    },
+                    s.emission,
+                )
+            }
+            LineLight::Rect(m) => {
+                let mesh = &scene.meshes[m as usize];
+                let Some(r) = mesh.rect else {
+                    return (Vec3::ZERO, 0);
+                };
+                // One-sided: a rectangle facing away sends nothing.
+                if r.normal().dot(p - r.corner) <= 0.0 {
+                    return (Vec3::ZERO, 0);
+                }
+                let centre = r.corner + 0.5 * (r.edge_u + r.edge_v);
+                (
+                    Domain::Rect {
+                        frame: Frame::from_normal((centre - p).normalize()),
+                        corner: r.corner,
+                        edge_u: r.edge_u,
+                        edge_v: r.edge_v,
+                    },
+                    mesh.emission,
+                )
+            }
+        };
+        let env = scene.environment.as_ref();
+        let radiance_from = |w: Vec3| match light {
+            LineLight::Environment => env.map_or(Vec3::ZERO, |e| e.eval(w)),
+            _ => le,
+        };
+        let transport = |w: Vec3| {
+            let wl = si.frame.to_local(w);
+            if wl.z <= 0.0 {
+                return Vec3::ZERO;
+            }
+            material.eval(wo, wl) * wl.z * radiance_from(w) / pmf
+        };
+        let mut radiance = Vec3::ZERO;
+        let mut on_point = |pt: &LinePoint| {
+            if !pt.visible {
+                return;
+            }
+            let wl = si.frame.to_local(pt.wi);
+            if wl.z <= 0.0 || pt.wi.dot(si.ng) <= 0.0 {
+                return;
+            }
+            let le = radiance_from(pt.wi);
+            radiance += material.eval(wo, wl) * wl.z * le / (pt.pdf * pmf);
+            let lp = match pt.light_point {
+                Some((y, ny)) => {
+                    let d = y - p;
+                    let r2 = d.length_squared();
+                    let cos_y = (ny.dot(d) / r2.sqrt()).abs();
+                    LightPoint::Area {
+                        y,
+                        ny,
+                        radiance: le,
+                        pdf_area: pt.pdf * cos_y / r2,
+                    }
+                }
+                None => LightPoint::Direction {
+                    wi: pt.wi,
+                    radiance: le,
+                    pdf: pt.pdf,
+                },
+            };
+            g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0 / pmf);
+        };
+        let dx = [hd.x.lane(SV), hd.x.lane(SV + 1)];
+        let est = trace_line(
+            scene,
+            self.accel,
+            p,
+            si.ng,
+            &domain,
+            u.x * std::f32::consts::TAU,
+            u.y,
+            cfg.n_theta,
+            cfg.refine,
+            dx,
+            &transport,
+            &mut on_point,
+        );
+        for k in 0..2 {
+            g.vis[k] += est.vis[k];
+        }
+        (finite_or_zero(radiance), est.rays)
     }
 
     fn unoccluded(&self, si: &Interaction, wi: Vec3, point: Option<(Vec3, Vec3)>) -> bool {

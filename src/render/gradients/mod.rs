@@ -22,6 +22,7 @@
 
 pub mod geometry;
 pub mod shading;
+pub mod visibility;
 
 use crate::math::dual::{DVec3, Dual};
 use crate::math::{luminance, Vec3};
