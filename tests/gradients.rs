@@ -292,6 +292,7 @@ fn per_sample_gradient_matches_shifted_estimator() {
             max_depth: 2,
             rr_depth: 5,
             lines: None,
+            far_light: None,
         };
         let c = &s.camera;
         let h = 1e-2f32;
@@ -402,6 +403,7 @@ fn converged_gradient_matches_image_differences() {
         max_depth: 2,
         rr_depth: 5,
         lines: None,
+        far_light: None,
     };
     let mut checked = 0;
     for (px, py) in [(12u32, 9u32), (10, 8), (14, 11), (11, 12)] {

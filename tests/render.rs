@@ -323,6 +323,7 @@ fn estimator_is_finite_on_hard_configurations() {
         max_depth: 8,
         rr_depth: 3,
         lines: None,
+        far_light: None,
     };
     let (w, h) = (s.camera.width, s.camera.height);
     let mut bad = 0;

@@ -38,6 +38,9 @@ pub struct RenderOptions {
     pub vis_samples: Option<u32>,
     /// With gradients: bisection steps that refine each visibility jump (default 0).
     pub vis_refine: Option<u32>,
+    /// With gradients: treat near lights as distant where 2|n_x|·d exceeds this
+    /// factor (the far-light criterion of Sec. 5.2), dropping their SV term.
+    pub far_light: Option<f32>,
 }
 
 /// What a render produced: row-major planes, top row first.
@@ -194,6 +197,7 @@ pub fn render(
             n_theta: opts.vis_samples.unwrap_or(32).max(1),
             refine: opts.vis_refine.unwrap_or(0),
         }),
+        far_light: opts.far_light,
     };
 
     let tiles_x = w.div_ceil(TILE);

@@ -29,6 +29,9 @@ pub struct PathTracer<'a> {
     /// With gradients: how the first hit's direct light is sampled (see
     /// `gradients::visibility`); `None` keeps point sampling everywhere.
     pub lines: Option<LineConfig>,
+    /// Far-light criterion factor for the gradient terms (Sec. 5.2); `None`
+    /// keeps every near light's SV term.
+    pub far_light: Option<f32>,
 }
 
 /// Line sampling of the first hit's direct light: `n_theta` shadow rays along one
@@ -179,7 +182,9 @@ impl PathTracer<'_> {
                             // The gradient uses this light sample alone (weight 1):
                             // an unbiased estimate of ∂(direct light) on its own.
                             if let (Some((g, hd)), 1) = (grad.as_mut(), depth) {
-                                let lp = light_point(&si, &ls);
+                                let far = self.far_light.map(|k| (hd.cv, k));
+                                let lp =
+                                    light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far);
                                 g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0);
                             }
                         }
@@ -306,24 +311,8 @@ impl PathTracer<'_> {
             }
             let le = radiance_from(pt.wi);
             radiance += material.eval(wo, wl) * wl.z * le / (pt.pdf * pmf);
-            let lp = match pt.light_point {
-                Some((y, ny)) => {
-                    let d = y - p;
-                    let r2 = d.length_squared();
-                    let cos_y = (ny.dot(d) / r2.sqrt()).abs();
-                    LightPoint::Area {
-                        y,
-                        ny,
-                        radiance: le,
-                        pdf_area: pt.pdf * cos_y / r2,
-                    }
-                }
-                None => LightPoint::Direction {
-                    wi: pt.wi,
-                    radiance: le,
-                    pdf: pt.pdf,
-                },
-            };
+            let far = self.far_light.map(|k| (hd.cv, k));
+            let lp = light_point(p, pt.light_point, pt.wi, le, pt.pdf, far);
             g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0 / pmf);
         };
         let dx = [hd.x.lane(SV), hd.x.lane(SV + 1)];
@@ -356,26 +345,40 @@ impl PathTracer<'_> {
     }
 }
 
-/// The light sample in the form the gradient stage differentiates: emitter points
-/// in area measure (so they stay fixed while the shading point moves).
-fn light_point(si: &Interaction, ls: &super::lights::LightSample) -> LightPoint {
-    match ls.point {
+/// A light sample in the form the gradient stage differentiates: emitter points
+/// in area measure (so they stay fixed while the shading point moves), from a
+/// solid-angle density `pdf`.
+///
+/// With the far-light criterion (Sec. 5.2) a near light is treated as distant —
+/// its direction held fixed, which drops its SV term — where the surface is curved
+/// enough that |L_x| ≪ 2|n_x||L_θ|: for an isotropic source at distance d,
+/// L_x ≈ L_θ/d, so the test is 2|n_x|·d > `far_factor` (CV = 2|n_x|).
+fn light_point(
+    p: Vec3,
+    point: Option<(Vec3, Vec3)>,
+    wi: Vec3,
+    radiance: Vec3,
+    pdf: f32,
+    far: Option<(f32, f32)>,
+) -> LightPoint {
+    match point {
         Some((y, ny)) => {
-            let d = y - si.p;
+            let d = y - p;
             let r2 = d.length_squared();
+            if let Some((cv, far_factor)) = far {
+                if cv * r2.sqrt() > far_factor {
+                    return LightPoint::Direction { wi, radiance, pdf };
+                }
+            }
             let cos_y = (ny.dot(d) / r2.sqrt()).abs();
             LightPoint::Area {
                 y,
                 ny,
-                radiance: ls.radiance,
-                pdf_area: ls.pdf * cos_y / r2,
+                radiance,
+                pdf_area: pdf * cos_y / r2,
             }
         }
-        None => LightPoint::Direction {
-            wi: ls.wi,
-            radiance: ls.radiance,
-            pdf: ls.pdf,
-        },
+        None => LightPoint::Direction { wi, radiance, pdf },
     }
 }
 

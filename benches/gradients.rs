@@ -1,0 +1,116 @@
+//! What analytic gradients cost: render time with and without `--gradients` at
+//! the same samples per pixel on `spheres_table` and `objects_bumpy`, and the
+//! visibility-gradient analysis alone (jump finding + Eq. 45–46/72 per line)
+//! against casting the same shadow rays without it.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use gradtrace::accel::Accel;
+use gradtrace::math::{Frame, Ray, Vec3};
+use gradtrace::render::gradients::visibility::{trace_line, Domain};
+use gradtrace::render::{render, RenderOptions};
+use gradtrace::scene::{self, Integrator};
+use std::path::Path;
+
+fn overhead(c: &mut Criterion) {
+    for name in ["spheres_table", "objects_bumpy"] {
+        let path = format!("scenes/{name}.toml");
+        let scene = scene::load(Path::new(&path)).expect("bundled scene loads");
+        let accel = Accel::build(&scene.meshes, &scene.spheres);
+        let mut group = c.benchmark_group(format!("gradient_overhead/{name}"));
+        group.sample_size(10);
+        let base = RenderOptions {
+            spp: Some(4),
+            resolution: Some((160, 120)),
+            integrator: Some(Integrator::Direct),
+            ..Default::default()
+        };
+        let variants = [
+            ("no_gradients", base.clone()),
+            (
+                "gradients_line1",
+                RenderOptions {
+                    gradients: true,
+                    vis_samples: Some(1),
+                    ..base.clone()
+                },
+            ),
+            (
+                "gradients_line32",
+                RenderOptions {
+                    gradients: true,
+                    vis_samples: Some(32),
+                    ..base.clone()
+                },
+            ),
+        ];
+        for (label, opts) in variants {
+            group.bench_function(label, |b| {
+                b.iter(|| render(&scene, &accel, &opts, &|_, _| {}).unwrap())
+            });
+        }
+        group.finish();
+    }
+}
+
+fn visibility_alone(c: &mut Criterion) {
+    let scene = scene::load(Path::new("scenes/spheres_table.toml")).expect("bundled scene loads");
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    // Shading points on a grid over the ground, hemisphere lines toward +y.
+    let points: Vec<Vec3> = (0..64)
+        .map(|i| {
+            Vec3::new(
+                (i % 8) as f32 * 0.25 - 1.0,
+                0.001,
+                (i / 8) as f32 * 0.25 - 1.0,
+            )
+        })
+        .collect();
+    let domain = Domain::Cone {
+        frame: Frame::from_normal(Vec3::Y),
+        theta_max: 1.5,
+        sphere: None,
+    };
+    let mut group = c.benchmark_group("visibility_line_32rays_x64");
+    group.bench_function("rays_only", |b| {
+        b.iter(|| {
+            let mut n = 0u32;
+            for (i, &x) in points.iter().enumerate() {
+                let phi = i as f32 * 0.7;
+                let f = Frame::from_normal(Vec3::Y);
+                for k in 0..32 {
+                    let t = (k as f32 + 0.5) / 32.0 * 1.5;
+                    let w = f.n * t.cos() + (f.s * phi.cos() + f.t * phi.sin()) * t.sin();
+                    n += accel.intersect(&Ray::new(x + Vec3::Y * 1e-3, w)).is_some() as u32;
+                }
+            }
+            n
+        })
+    });
+    group.bench_function("rays_and_visibility_gradient", |b| {
+        b.iter(|| {
+            let mut acc = Vec3::ZERO;
+            for (i, &x) in points.iter().enumerate() {
+                let est = trace_line(
+                    &scene,
+                    &accel,
+                    x,
+                    Vec3::Y,
+                    &domain,
+                    i as f32 * 0.7,
+                    0.5,
+                    32,
+                    0,
+                    [Vec3::X, Vec3::Z],
+                    &|_| Vec3::ONE,
+                    &mut |_| {},
+                );
+                acc += est.vis[0];
+            }
+            acc
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, overhead, visibility_alone);
+criterion_main!(benches);
