@@ -351,6 +351,7 @@ fn rect_exit_angle(
 /// θ_c ± asin(r'/d'); the intervals of all spheres are merged (overlapping
 /// blockers give one jump at each end of their union, not two each), and each
 /// remaining jump gets its exact α, tangent distance D and blocker normal.
+/// Computed in f64: near-tangent planes cancel catastrophically in f32.
 ///
 /// Returns the visibility gradient for the displacements `dx` and the visible
 /// measure ∫_visible sin θ dθ of the line (so B = 2π · mean over φ of it when
@@ -364,20 +365,24 @@ pub fn object_space_line(
     dx: [Vec3; 2],
     transport: &dyn Fn(Vec3) -> Vec3,
 ) -> (LineEstimate, f32) {
-    let (sp, cp) = phi.sin_cos();
-    let a = frame.n;
-    let dphi = frame.s * cp + frame.t * sp;
+    use glam::DVec3;
+    let (sp, cp) = (phi as f64).sin_cos();
+    let a = frame.n.as_dvec3();
+    let dphi = frame.s.as_dvec3() * cp + frame.t.as_dvec3() * sp;
     let v = a.cross(dphi);
+    let xd = x.as_dvec3();
+    let theta_max = theta_max as f64;
     // (start, end, sphere index) of each blocked θ-interval on this line.
-    let mut intervals: Vec<(f32, f32, usize)> = Vec::new();
+    let mut intervals: Vec<(f64, f64, usize)> = Vec::new();
     for (i, s) in spheres.iter().enumerate() {
-        let h = (s.center - x).dot(v);
-        if h.abs() >= s.radius {
+        let (c, r) = (s.center.as_dvec3(), s.radius as f64);
+        let h = (c - xd).dot(v);
+        if h.abs() >= r {
             continue;
         }
-        let c2 = s.center - v * h;
-        let r2 = (s.radius * s.radius - h * h).sqrt();
-        let q = c2 - x;
+        let c2 = c - v * h;
+        let r2 = ((r - h) * (r + h)).sqrt();
+        let q = c2 - xd;
         let d2 = q.length();
         if d2 <= r2 {
             continue;
@@ -391,7 +396,7 @@ pub fn object_space_line(
     }
     intervals.sort_by(|p, q| p.0.total_cmp(&q.0));
     // Union of the intervals, remembering which sphere owns each end.
-    let mut merged: Vec<(f32, usize, f32, usize)> = Vec::new();
+    let mut merged: Vec<(f64, usize, f64, usize)> = Vec::new();
     for (lo, hi, i) in intervals {
         match merged.last_mut() {
             Some(last) if lo <= last.2 => {
@@ -404,30 +409,31 @@ pub fn object_space_line(
         }
     }
     let mut est = LineEstimate::default();
-    let mut blocked = 0.0f32;
-    let dir = |t: f32| a * t.cos() + dphi * t.sin();
-    let jump = |alpha: f32, sphere: usize, sgn: f32, est: &mut LineEstimate| {
+    let mut blocked = 0.0f64;
+    let jump = |alpha: f64, sphere: usize, sgn: f64, est: &mut LineEstimate| {
         // Jumps at the ends of the line's domain are the domain's own boundary.
         if alpha <= 0.0 || alpha >= theta_max {
             return;
         }
         let s = &spheres[sphere];
-        let w = dir(alpha);
-        let c = a * (-alpha.sin()) + dphi * alpha.cos();
-        let d = (s.center - x).dot(w);
-        let p = x + w * d;
-        let n = (p - s.center).normalize_or_zero();
+        let (c, sa, ca) = (s.center.as_dvec3(), alpha.sin(), alpha.cos());
+        let w = a * ca + dphi * sa;
+        let cdir = a * (-sa) + dphi * ca;
+        let d = (c - xd).dot(w);
+        let p = xd + w * d;
+        let n = (p - c).normalize_or_zero();
         let k = n.cross(w).normalize_or_zero();
-        let vv = w.cross(c);
+        let vv = w.cross(cdir);
         let kv = k.dot(vv);
-        if kv.abs() < 1e-6 || d <= 0.0 {
+        if kv.abs() < 1e-9 || d <= 0.0 {
             return;
         }
-        let tr = transport(w);
+        let tr = transport(w.as_vec3());
         for (j, delta) in dx.iter().enumerate() {
+            let delta: DVec3 = delta.as_dvec3();
             let s_k = delta.dot(vv) / kv;
-            let dalpha = (s_k * k.dot(c) - delta.dot(c)) / d;
-            est.vis[j] += tr * (sgn * alpha.sin() * dalpha * TAU);
+            let dalpha = (s_k * k.dot(cdir) - delta.dot(cdir)) / d;
+            est.vis[j] += tr * (sgn * sa * dalpha * std::f64::consts::TAU) as f32;
         }
         est.jumps += 1;
     };
@@ -436,5 +442,184 @@ pub fn object_space_line(
         jump(lo, i_lo, 1.0, &mut est);
         jump(hi, i_hi, -1.0, &mut est);
     }
-    (est, (1.0 - theta_max.cos()) - blocked)
+    (est, ((1.0 - theta_max.cos()) - blocked) as f32)
+}
+
+/// The φ values where a line's plane is tangent to one of the spheres: there the
+/// jump derivatives have their integrable (φ − φ0)^(−1/2) spikes (footnote 4).
+/// Known in closed form for spheres: the plane's signed distance to the centre is
+/// ρ cos(φ + ψ), equal to ±R at φ = −ψ ± acos(R/ρ) and π − ψ ± acos(R/ρ).
+pub fn sphere_tangent_phis(spheres: &[crate::scene::Sphere], x: Vec3, frame: &Frame) -> Vec<f64> {
+    let mut out = Vec::new();
+    for s in spheres {
+        let q = (s.center - x).as_dvec3();
+        let (qs, qt) = (q.dot(frame.s.as_dvec3()), q.dot(frame.t.as_dvec3()));
+        let rho = qs.hypot(qt);
+        let r = s.radius as f64;
+        if rho <= r {
+            continue;
+        }
+        let psi = qs.atan2(qt);
+        let a = (r / rho).acos();
+        for base in [0.0, std::f64::consts::PI] {
+            for sgn in [-1.0, 1.0] {
+                out.push((base - psi + sgn * a).rem_euclid(std::f64::consts::TAU));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.total_cmp(b));
+    out
+}
+
+/// The object-space visibility gradient at x integrated over φ to high accuracy:
+/// the circle is split at the tangent φ of every sphere and each piece is
+/// integrated by Gauss–Legendre after the substitution φ = φa + (φb − φa)(1 − cos τ)/2,
+/// whose Jacobian sin τ cancels the inverse-square-root spikes at both ends.
+/// Returns (gradient pair, unblocked measure B of Eq. 47 times T = 1 weights).
+pub fn object_space_gradient(
+    spheres: &[crate::scene::Sphere],
+    x: Vec3,
+    frame: &Frame,
+    theta_max: f32,
+    dx: [Vec3; 2],
+    transport: &dyn Fn(Vec3) -> Vec3,
+) -> ([Vec3; 2], f32) {
+    let mut cuts = sphere_tangent_phis(spheres, x, frame);
+    cuts.insert(0, 0.0);
+    cuts.push(std::f64::consts::TAU);
+    let (nodes, weights) = gauss_legendre_16();
+    let mut g = [glam::DVec3::ZERO; 2];
+    let mut b = 0.0f64;
+    for w in cuts.windows(2) {
+        let (pa, pb) = (w[0], w[1]);
+        if pb - pa <= 1e-12 {
+            continue;
+        }
+        for (&t, &wt) in nodes.iter().zip(&weights) {
+            // τ ∈ [0, π] from the node t ∈ [−1, 1].
+            let tau = 0.5 * std::f64::consts::PI * (t + 1.0);
+            let phi = pa + (pb - pa) * 0.5 * (1.0 - tau.cos());
+            let jac = (pb - pa) * 0.5 * tau.sin() * 0.5 * std::f64::consts::PI;
+            let (est, vis) =
+                object_space_line(spheres, x, frame, theta_max, phi as f32, dx, transport);
+            for k in 0..2 {
+                g[k] += est.vis[k].as_dvec3() * (wt * jac);
+            }
+            b += vis as f64 * wt * jac;
+        }
+    }
+    let inv = 1.0 / std::f64::consts::TAU;
+    ([(g[0] * inv).as_vec3(), (g[1] * inv).as_vec3()], b as f32)
+}
+
+/// 16-point Gauss–Legendre nodes and weights on [−1, 1].
+fn gauss_legendre_16() -> ([f64; 16], [f64; 16]) {
+    const X: [f64; 8] = [
+        0.0950125098376374,
+        0.2816035507792589,
+        0.4580167776572274,
+        0.6178762444026438,
+        0.7554044083550030,
+        0.8656312023878318,
+        0.9445750230732326,
+        0.9894009349916499,
+    ];
+    const W: [f64; 8] = [
+        0.1894506104550685,
+        0.1826034150449236,
+        0.1691565193950025,
+        0.1495959888165767,
+        0.1246289712555339,
+        0.0951585116824928,
+        0.0622535239386479,
+        0.0271524594117541,
+    ];
+    let mut x = [0.0; 16];
+    let mut w = [0.0; 16];
+    for i in 0..8 {
+        x[2 * i] = -X[i];
+        x[2 * i + 1] = X[i];
+        w[2 * i] = W[i];
+        w[2 * i + 1] = W[i];
+    }
+    (x, w)
+}
+
+/// Integrates a per-φ quantity (a visibility gradient pair) over φ ∈ [0, 2π) by
+/// adaptive Simpson quadrature. The integrand has integrable (φ − φ0)^(−1/2)
+/// spikes where a line's plane is tangent to a blocker (footnote 4 of the paper);
+/// adaptive subdivision concentrates evaluations there instead of refining the
+/// whole circle. Returns the integral divided by 2π (the mean over φ, matching
+/// the 2π weight already inside each line's value) and the evaluation count.
+pub fn integrate_phi_adaptive(
+    f: &mut dyn FnMut(f32) -> [Vec3; 2],
+    initial: u32,
+    tol: f32,
+    max_depth: u32,
+) -> ([Vec3; 2], u32) {
+    fn add(a: [Vec3; 2], b: [Vec3; 2], s: f32) -> [Vec3; 2] {
+        [a[0] + b[0] * s, a[1] + b[1] * s]
+    }
+    fn norm(a: [Vec3; 2]) -> f32 {
+        a[0].abs().max_element().max(a[1].abs().max_element())
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn simpson(
+        f: &mut dyn FnMut(f32) -> [Vec3; 2],
+        a: f32,
+        b: f32,
+        fa: [Vec3; 2],
+        fm: [Vec3; 2],
+        fb: [Vec3; 2],
+        whole: [Vec3; 2],
+        tol: f32,
+        depth: u32,
+        evals: &mut u32,
+    ) -> [Vec3; 2] {
+        let m = 0.5 * (a + b);
+        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
+        let (flm, frm) = (f(lm), f(rm));
+        *evals += 2;
+        let h = (b - a) / 12.0;
+        let left = add(add(fa, fm, 1.0), flm, 4.0).map(|v| v * h);
+        let right = add(add(fm, fb, 1.0), frm, 4.0).map(|v| v * h);
+        let both = add(left, right, 1.0);
+        let err = norm(add(both, whole, -1.0));
+        if depth == 0 || err <= 15.0 * tol {
+            // Richardson extrapolation of the two Simpson estimates.
+            return add(both, add(both, whole, -1.0), 1.0 / 15.0);
+        }
+        let l = simpson(f, a, m, fa, flm, fm, left, tol * 0.5, depth - 1, evals);
+        let r = simpson(f, m, b, fm, frm, fb, right, tol * 0.5, depth - 1, evals);
+        add(l, r, 1.0)
+    }
+    let n = initial.max(2);
+    let step = TAU / n as f32;
+    let mut evals = 0u32;
+    let mut total = [Vec3::ZERO; 2];
+    let mut f0 = f(0.0);
+    evals += 1;
+    let first = f0;
+    for i in 0..n {
+        let (a, b) = (i as f32 * step, (i + 1) as f32 * step);
+        let fm = f(0.5 * (a + b));
+        let fb = if i + 1 == n { first } else { f(b) };
+        evals += 1 + (i + 1 != n) as u32;
+        let whole = add(add(f0, fb, 1.0), fm, 4.0).map(|v| v * (step / 6.0));
+        let part = simpson(
+            f,
+            a,
+            b,
+            f0,
+            fm,
+            fb,
+            whole,
+            tol / n as f32,
+            max_depth,
+            &mut evals,
+        );
+        total = add(total, part, 1.0);
+        f0 = fb;
+    }
+    (total.map(|v| v / TAU), evals)
 }
