@@ -57,3 +57,10 @@ impl Material {
         matches!(self, Material::Mirror { .. })
     }
 }
+
+/// Placeholder until the BRDF work lands: the modified Blinn-Phong RDF factor.
+pub mod normalization {
+    pub fn blinn_phong_modified_rdf(n: f64) -> f64 {
+        (n + 2.0) * (n + 4.0) / (8.0 * std::f64::consts::PI * ((-n / 2.0).exp2() + n))
+    }
+}

@@ -3,6 +3,7 @@
 //! where possible so that it can be used from any thread without state.
 
 pub mod distribution;
+pub mod dual;
 pub mod sampler;
 pub mod warp;
 

@@ -1,11 +1,22 @@
 //! scene + BVH → per-pixel estimates (radiance and AOVs) by path tracing.
 //!
-//! OWNED BY THE RENDER WORK ITEM (lead) — the API below is stable; bodies change.
+
+pub mod gradients;
+pub mod interaction;
+pub mod lights;
+pub mod path;
 
 use crate::accel::Accel;
-use crate::math::Vec3;
+use crate::math::sampler::PixelSampler;
+use crate::math::{finite_or_zero, Vec2, Vec3};
 use crate::scene::{Integrator, Scene};
-use std::time::Duration;
+use gradients::geometry::unit_direction_derivatives;
+use gradients::GradientSample;
+use lights::LightSet;
+use path::{PathTracer, SampleResult};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
 /// Options for one render; `None` fields fall back to the scene's `[render]` table.
 #[derive(Clone, Debug, Default)]
@@ -20,6 +31,8 @@ pub struct RenderOptions {
     pub resolution: Option<(u32, u32)>,
     /// Compute the AOV planes (normal, depth, albedo, object id, variance).
     pub aovs: bool,
+    /// Compute the analytic image gradient planes (`grad.*` layers).
+    pub gradients: bool,
 }
 
 /// What a render produced: row-major planes, top row first.
@@ -35,7 +48,64 @@ pub struct RenderOutput {
     pub depth: Option<Vec<f32>>,
     pub albedo: Option<Vec<Vec3>>,
     pub object_id: Option<Vec<f32>>,
+    pub gradients: Option<GradientPlanes>,
     pub stats: RenderStats,
+}
+
+/// Per-pixel analytic gradients of the direct illumination (pixel units; u to
+/// the right, v downwards) and the magnitudes of the first-order paper's terms.
+#[derive(Clone, Debug, Default)]
+pub struct GradientPlanes {
+    /// ∂I/∂u, ∂I/∂v: all terms, including visibility.
+    pub grad_u: Vec<Vec3>,
+    pub grad_v: Vec<Vec3>,
+    /// |SV| = |L_x ⊗ ρ| projected to the image (luminance magnitude over u, v).
+    pub sv: Vec<f32>,
+    /// |DV| = |L_θ ⊗ ρ|: angular gradient of the reflected radiance, per radian.
+    pub dv: Vec<f32>,
+    /// CV = 2|n_x|, per unit length on the surface.
+    pub cv: Vec<f32>,
+    /// |CDV| = |2 n_x (L_θ ⊗ ρ)| projected to the image.
+    pub cdv: Vec<f32>,
+    /// |visibility term| projected to the image.
+    pub vis: Vec<f32>,
+    /// CDV / SV (the paper's Fig. 5e), 0 where both vanish.
+    pub ratio: Vec<f32>,
+}
+
+impl GradientPlanes {
+    fn new(n: usize) -> Self {
+        Self {
+            grad_u: vec![Vec3::ZERO; n],
+            grad_v: vec![Vec3::ZERO; n],
+            sv: vec![0.0; n],
+            dv: vec![0.0; n],
+            cv: vec![0.0; n],
+            cdv: vec![0.0; n],
+            vis: vec![0.0; n],
+            ratio: vec![0.0; n],
+        }
+    }
+
+    /// Stores the mean gradient of one pixel's samples.
+    fn set(&mut self, i: usize, g: &GradientSample) {
+        let t = g.total();
+        self.grad_u[i] = finite_or_zero(t[0]);
+        self.grad_v[i] = finite_or_zero(t[1]);
+        let fin = |x: f32| if x.is_finite() { x } else { 0.0 };
+        let sv = fin(gradients::magnitude(&g.sv));
+        let cdv = fin(gradients::magnitude(&g.cdv));
+        self.sv[i] = sv;
+        self.cdv[i] = cdv;
+        self.dv[i] = fin(gradients::magnitude(&g.dv));
+        self.cv[i] = fin(g.cv);
+        self.vis[i] = fin(gradients::magnitude(&g.vis));
+        self.ratio[i] = if cdv <= 0.0 {
+            0.0
+        } else {
+            (cdv / sv.max(1e-12)).min(1e12)
+        };
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -48,25 +118,284 @@ pub struct RenderStats {
 /// Progress callback: called with (tiles done, tiles total) from worker threads.
 pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
-/// Renders the scene. Deterministic for a fixed seed, whatever the thread count.
+/// Side length of the square tiles that rayon distributes.
+const TILE: usize = 16;
+
+/// What `render` builds for a scene before tracing: reported by `info`.
+pub fn describe(scene: &Scene) -> String {
+    let lights = LightSet::build(scene);
+    let (tris, spheres, env) = lights.counts();
+    let env_sampler = match &lights.env_sampler {
+        None => "none".to_string(),
+        Some(lights::EnvSampler::Uniform) => "uniform sphere".to_string(),
+        Some(lights::EnvSampler::Image(_)) => "2D piecewise-constant (lat-long texels)".to_string(),
+        Some(lights::EnvSampler::GaussianSky { lobe_prob }) => {
+            format!("vMF lobe (p = {lobe_prob:.3}) + uniform")
+        }
+    };
+    let bumped = scene.meshes.iter().filter(|m| m.bump.is_some()).count()
+        + scene.spheres.iter().filter(|s| s.bump.is_some()).count();
+    format!(
+        "light sampling: {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}",
+        if env { ", environment" } else { "" }
+    )
+}
+
+/// Renders the scene. Deterministic for a fixed seed, whatever the thread count:
+/// every random number is addressed by (pixel, sample, dimension, seed).
 pub fn render(
     scene: &Scene,
-    _accel: &Accel,
-    _opts: &RenderOptions,
-    _progress: Progress,
+    accel: &Accel,
+    opts: &RenderOptions,
+    progress: Progress,
 ) -> crate::Result<RenderOutput> {
-    let w = scene.camera.width as usize;
-    let h = scene.camera.height as usize;
-    Ok(RenderOutput {
+    let start = Instant::now();
+    let settings = &scene.settings;
+    let spp = opts.spp.unwrap_or(settings.spp);
+    if spp == 0 {
+        return Err(crate::Error::Option {
+            option: "--spp".into(),
+            message: "must be at least 1".into(),
+        });
+    }
+    let integrator = opts.integrator.unwrap_or(settings.integrator);
+    let max_depth = match integrator {
+        Integrator::Path => opts.max_depth.unwrap_or(settings.max_depth),
+        // Emitters seen directly plus one bounce of emitted light.
+        Integrator::Direct => opts.max_depth.unwrap_or(2).min(2),
+    };
+    let seed = opts.seed.unwrap_or(settings.seed);
+    let camera = match opts.resolution {
+        Some((w, h)) => {
+            scene
+                .camera
+                .with_resolution(w, h)
+                .map_err(|message| crate::Error::Option {
+                    option: "--width/--height".into(),
+                    message,
+                })?
+        }
+        None => scene.camera.clone(),
+    };
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let lights = LightSet::build(scene);
+    let tracer = PathTracer {
+        scene,
+        accel,
+        lights: &lights,
+        max_depth,
+        rr_depth: settings.rr_depth,
+    };
+
+    let tiles_x = w.div_ceil(TILE);
+    let tiles_y = h.div_ceil(TILE);
+    let total = tiles_x * tiles_y;
+    let done = AtomicUsize::new(0);
+    let render_tile = |tile: usize| -> TileResult {
+        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+        let x0 = tx * TILE;
+        let y0 = ty * TILE;
+        let x1 = (x0 + TILE).min(w);
+        let y1 = (y0 + TILE).min(h);
+        let mut res = TileResult::new(x0, y0, x1 - x0, y1 - y0, opts.aovs, opts.gradients);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let pixel = (y * w + x) as u32;
+                let mut acc = PixelAccumulator::default();
+                for s in 0..spp {
+                    let r =
+                        camera_sample(&tracer, &camera, pixel, s, seed, opts.gradients, Vec2::ZERO);
+                    acc.add(&r, s == 0);
+                }
+                res.store(x - x0, y - y0, &acc, spp);
+            }
+        }
+        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+        progress(n, total);
+        res
+    };
+    let tiles: Vec<TileResult> = (0..total).into_par_iter().map(render_tile).collect();
+
+    let mut out = RenderOutput {
         width: w,
         height: h,
-        spp: 0,
+        spp,
         beauty: vec![Vec3::ZERO; w * h],
-        variance: None,
-        normal: None,
-        depth: None,
-        albedo: None,
-        object_id: None,
+        variance: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
+        normal: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
+        depth: opts.aovs.then(|| vec![0.0; w * h]),
+        albedo: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
+        object_id: opts.aovs.then(|| vec![0.0; w * h]),
+        gradients: opts.gradients.then(|| GradientPlanes::new(w * h)),
         stats: RenderStats::default(),
-    })
+    };
+    let mut rays = 0u64;
+    for t in &tiles {
+        rays += t.rays;
+        t.scatter(&mut out, w);
+    }
+    out.stats = RenderStats {
+        wall_time: start.elapsed(),
+        rays,
+    };
+    Ok(out)
+}
+
+/// One camera sample of pixel `pixel` (linear index): jittered position inside
+/// the pixel (box filter), shifted by `shift` pixels. Tests shift it to take
+/// finite differences with the very same random numbers.
+pub fn camera_sample(
+    tracer: &PathTracer,
+    camera: &crate::scene::Camera,
+    pixel: u32,
+    sample: u32,
+    seed: u32,
+    gradients: bool,
+    shift: Vec2,
+) -> SampleResult {
+    let w = camera.width;
+    let mut sampler = PixelSampler::new(pixel, sample, seed);
+    let jitter = sampler.next_2d();
+    let p = Vec2::new((pixel % w) as f32, (pixel / w) as f32) + jitter + shift;
+    let ray = camera.generate_ray(p);
+    let dd = gradients.then(|| {
+        let d_len = 1.0 / ray.dir.dot(camera.forward());
+        unit_direction_derivatives(ray.dir, d_len, camera.direction_derivatives())
+    });
+    tracer.li(ray, &mut sampler, dd)
+}
+
+/// Running sums of one pixel's samples (f64, so thousands of samples add exactly
+/// enough for the variance estimate).
+#[derive(Default)]
+struct PixelAccumulator {
+    sum: [f64; 3],
+    sum_sq: [f64; 3],
+    normal: Vec3,
+    depth: f32,
+    albedo: Vec3,
+    object_id: u32,
+    hits: u32,
+    rays: u64,
+    gradient: GradientSample,
+}
+
+impl PixelAccumulator {
+    fn add(&mut self, r: &SampleResult, first: bool) {
+        let l = finite_or_zero(r.radiance);
+        for (c, v) in l.to_array().into_iter().enumerate() {
+            self.sum[c] += v as f64;
+            self.sum_sq[c] += (v as f64) * (v as f64);
+        }
+        if let Some(fh) = &r.first_hit {
+            self.normal += finite_or_zero(fh.normal);
+            if fh.depth.is_finite() {
+                self.depth += fh.depth;
+                self.hits += 1;
+            }
+            self.albedo += fh.albedo;
+            if first {
+                self.object_id = fh.object_id;
+            }
+        }
+        self.rays += r.rays as u64;
+        if let Some(g) = &r.gradient {
+            self.gradient.add_scaled(g, 1.0);
+        }
+    }
+}
+
+struct TileResult {
+    x0: usize,
+    y0: usize,
+    w: usize,
+    beauty: Vec<Vec3>,
+    aovs: Option<Vec<[f32; 11]>>,
+    gradients: Option<Vec<GradientSample>>,
+    rays: u64,
+}
+
+impl TileResult {
+    fn new(x0: usize, y0: usize, w: usize, h: usize, aovs: bool, gradients: bool) -> Self {
+        Self {
+            x0,
+            y0,
+            w,
+            beauty: vec![Vec3::ZERO; w * h],
+            aovs: aovs.then(|| vec![[0.0; 11]; w * h]),
+            gradients: gradients.then(|| vec![GradientSample::default(); w * h]),
+            rays: 0,
+        }
+    }
+
+    fn store(&mut self, x: usize, y: usize, acc: &PixelAccumulator, spp: u32) {
+        let n = spp as f64;
+        let i = y * self.w + x;
+        let mean = [acc.sum[0] / n, acc.sum[1] / n, acc.sum[2] / n];
+        self.beauty[i] = Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
+        self.rays += acc.rays;
+        if let Some(g) = &mut self.gradients {
+            let mut mean = GradientSample::default();
+            mean.add_scaled(&acc.gradient, 1.0 / spp as f32);
+            g[i] = mean;
+        }
+        if let Some(a) = &mut self.aovs {
+            // Variance of the pixel mean: unbiased sample variance / n.
+            let var = |c: usize| -> f32 {
+                if spp < 2 {
+                    return 0.0;
+                }
+                let v = (acc.sum_sq[c] - acc.sum[c] * acc.sum[c] / n) / (n - 1.0);
+                (v.max(0.0) / n) as f32
+            };
+            let nrm = acc.normal.normalize_or_zero();
+            let inv = 1.0 / spp as f32;
+            a[i] = [
+                var(0),
+                var(1),
+                var(2),
+                nrm.x,
+                nrm.y,
+                nrm.z,
+                // Mean distance over the samples that hit something.
+                acc.depth / acc.hits.max(1) as f32,
+                acc.albedo.x * inv,
+                acc.albedo.y * inv,
+                acc.albedo.z * inv,
+                acc.object_id as f32,
+            ];
+        }
+    }
+
+    fn scatter(&self, out: &mut RenderOutput, width: usize) {
+        let h = self.beauty.len() / self.w;
+        for y in 0..h {
+            for x in 0..self.w {
+                let src = y * self.w + x;
+                let dst = (self.y0 + y) * width + self.x0 + x;
+                out.beauty[dst] = self.beauty[src];
+                if let (Some(g), Some(planes)) = (&self.gradients, &mut out.gradients) {
+                    planes.set(dst, &g[src]);
+                }
+                if let Some(a) = &self.aovs {
+                    let a = &a[src];
+                    if let Some(v) = &mut out.variance {
+                        v[dst] = Vec3::new(a[0], a[1], a[2]);
+                    }
+                    if let Some(v) = &mut out.normal {
+                        v[dst] = Vec3::new(a[3], a[4], a[5]);
+                    }
+                    if let Some(v) = &mut out.depth {
+                        v[dst] = a[6];
+                    }
+                    if let Some(v) = &mut out.albedo {
+                        v[dst] = Vec3::new(a[7], a[8], a[9]);
+                    }
+                    if let Some(v) = &mut out.object_id {
+                        v[dst] = a[10];
+                    }
+                }
+            }
+        }
+    }
 }

@@ -78,10 +78,10 @@ impl Camera {
 
     /// Derivatives of the (unnormalised) direction with respect to the pixel
     /// coordinates; ray differentials for the gradient stages start from these.
-    pub fn direction_derivatives(&self) -> (Vec3, Vec3) {
+    pub fn direction_derivatives(&self) -> [Vec3; 2] {
         let dx = self.right * (2.0 * self.tan_half * self.aspect() / self.width as f32);
         let dy = -self.true_up * (2.0 * self.tan_half / self.height as f32);
-        (dx, dy)
+        [dx, dy]
     }
 
     pub fn generate_ray(&self, p: Vec2) -> Ray {

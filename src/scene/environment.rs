@@ -38,7 +38,8 @@ pub fn direction_to_latlong(d: Vec3) -> Vec2 {
     if u < 0.0 {
         u += 1.0;
     }
-    let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+    // atan2 rather than acos: accurate near the poles, where y rounds to ±1.
+    let v = (d.x * d.x + d.z * d.z).sqrt().atan2(d.y) / PI;
     Vec2::new(u.min(1.0 - f32::EPSILON), v.min(1.0 - f32::EPSILON))
 }
 

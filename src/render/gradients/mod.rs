@@ -1,0 +1,93 @@
+//! first hit + light samples → analytic image gradients ∂I/∂u, ∂I/∂v and the
+//! first-order paper's terms (SV, DV, CV, CDV), from the same light samples and
+//! shadow rays as the radiance: no extra rays.
+//!
+//! How: the direct-lighting integrand at a fixed light sample (a point y on an
+//! emitter, in area measure, or a direction at infinity) is evaluated over dual
+//! numbers whose lanes carry the derivatives of the shading point x, the shading
+//! normal n and the view direction ω_o with respect to the image coordinates
+//! (ray differentials, Eq. 26–27 generalised to any camera ray):
+//!
+//! * lanes 0,1 — ∂x/∂u, ∂x/∂v with n and ω_o fixed: the spatial variation of
+//!   the incident light, SV = L_x ⊗ ρ (Eq. 25);
+//! * lanes 2,3 — ∂n/∂u, ∂n/∂v (curvature, including bump maps, Sec. 4.2) with x and
+//!   ω_o fixed: CDV = 2 n_x (L_θ ⊗ ρ) — the general-BRDF form of that product;
+//! * lanes 4,5 — ∂ω_o/∂u, ∂ω_o/∂v: the camera term B_θ ∂θ/∂u of Eq. 26;
+//! * lanes 6,7 — ω_o rotated along two unit tangents: the directional variation
+//!   DV = L_θ ⊗ ρ as an angular gradient magnitude (per radian).
+//!
+//! Differentiating at a fixed area sample is unbiased for the derivative of the
+//! unshadowed-boundary part of the integral, because the light's domain does not
+//! move with x; the moving visibility boundary is the separate visibility term.
+
+pub mod geometry;
+pub mod shading;
+
+use crate::math::dual::{DVec3, Dual};
+use crate::math::{luminance, Vec3};
+
+/// Number of derivative lanes (see the module doc for their meaning).
+pub const LANES: usize = 8;
+pub type GDual = Dual<LANES>;
+pub type GVec3 = DVec3<LANES>;
+
+pub const SV: usize = 0;
+pub const CDV: usize = 2;
+pub const CAM: usize = 4;
+pub const DV: usize = 6;
+
+/// Per-sample gradient of the radiance, split into the paper's terms. All image
+/// quantities are per pixel (u to the right, v downwards).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GradientSample {
+    /// The value whose derivative the lanes are: the light-sampled direct
+    /// illumination at the first hit (or the environment seen directly). Equal in
+    /// expectation to the direct part of the radiance; the tests difference it.
+    pub value: Vec3,
+    pub sv: [Vec3; 2],
+    pub cdv: [Vec3; 2],
+    pub cam: [Vec3; 2],
+    /// Angular gradient of the reflected radiance along two tangents of ω_o.
+    pub dv: [Vec3; 2],
+    /// Visibility (soft shadow) term of ∂I/∂u, ∂I/∂v.
+    pub vis: [Vec3; 2],
+    /// 2·|∂n/∂x|: twice the Frobenius norm of the shading normal's derivative per
+    /// unit length on the surface (the CV term; 0 on flat unbumped surfaces).
+    pub cv: f32,
+}
+
+impl GradientSample {
+    /// ∂I/∂u and ∂I/∂v: the sum of all terms.
+    pub fn total(&self) -> [Vec3; 2] {
+        [0, 1].map(|i| self.sv[i] + self.cdv[i] + self.cam[i] + self.vis[i])
+    }
+
+    /// Adds `w ×` the lanes of an RGB dual contribution.
+    pub fn add_lanes(&mut self, c: &[GDual; 3], w: f32) {
+        self.value += Vec3::new(c[0].v, c[1].v, c[2].v) * w;
+        let lane = |i: usize| Vec3::new(c[0].d[i], c[1].d[i], c[2].d[i]) * w;
+        for k in 0..2 {
+            self.sv[k] += lane(SV + k);
+            self.cdv[k] += lane(CDV + k);
+            self.cam[k] += lane(CAM + k);
+            self.dv[k] += lane(DV + k);
+        }
+    }
+
+    pub fn add_scaled(&mut self, o: &GradientSample, w: f32) {
+        self.value += o.value * w;
+        for k in 0..2 {
+            self.sv[k] += o.sv[k] * w;
+            self.cdv[k] += o.cdv[k] * w;
+            self.cam[k] += o.cam[k] * w;
+            self.dv[k] += o.dv[k] * w;
+            self.vis[k] += o.vis[k] * w;
+        }
+        self.cv += o.cv * w;
+    }
+}
+
+/// Magnitude of a (u, v) pair of RGB gradients, on luminance.
+pub fn magnitude(g: &[Vec3; 2]) -> f32 {
+    luminance(g[0]).hypot(luminance(g[1]))
+}

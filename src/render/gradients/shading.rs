@@ -1,0 +1,140 @@
+//! The direct-lighting integrand at one fixed light sample, over duals:
+//! f(ω_o, ω_i; n) (n·ω_i)₊ L_e G / p, whose lanes are the gradient terms.
+
+use super::geometry::HitDuals;
+use super::{GDual, GVec3};
+use crate::brdf::Material;
+use crate::math::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// A light sample as the gradient stage sees it.
+#[derive(Clone, Copy, Debug)]
+pub enum LightPoint {
+    /// A point y on an emitter with normal n_y; `pdf_area` is the density of
+    /// choosing y in area measure (light choice included).
+    Area {
+        y: Vec3,
+        ny: Vec3,
+        radiance: Vec3,
+        pdf_area: f32,
+    },
+    /// A direction at infinity with solid-angle density `pdf`.
+    Direction { wi: Vec3, radiance: Vec3, pdf: f32 },
+}
+
+/// f·(n·ω_i)₊ L_e G / p and its derivatives. The light point is held fixed (in
+/// area measure for emitters), so the derivatives are those of the integrand of
+/// a fixed-domain integral: an unbiased estimate of ∂B (Eq. 25's terms).
+pub fn direct_sample(material: &Material, h: &HitDuals, light: &LightPoint) -> [GDual; 3] {
+    let (wi, radiance, scale) = match *light {
+        LightPoint::Area {
+            y,
+            ny,
+            radiance,
+            pdf_area,
+        } => {
+            let to = GVec3::constant(y) - h.x;
+            let r2 = to.length_squared();
+            let wi = to * r2.sqrt().recip();
+            // Geometry term of the emitter side: cos θ_y / r².
+            let cos_y = -wi.dot_const(ny);
+            (wi, radiance, cos_y.max0() / r2 * (1.0 / pdf_area))
+        }
+        LightPoint::Direction { wi, radiance, pdf } => {
+            (GVec3::constant(wi), radiance, GDual::constant(1.0 / pdf))
+        }
+    };
+    let f_cos = brdf_cos(material, h.n, h.wo, wi);
+    [0, 1, 2].map(|c| f_cos[c] * scale * radiance[c])
+}
+
+/// f(ω_o, ω_i; n) · (n·ω_i)₊ in world space, per RGB channel, for every material
+/// of `brdf` (the same formulas as `Material::eval`, checked against it in the
+/// tests); zero for delta lobes.
+pub fn brdf_cos(material: &Material, n: GVec3, wo: GVec3, wi: GVec3) -> [GDual; 3] {
+    let cos_i = n.dot(wi).max0();
+    let cos_o = n.dot(wo);
+    if cos_i.v <= 0.0 || cos_o.v <= 0.0 {
+        return [GDual::constant(0.0); 3];
+    }
+    match material {
+        Material::Lambert { albedo } => [0, 1, 2].map(|c| cos_i * (albedo[c] * FRAC_1_PI)),
+        Material::BlinnPhong { kd, ks, exponent } => {
+            let h = (wo + wi).normalize();
+            let lobe = n.dot(h).max0().powf(*exponent)
+                * crate::brdf::normalization::blinn_phong_modified_rdf(*exponent as f64) as f32;
+            [0, 1, 2].map(|c| (lobe * ks[c] + kd[c] * FRAC_1_PI) * cos_i)
+        }
+        Material::CookTorrance { kd, ks, exponent } => {
+            let h = (wo + wi).normalize();
+            let l_h = wi.dot(h);
+            let lobe = n.dot(h).max0().powf(*exponent)
+                * ((exponent + 1.0) / (8.0 * std::f32::consts::PI))
+                / (l_h * l_h * l_h);
+            [0, 1, 2].map(|c| (lobe * ks[c] + kd[c] * FRAC_1_PI) * cos_i)
+        }
+        Material::Mirror { .. } => [GDual::constant(0.0); 3],
+    }
+}
+
+/// Radiance of the environment seen along the dual direction `d` (for camera
+/// rays that escape: the view-direction lanes then carry ∂L_env/∂u, ∂L_env/∂v).
+pub fn environment(env: &crate::scene::Environment, d: GVec3) -> [GDual; 3] {
+    use crate::scene::Environment;
+    match env {
+        Environment::Constant { radiance } => radiance.to_array().map(GDual::constant),
+        Environment::GaussianSky {
+            direction,
+            sharpness,
+            peak,
+            ambient,
+        } => {
+            let lobe = ((d.dot_const(*direction) + -1.0) * *sharpness).exp();
+            [0, 1, 2].map(|c| lobe * peak[c] + ambient[c])
+        }
+        Environment::Image {
+            width,
+            height,
+            texels,
+            scale,
+        } => {
+            // (u, v) of the lat-long map as duals (same convention as
+            // `environment::direction_to_latlong`), then the bilinear lookup's
+            // exact derivative inside the current cell.
+            let u = d.x.atan2(-d.z).scale(1.0 / std::f32::consts::TAU);
+            let v = (d.x * d.x + d.z * d.z)
+                .sqrt()
+                .atan2(d.y)
+                .scale(1.0 / std::f32::consts::PI);
+            let uv = crate::scene::environment::direction_to_latlong(d.value());
+            let (w, hgt) = (*width, *height);
+            let x = uv.x * w as f32 - 0.5;
+            let y = (uv.y * hgt as f32 - 0.5).clamp(0.0, (hgt - 1) as f32);
+            let (x0, y0) = (x.floor(), y.floor());
+            let (fx, fy) = (x - x0, y - y0);
+            let xi0 = (x0 as i64).rem_euclid(w as i64) as usize;
+            let xi1 = (xi0 + 1) % w;
+            let yi0 = y0 as usize;
+            let yi1 = (yi0 + 1).min(hgt - 1);
+            let t = |xx: usize, yy: usize| texels[yy * w + xx] * *scale;
+            let (t00, t10, t01, t11) = (t(xi0, yi0), t(xi1, yi0), t(xi0, yi1), t(xi1, yi1));
+            let val =
+                (t00 * (1.0 - fx) + t10 * fx) * (1.0 - fy) + (t01 * (1.0 - fx) + t11 * fx) * fy;
+            let dl_dx = ((t10 - t00) * (1.0 - fy) + (t11 - t01) * fy) * w as f32;
+            // Clamped rows (at the poles) have no v derivative.
+            let clamped = uv.y * hgt as f32 - 0.5 != y;
+            let dl_dy = if clamped || yi1 == yi0 {
+                Vec3::ZERO
+            } else {
+                ((t01 - t00) * (1.0 - fx) + (t11 - t10) * fx) * hgt as f32
+            };
+            [0, 1, 2].map(|c| {
+                let mut r = GDual::constant(val[c]);
+                for l in 0..super::LANES {
+                    r.d[l] = dl_dx[c] * u.d[l] + dl_dy[c] * v.d[l];
+                }
+                r
+            })
+        }
+    }
+}

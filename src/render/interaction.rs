@@ -1,0 +1,223 @@
+//! Ray hit → local surface description: position, geometric and shading normals,
+//! (u, v) and its tangents, material, emission. Bump maps perturb the shading normal
+//! here, and only on shapes that have one.
+
+use crate::accel::{Hit, PrimRef};
+use crate::math::{Frame, Ray, Vec2, Vec3};
+use crate::scene::Scene;
+use std::f32::consts::{PI, TAU};
+
+/// Everything shading needs at a hit point. Normals face the side the ray came
+/// from (materials are two-sided); `front_face` records whether that is the side
+/// the geometric normal originally pointed to (emission is one-sided).
+#[derive(Clone, Copy, Debug)]
+pub struct Interaction {
+    pub p: Vec3,
+    pub t: f32,
+    /// Geometric normal, flipped to face the incoming ray.
+    pub ng: Vec3,
+    /// Shading frame: interpolated/bumped normal, flipped like `ng`.
+    pub frame: Frame,
+    pub uv: Vec2,
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
+    pub front_face: bool,
+    pub material: u32,
+    /// Emitted radiance toward the ray origin (zero unless an emitter seen from its front).
+    pub emission: Vec3,
+    pub object_id: u32,
+    pub prim: PrimRef,
+}
+
+/// Builds the [`Interaction`] of `hit` along `ray`.
+pub fn interaction(scene: &Scene, ray: &Ray, hit: &Hit) -> Interaction {
+    match hit.prim {
+        PrimRef::Triangle { mesh, tri } => triangle_interaction(scene, ray, hit, mesh, tri),
+        PrimRef::Sphere(i) => sphere_interaction(scene, ray, hit, i),
+    }
+}
+
+fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32) -> Interaction {
+    let m = &scene.meshes[mesh as usize];
+    let [i0, i1, i2] = m.triangles[tri as usize].map(|i| i as usize);
+    let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
+    let (b1, b2) = (hit.bary.x, hit.bary.y);
+    let b0 = 1.0 - b1 - b2;
+    // Interpolating the vertices is more accurate than o + t·d far from the origin.
+    let p = b0 * p0 + b1 * p1 + b2 * p2;
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let ng_orig = e1.cross(e2).normalize_or_zero();
+    let ns_orig = if m.normals.is_empty() {
+        ng_orig
+    } else {
+        let n = b0 * m.normals[i0] + b1 * m.normals[i1] + b2 * m.normals[i2];
+        let n = n.normalize_or_zero();
+        if n == Vec3::ZERO {
+            ng_orig
+        } else {
+            n
+        }
+    };
+    // (u, v) parameterisation: texture coordinates when present, else barycentric.
+    let (uv, dpdu, dpdv) = if m.uvs.is_empty() {
+        (Vec2::new(b1, b2), e1, e2)
+    } else {
+        let (t0, t1, t2) = (m.uvs[i0], m.uvs[i1], m.uvs[i2]);
+        let uv = b0 * t0 + b1 * t1 + b2 * t2;
+        let d1 = t1 - t0;
+        let d2 = t2 - t0;
+        let det = d1.x * d2.y - d1.y * d2.x;
+        if det.abs() < 1e-12 {
+            (uv, e1, e2)
+        } else {
+            let inv = 1.0 / det;
+            (
+                uv,
+                (d2.y * e1 - d1.y * e2) * inv,
+                (-d2.x * e1 + d1.x * e2) * inv,
+            )
+        }
+    };
+    finish(
+        scene,
+        ray,
+        hit.t,
+        p,
+        ng_orig,
+        ns_orig,
+        uv,
+        dpdu,
+        dpdv,
+        m.material,
+        m.emission,
+        m.bump,
+        m.object_id,
+        hit.prim,
+    )
+}
+
+fn sphere_interaction(scene: &Scene, ray: &Ray, hit: &Hit, i: u32) -> Interaction {
+    let s = &scene.spheres[i as usize];
+    let hit_point = ray.at(hit.t);
+    let n = (hit_point - s.center).normalize_or_zero();
+    let n = if n == Vec3::ZERO { Vec3::Y } else { n };
+    // Re-project onto the surface: removes the error of o + t·d.
+    let p = s.center + s.radius * n;
+    // (u, v) = (φ / 2π, θ / π), θ from +y, φ = atan2(z, x).
+    let theta = n.y.clamp(-1.0, 1.0).acos();
+    let mut phi = n.z.atan2(n.x);
+    if phi < 0.0 {
+        phi += TAU;
+    }
+    let (sp, cp) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    let dpdphi = s.radius * Vec3::new(-st * sp, 0.0, st * cp);
+    let dpdtheta = s.radius * Vec3::new(ct * cp, -st, ct * sp);
+    let uv = Vec2::new(phi / TAU, theta / PI);
+    finish(
+        scene,
+        ray,
+        hit.t,
+        p,
+        n,
+        n,
+        uv,
+        TAU * dpdphi,
+        PI * dpdtheta,
+        s.material,
+        s.emission,
+        s.bump,
+        s.object_id,
+        hit.prim,
+    )
+}
+
+/// Shared tail: applies the bump map, orients normals toward the ray, builds the frame.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    scene: &Scene,
+    ray: &Ray,
+    t: f32,
+    p: Vec3,
+    ng_orig: Vec3,
+    ns_orig: Vec3,
+    uv: Vec2,
+    dpdu: Vec3,
+    dpdv: Vec3,
+    material: u32,
+    emission: Vec3,
+    bump: Option<u32>,
+    object_id: u32,
+    prim: PrimRef,
+) -> Interaction {
+    let mut ns = ns_orig;
+    if let Some(b) = bump {
+        ns = bumped_normal(&scene.bumps[b as usize], uv, ns, dpdu, dpdv);
+    }
+    let front_face = ray.dir.dot(ng_orig) < 0.0;
+    let sign = if front_face { 1.0 } else { -1.0 };
+    let ng = ng_orig * sign;
+    let mut ns = ns * sign;
+    // A shading normal on the far side of the geometric one would let light leak;
+    // fold it back to the visible hemisphere.
+    if ns.dot(ng) <= 1e-4 {
+        ns = ng;
+    }
+    let frame = Frame::from_normal_tangent(ns, dpdu);
+    Interaction {
+        p,
+        t,
+        ng,
+        frame,
+        uv,
+        dpdu,
+        dpdv,
+        front_face,
+        material,
+        emission: if front_face { emission } else { Vec3::ZERO },
+        object_id,
+        prim,
+    }
+}
+
+/// Normal of the displaced surface p + h(u,v)·n, to first order in h:
+/// ∂p'/∂u ≈ ∂p/∂u + h_u n and ∂p'/∂v ≈ ∂p/∂v + h_v n (the h·∂n/∂u term is dropped,
+/// as in pbrt, since bump heights are small against the radius of curvature).
+pub fn bumped_normal(bump: &crate::scene::Bump, uv: Vec2, n: Vec3, dpdu: Vec3, dpdv: Vec3) -> Vec3 {
+    let j = bump.eval(uv);
+    let pu = dpdu + j.h_u * n;
+    let pv = dpdv + j.h_v * n;
+    let nb = pu.cross(pv).normalize_or_zero();
+    if nb == Vec3::ZERO || !nb.is_finite() {
+        return n;
+    }
+    // Keep the orientation of the unbumped normal whatever the handedness of (u, v).
+    if nb.dot(n) < 0.0 {
+        -nb
+    } else {
+        nb
+    }
+}
+
+/// Origin for a ray leaving `p` on the side of `ng` that `dir` points to, offset far
+/// enough that the ray cannot re-hit the surface it leaves: the offset scales with
+/// the magnitude of the coordinates because f32 rounding error does.
+pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
+    let scale = 1e-4 * p.abs().max_element().max(1.0);
+    let n = if dir.dot(ng) < 0.0 { -ng } else { ng };
+    p + n * scale
+}
+
+/// A ray from `p` toward the point `target`, stopping short of it on both ends.
+pub fn segment_between(p: Vec3, ng: Vec3, target: Vec3, target_n: Option<Vec3>) -> Ray {
+    let d = target - p;
+    let o = offset_origin(p, ng, d);
+    let end = match target_n {
+        Some(n) => offset_origin(target, n, -d),
+        None => target,
+    };
+    let dd = end - o;
+    let dist = dd.length();
+    Ray::segment(o, dd / dist.max(1e-30), dist * (1.0 - 1e-4))
+}

@@ -1,0 +1,446 @@
+//! Emitters and the environment as light sources for next-event estimation:
+//! choosing a light in proportion to its power, sampling a point or direction on
+//! it, and the solid-angle density of that choice (needed again when a BSDF-sampled
+//! ray hits the same light, for multiple importance sampling).
+
+use crate::accel::PrimRef;
+use crate::math::distribution::{Distribution1D, Distribution2D};
+use crate::math::{luminance, warp, Frame, Vec2, Vec3};
+use crate::scene::environment::{direction_to_latlong, latlong_to_direction};
+use crate::scene::{Environment, Scene};
+use std::f32::consts::PI;
+
+/// One light source.
+#[derive(Clone, Copy, Debug)]
+enum Light {
+    /// Emitting triangle `tri` of mesh `mesh` (quads are two of these).
+    Triangle {
+        mesh: u32,
+        tri: u32,
+        area: f32,
+    },
+    Sphere(u32),
+    Environment,
+}
+
+/// A sampled light direction as seen from a shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    pub wi: Vec3,
+    /// Emitted radiance arriving along `-wi` (before visibility).
+    pub radiance: Vec3,
+    /// Density in solid angle at the shading point, including the light choice.
+    pub pdf: f32,
+    /// Point on the light and its normal; `None` for the environment (at infinity).
+    pub point: Option<(Vec3, Vec3)>,
+}
+
+/// How the environment is importance-sampled: built only for scenes that have one.
+#[derive(Clone, Debug)]
+pub enum EnvSampler {
+    /// Constant radiance: uniform sphere.
+    Uniform,
+    /// Lat-long image: a 2D piecewise-constant distribution over texels with
+    /// weights luminance · sin θ (the Jacobian of the lat-long map).
+    Image(Distribution2D),
+    /// Gaussian sky: the vMF lobe with probability `lobe_prob`, else uniform.
+    GaussianSky { lobe_prob: f32 },
+}
+
+/// All lights of a scene plus the distribution that picks one.
+#[derive(Clone, Debug)]
+pub struct LightSet {
+    lights: Vec<Light>,
+    choose: Option<Distribution1D>,
+    /// Index into `lights` of each mesh's first emitting triangle (u32::MAX if none).
+    mesh_first_light: Vec<u32>,
+    sphere_light: Vec<u32>,
+    env_light: Option<u32>,
+    pub env_sampler: Option<EnvSampler>,
+}
+
+impl LightSet {
+    pub fn build(scene: &Scene) -> Self {
+        let mut lights = Vec::new();
+        let mut power = Vec::new();
+        let mut mesh_first_light = vec![u32::MAX; scene.meshes.len()];
+        for (mi, m) in scene.meshes.iter().enumerate() {
+            if m.emission == Vec3::ZERO {
+                continue;
+            }
+            mesh_first_light[mi] = lights.len() as u32;
+            for (ti, t) in m.triangles.iter().enumerate() {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                let area = 0.5 * (b - a).cross(c - a).length();
+                lights.push(Light::Triangle {
+                    mesh: mi as u32,
+                    tri: ti as u32,
+                    area,
+                });
+                power.push(luminance(m.emission) * area * PI);
+            }
+        }
+        let mut sphere_light = vec![u32::MAX; scene.spheres.len()];
+        for (si, s) in scene.spheres.iter().enumerate() {
+            if s.emission == Vec3::ZERO {
+                continue;
+            }
+            sphere_light[si] = lights.len() as u32;
+            lights.push(Light::Sphere(si as u32));
+            power.push(luminance(s.emission) * 4.0 * PI * s.radius * s.radius * PI);
+        }
+        let (env_light, env_sampler) = match &scene.environment {
+            None => (None, None),
+            Some(env) => {
+                let r = scene_radius(scene);
+                // Power through a disk the size of the scene (pbrt's Φ of an infinite light).
+                power.push(mean_luminance(env) * 4.0 * PI * PI * r * r);
+                lights.push(Light::Environment);
+                (Some(lights.len() as u32 - 1), Some(build_env_sampler(env)))
+            }
+        };
+        let choose = (!lights.is_empty()).then(|| Distribution1D::new(&power));
+        Self {
+            lights,
+            choose,
+            mesh_first_light,
+            sphere_light,
+            env_light,
+            env_sampler,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.lights.is_empty()
+    }
+
+    /// Counts for `info`: (emitting triangles, emitting spheres, environment?).
+    pub fn counts(&self) -> (usize, usize, bool) {
+        let tris = self
+            .lights
+            .iter()
+            .filter(|l| matches!(l, Light::Triangle { .. }))
+            .count();
+        let spheres = self
+            .lights
+            .iter()
+            .filter(|l| matches!(l, Light::Sphere(_)))
+            .count();
+        (tris, spheres, self.env_light.is_some())
+    }
+
+    /// Picks a light with `u_pick` and samples a direction toward it from `p`.
+    pub fn sample(&self, scene: &Scene, p: Vec3, u_pick: f32, u: Vec2) -> Option<LightSample> {
+        let choose = self.choose.as_ref()?;
+        let idx = choose.sample_discrete(u_pick);
+        let pick = choose.discrete_pmf(idx);
+        let mut s = match self.lights[idx] {
+            Light::Triangle { mesh, tri, area } => sample_triangle(scene, mesh, tri, area, p, u)?,
+            Light::Sphere(i) => sample_sphere(scene, i, p, u)?,
+            Light::Environment => self.sample_env(scene.environment.as_ref()?, u)?,
+        };
+        s.pdf *= pick;
+        (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
+    }
+
+    /// Solid-angle density with which [`Self::sample`] would produce the direction
+    /// from `p` to the point `q` (normal `nq`) on the emitter `prim`.
+    pub fn pdf_emitter(&self, scene: &Scene, prim: PrimRef, p: Vec3, q: Vec3, nq: Vec3) -> f32 {
+        let Some(choose) = &self.choose else {
+            return 0.0;
+        };
+        match prim {
+            PrimRef::Triangle { mesh, tri } => {
+                let first = self.mesh_first_light[mesh as usize];
+                if first == u32::MAX {
+                    return 0.0;
+                }
+                let idx = (first + tri) as usize;
+                let Light::Triangle { area, .. } = self.lights[idx] else {
+                    return 0.0;
+                };
+                let d = q - p;
+                let dist2 = d.length_squared();
+                let cos = (nq.dot(d) / dist2.sqrt()).abs();
+                if cos <= 0.0 || area <= 0.0 {
+                    return 0.0;
+                }
+                choose.discrete_pmf(idx) * dist2 / (area * cos)
+            }
+            PrimRef::Sphere(i) => {
+                let idx = self.sphere_light[i as usize];
+                if idx == u32::MAX {
+                    return 0.0;
+                }
+                choose.discrete_pmf(idx as usize) * sphere_pdf(scene, i, p, q, nq)
+            }
+        }
+    }
+
+    /// Density with which [`Self::sample`] would produce the environment direction `wi`.
+    pub fn pdf_env(&self, scene: &Scene, wi: Vec3) -> f32 {
+        let (Some(idx), Some(choose), Some(env)) =
+            (self.env_light, &self.choose, &scene.environment)
+        else {
+            return 0.0;
+        };
+        choose.discrete_pmf(idx as usize) * self.env_pdf(env, wi)
+    }
+
+    fn sample_env(&self, env: &Environment, u: Vec2) -> Option<LightSample> {
+        let wi = match (self.env_sampler.as_ref()?, env) {
+            (EnvSampler::Image(dist), _) => {
+                let (uv, _) = dist.sample(u);
+                latlong_to_direction(uv)
+            }
+            (
+                EnvSampler::GaussianSky { lobe_prob },
+                Environment::GaussianSky {
+                    direction,
+                    sharpness,
+                    ..
+                },
+            ) => {
+                if u.x < *lobe_prob {
+                    let u = Vec2::new(u.x / lobe_prob, u.y);
+                    Frame::from_normal(*direction).to_world(warp::square_to_vmf(u, *sharpness))
+                } else {
+                    let u = Vec2::new((u.x - lobe_prob) / (1.0 - lobe_prob), u.y);
+                    warp::square_to_uniform_sphere(u)
+                }
+            }
+            _ => warp::square_to_uniform_sphere(u),
+        };
+        let pdf = self.env_pdf(env, wi);
+        Some(LightSample {
+            wi,
+            radiance: env.eval(wi),
+            pdf,
+            point: None,
+        })
+    }
+
+    fn env_pdf(&self, env: &Environment, wi: Vec3) -> f32 {
+        match (self.env_sampler.as_ref(), env) {
+            (Some(EnvSampler::Image(dist)), _) => {
+                let uv = direction_to_latlong(wi);
+                // From x and z, not 1 − y²: exact near the poles where y rounds to 1.
+                let sin_theta = (wi.x * wi.x + wi.z * wi.z).sqrt();
+                if sin_theta <= 1e-6 {
+                    return 0.0;
+                }
+                // (u,v) → direction has Jacobian 2π · π · sin θ.
+                dist.pdf(uv) / (2.0 * PI * PI * sin_theta)
+            }
+            (
+                Some(EnvSampler::GaussianSky { lobe_prob }),
+                Environment::GaussianSky {
+                    direction,
+                    sharpness,
+                    ..
+                },
+            ) => {
+                lobe_prob * warp::vmf_pdf(wi.dot(*direction), *sharpness)
+                    + (1.0 - lobe_prob) * warp::UNIFORM_SPHERE_PDF
+            }
+            (Some(_), _) => warp::UNIFORM_SPHERE_PDF,
+            (None, _) => 0.0,
+        }
+    }
+}
+
+fn build_env_sampler(env: &Environment) -> EnvSampler {
+    match env {
+        Environment::Constant { .. } => EnvSampler::Uniform,
+        Environment::Image {
+            width,
+            height,
+            texels,
+            ..
+        } => {
+            let mut w = Vec::with_capacity(width * height);
+            for y in 0..*height {
+                let sin_theta = ((y as f32 + 0.5) / *height as f32 * PI).sin();
+                for x in 0..*width {
+                    // Bilinear lookup spreads a texel into its neighbours: blur the
+                    // weights by taking the max of the 3×3 neighbourhood so that no
+                    // direction with radiance gets a zero density.
+                    let mut m = 0.0f32;
+                    for dy in -1i64..=1 {
+                        let yy = (y as i64 + dy).clamp(0, *height as i64 - 1) as usize;
+                        for dx in -1i64..=1 {
+                            let xx = (x as i64 + dx).rem_euclid(*width as i64) as usize;
+                            m = m.max(luminance(texels[yy * width + xx]));
+                        }
+                    }
+                    w.push(m * sin_theta);
+                }
+            }
+            EnvSampler::Image(Distribution2D::new(&w, *width, *height))
+        }
+        Environment::GaussianSky {
+            sharpness,
+            peak,
+            ambient,
+            ..
+        } => {
+            // Power of each part: the lobe integrates to peak·2π(1−e^{−2κ})/κ.
+            let k = sharpness.max(1e-4);
+            let lobe = luminance(*peak) * 2.0 * PI * (-(-2.0 * k).exp_m1()) / k;
+            let flat = luminance(*ambient) * 4.0 * PI;
+            let total = lobe + flat;
+            let p = if total > 0.0 { lobe / total } else { 0.0 };
+            // Keep some uniform sampling so the ambient part is never starved.
+            EnvSampler::GaussianSky {
+                lobe_prob: p.clamp(0.0, 0.95),
+            }
+        }
+    }
+}
+
+fn mean_luminance(env: &Environment) -> f32 {
+    match env {
+        Environment::Constant { radiance } => luminance(*radiance),
+        Environment::Image {
+            width,
+            height,
+            texels,
+            scale,
+        } => {
+            let mut s = 0.0f64;
+            let mut wsum = 0.0f64;
+            for y in 0..*height {
+                let st = ((y as f64 + 0.5) / *height as f64 * std::f64::consts::PI).sin();
+                for x in 0..*width {
+                    s += luminance(texels[y * width + x]) as f64 * st;
+                    wsum += st;
+                }
+            }
+            (*scale as f64 * s / wsum.max(1e-30)) as f32
+        }
+        Environment::GaussianSky {
+            sharpness,
+            peak,
+            ambient,
+            ..
+        } => {
+            let k = sharpness.max(1e-4);
+            luminance(*ambient) + luminance(*peak) * (-(-2.0 * k).exp_m1()) / (2.0 * k)
+        }
+    }
+}
+
+/// Radius of a sphere around all finite geometry (at least 1).
+fn scene_radius(scene: &Scene) -> f32 {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for m in &scene.meshes {
+        for &p in &m.positions {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    for s in &scene.spheres {
+        lo = lo.min(s.center - Vec3::splat(s.radius));
+        hi = hi.max(s.center + Vec3::splat(s.radius));
+    }
+    if lo.x > hi.x {
+        return 1.0;
+    }
+    (0.5 * (hi - lo).length()).max(1.0)
+}
+
+fn sample_triangle(
+    scene: &Scene,
+    mesh: u32,
+    tri: u32,
+    area: f32,
+    p: Vec3,
+    u: Vec2,
+) -> Option<LightSample> {
+    let m = &scene.meshes[mesh as usize];
+    let [a, b, c] = m.triangles[tri as usize].map(|i| m.positions[i as usize]);
+    let bary = warp::square_to_uniform_triangle(u);
+    let q = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
+    let n = (b - a).cross(c - a).normalize_or_zero();
+    let d = q - p;
+    let dist2 = d.length_squared();
+    if dist2 <= 0.0 || area <= 0.0 {
+        return None;
+    }
+    let wi = d / dist2.sqrt();
+    let cos_l = -n.dot(wi);
+    // One-sided emission: the back of an emitter is dark.
+    if cos_l <= 0.0 {
+        return None;
+    }
+    Some(LightSample {
+        wi,
+        radiance: m.emission,
+        pdf: dist2 / (area * cos_l),
+        point: Some((q, n)),
+    })
+}
+
+/// Samples the cone of directions a sphere light subtends (uniform in solid angle:
+/// zero variance in the geometry term, unlike area sampling); area sampling when
+/// `p` is inside the sphere.
+fn sample_sphere(scene: &Scene, i: u32, p: Vec3, u: Vec2) -> Option<LightSample> {
+    let s = &scene.spheres[i as usize];
+    let to_c = s.center - p;
+    let dist2 = to_c.length_squared();
+    let r2 = s.radius * s.radius;
+    if dist2 <= r2 * 1.0001 {
+        // Inside (or on) the light: uniform area sampling of the whole sphere.
+        let n = warp::square_to_uniform_sphere(u);
+        let q = s.center + s.radius * n;
+        let d = q - p;
+        let d2 = d.length_squared();
+        let wi = d / d2.sqrt().max(1e-30);
+        let cos_l = -n.dot(wi);
+        if cos_l <= 0.0 {
+            return None;
+        }
+        return Some(LightSample {
+            wi,
+            radiance: s.emission,
+            pdf: d2 / (4.0 * PI * r2 * cos_l),
+            point: Some((q, n)),
+        });
+    }
+    let dist = dist2.sqrt();
+    let sin2_max = r2 / dist2;
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+    let frame = Frame::from_normal(to_c / dist);
+    let local = warp::square_to_uniform_cone(u, cos_max);
+    let wi = frame.to_world(local);
+    // Point on the sphere along wi: nearer root of |p + t wi − c|² = r².
+    let b = to_c.dot(wi);
+    let disc = (r2 - (to_c - b * wi).length_squared()).max(0.0);
+    let t = b - disc.sqrt();
+    let q = p + t * wi;
+    let n = (q - s.center).normalize_or_zero();
+    Some(LightSample {
+        wi,
+        radiance: s.emission,
+        pdf: warp::uniform_cone_pdf(cos_max),
+        point: Some((q, n)),
+    })
+}
+
+fn sphere_pdf(scene: &Scene, i: u32, p: Vec3, q: Vec3, nq: Vec3) -> f32 {
+    let s = &scene.spheres[i as usize];
+    let dist2 = (s.center - p).length_squared();
+    let r2 = s.radius * s.radius;
+    if dist2 <= r2 * 1.0001 {
+        let d = q - p;
+        let d2 = d.length_squared();
+        let cos_l = (nq.dot(d) / d2.sqrt()).abs();
+        if cos_l <= 0.0 {
+            return 0.0;
+        }
+        return d2 / (4.0 * PI * r2 * cos_l);
+    }
+    let cos_max = (1.0 - r2 / dist2).max(0.0).sqrt();
+    warp::uniform_cone_pdf(cos_max)
+}

@@ -1,0 +1,233 @@
+//! The per-sample estimator: unidirectional path tracing with next-event
+//! estimation, multiple importance sampling (power heuristic) between light and
+//! BSDF sampling for area lights and the environment, and Russian roulette.
+
+use super::gradients::geometry::{hit_duals, HitDuals};
+use super::gradients::shading::{self, LightPoint};
+use super::gradients::GradientSample;
+use super::interaction::{interaction, offset_origin, segment_between, Interaction};
+use super::lights::LightSet;
+use crate::accel::Accel;
+use crate::math::sampler::PixelSampler;
+use crate::math::{Ray, Vec3};
+use crate::scene::Scene;
+
+/// Sampler dimensions used per path vertex; fixed so that vertex k always reads
+/// the same dimensions whatever happened at earlier vertices.
+const DIMS_PER_BOUNCE: u32 = 8;
+/// The first two dimensions jitter the position in the pixel.
+const FIRST_BOUNCE_DIM: u32 = 2;
+
+/// Configuration shared by all samples of a render.
+pub struct PathTracer<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    pub lights: &'a LightSet,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+}
+
+/// What one camera sample returns: radiance plus first-hit data for the AOVs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SampleResult {
+    pub radiance: Vec3,
+    pub first_hit: Option<FirstHit>,
+    /// Analytic image gradient of the direct illumination, when asked for.
+    pub gradient: Option<GradientSample>,
+    pub rays: u32,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct FirstHit {
+    pub normal: Vec3,
+    pub depth: f32,
+    pub albedo: Vec3,
+    pub object_id: u32,
+}
+
+/// Power heuristic with β = 2 (Veach 1997), written to stay finite when one
+/// density is infinite or both are zero.
+pub fn power_heuristic(f: f32, g: f32) -> f32 {
+    let (f2, g2) = (f * f, g * g);
+    if f2.is_infinite() {
+        return 1.0;
+    }
+    if f2 + g2 <= 0.0 {
+        return 0.0;
+    }
+    f2 / (f2 + g2)
+}
+
+impl PathTracer<'_> {
+    /// Radiance arriving at the camera along `ray`. With `dd` (the image
+    /// derivatives ∂d/∂u, ∂d/∂v of the ray's unit direction) the result also
+    /// carries the analytic gradient of the direct illumination at the first hit,
+    /// computed from the same light sample and shadow ray as the radiance.
+    pub fn li(
+        &self,
+        mut ray: Ray,
+        sampler: &mut PixelSampler,
+        dd: Option<[Vec3; 2]>,
+    ) -> SampleResult {
+        let scene = self.scene;
+        let mut out = SampleResult::default();
+        let mut grad: Option<(GradientSample, HitDuals)> = None;
+        let mut radiance = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        // Density of the BSDF sample that produced `ray`; infinite for camera rays
+        // and delta lobes (emitters they hit are counted with full weight).
+        let mut prev_pdf = f32::INFINITY;
+        let mut prev_p = ray.origin;
+        for depth in 1..=self.max_depth {
+            sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
+            out.rays += 1;
+            let Some(hit) = self.accel.intersect(&ray) else {
+                if let (Some(env), Some(dd), 1) = (&scene.environment, dd, depth) {
+                    out.gradient = Some(escaped_ray_gradient(env, ray.dir, dd));
+                }
+                if let Some(env) = &scene.environment {
+                    let le = env.eval(ray.dir);
+                    let w = if prev_pdf.is_infinite() {
+                        1.0
+                    } else {
+                        power_heuristic(prev_pdf, self.lights.pdf_env(scene, ray.dir))
+                    };
+                    radiance += beta * le * w;
+                }
+                break;
+            };
+            let si = interaction(scene, &ray, &hit);
+            if let (Some(dd), 1) = (dd, depth) {
+                let hd = hit_duals(scene, &si, &ray, dd);
+                let g = GradientSample {
+                    cv: hd.cv,
+                    ..Default::default()
+                };
+                grad = Some((g, hd));
+            }
+            if depth == 1 {
+                out.first_hit = Some(FirstHit {
+                    normal: si.frame.n,
+                    depth: hit.t,
+                    albedo: scene.materials[si.material as usize].albedo(),
+                    object_id: si.object_id,
+                });
+            }
+            if si.emission != Vec3::ZERO {
+                let w = if prev_pdf.is_infinite() {
+                    1.0
+                } else {
+                    let light_pdf = self.lights.pdf_emitter(scene, si.prim, prev_p, si.p, si.ng);
+                    power_heuristic(prev_pdf, light_pdf)
+                };
+                radiance += beta * si.emission * w;
+            }
+            if depth == self.max_depth {
+                break;
+            }
+            let material = &scene.materials[si.material as usize];
+            let wo = si.frame.to_local(-ray.dir);
+            if wo.z <= 0.0 {
+                break;
+            }
+            // Next-event estimation (one light sample per vertex).
+            let u_pick = sampler.next_1d();
+            let u_light = sampler.next_2d();
+            if !material.is_delta() {
+                if let Some(ls) = self.lights.sample(scene, si.p, u_pick, u_light) {
+                    let wi_local = si.frame.to_local(ls.wi);
+                    let f = material.eval(wo, wi_local);
+                    // Both sides must agree: the shading and the geometric normal.
+                    if wi_local.z > 0.0 && ls.wi.dot(si.ng) > 0.0 && f != Vec3::ZERO {
+                        out.rays += 1;
+                        if self.unoccluded(&si, ls.wi, ls.point) {
+                            let bsdf_pdf = material.pdf(wo, wi_local);
+                            let w = power_heuristic(ls.pdf, bsdf_pdf);
+                            radiance += beta * f * wi_local.z * ls.radiance * (w / ls.pdf);
+                            // The gradient uses this light sample alone (weight 1):
+                            // an unbiased estimate of ∂(direct light) on its own.
+                            if let (Some((g, hd)), 1) = (grad.as_mut(), depth) {
+                                let lp = light_point(&si, &ls);
+                                g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0);
+                            }
+                        }
+                    }
+                }
+            }
+            // BSDF sampling continues the path.
+            let u_lobe = sampler.next_1d();
+            let u_dir = sampler.next_2d();
+            let Some(bs) = material.sample(wo, u_lobe, u_dir) else {
+                break;
+            };
+            let wi = si.frame.to_world(bs.wi);
+            if wi.dot(si.ng) <= 0.0 || !bs.weight.is_finite() {
+                break;
+            }
+            beta *= bs.weight;
+            prev_pdf = if bs.is_delta { f32::INFINITY } else { bs.pdf };
+            prev_p = si.p;
+            ray = Ray::new(offset_origin(si.p, si.ng, wi), wi);
+            // Russian roulette on the throughput, once paths are long enough.
+            let u_rr = sampler.next_1d();
+            if depth >= self.rr_depth {
+                let q = beta.max_element().min(0.95);
+                if q <= 0.0 || u_rr >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            if beta == Vec3::ZERO {
+                break;
+            }
+        }
+        out.radiance = radiance;
+        if let Some((g, _)) = grad {
+            out.gradient = Some(g);
+        }
+        out
+    }
+
+    fn unoccluded(&self, si: &Interaction, wi: Vec3, point: Option<(Vec3, Vec3)>) -> bool {
+        let ray = match point {
+            Some((q, nq)) => segment_between(si.p, si.ng, q, Some(nq)),
+            None => Ray::new(offset_origin(si.p, si.ng, wi), wi),
+        };
+        !self.accel.occluded(&ray)
+    }
+}
+
+/// The light sample in the form the gradient stage differentiates: emitter points
+/// in area measure (so they stay fixed while the shading point moves).
+fn light_point(si: &Interaction, ls: &super::lights::LightSample) -> LightPoint {
+    match ls.point {
+        Some((y, ny)) => {
+            let d = y - si.p;
+            let r2 = d.length_squared();
+            let cos_y = (ny.dot(d) / r2.sqrt()).abs();
+            LightPoint::Area {
+                y,
+                ny,
+                radiance: ls.radiance,
+                pdf_area: ls.pdf * cos_y / r2,
+            }
+        }
+        None => LightPoint::Direction {
+            wi: ls.wi,
+            radiance: ls.radiance,
+            pdf: ls.pdf,
+        },
+    }
+}
+
+/// Gradient of the environment radiance seen by a camera ray that hits nothing.
+fn escaped_ray_gradient(env: &crate::scene::Environment, d: Vec3, dd: [Vec3; 2]) -> GradientSample {
+    let mut lanes = [Vec3::ZERO; super::gradients::LANES];
+    lanes[super::gradients::CAM] = dd[0];
+    lanes[super::gradients::CAM + 1] = dd[1];
+    let l = shading::environment(env, super::gradients::GVec3::with_lanes(d, lanes));
+    let mut g = GradientSample::default();
+    g.add_lanes(&l, 1.0);
+    g.dv = [Vec3::ZERO; 2];
+    g
+}

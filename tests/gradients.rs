@@ -1,0 +1,441 @@
+//! Analytic image gradients against finite differences, at three levels:
+//! 1. the geometric lanes (∂x/∂u, ∂n/∂u, ∂ω_o/∂u from ray differentials, curvature
+//!    and bump maps) against differences of re-traced camera rays;
+//! 2. each term of the integrand (SV, CDV, DV) against differences with only its
+//!    input perturbed, for every material and both kinds of light sample;
+//! 3. the per-sample estimate against central differences of the very same
+//!    estimator at shifted pixel positions (common random numbers: noise-free),
+//!    and the converged gradient against differences of the converged image.
+
+use gradtrace::accel::Accel;
+use gradtrace::brdf::Material;
+use gradtrace::math::dual::DVec3;
+use gradtrace::math::{Frame, Vec2, Vec3};
+use gradtrace::render::gradients::geometry::{hit_duals, unit_direction_derivatives, HitDuals};
+use gradtrace::render::gradients::shading::{direct_sample, LightPoint};
+use gradtrace::render::gradients::{GVec3, CAM, CDV, DV, LANES, SV};
+use gradtrace::render::interaction::interaction;
+use gradtrace::render::lights::LightSet;
+use gradtrace::render::path::PathTracer;
+use gradtrace::render::{camera_sample, render, RenderOptions};
+use gradtrace::scene::{Camera, Environment, Integrator, Rect, Scene};
+
+mod scenes;
+use scenes::*;
+
+fn cam(w: u32, h: u32) -> Camera {
+    Camera::new(
+        Vec3::new(0.0, 1.6, 5.0),
+        Vec3::new(0.0, 0.6, 0.0),
+        Vec3::Y,
+        30.0,
+        w,
+        h,
+    )
+    .unwrap()
+}
+
+fn near_quad_light() -> Rect {
+    // 1×1 light at height 3, facing down.
+    Rect {
+        corner: Vec3::new(-0.5, 3.0, -0.5),
+        edge_u: Vec3::new(1.0, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, 1.0),
+    }
+}
+
+fn sky() -> Environment {
+    Environment::GaussianSky {
+        direction: Vec3::new(0.3, 1.0, 0.2).normalize(),
+        sharpness: 8.0,
+        peak: Vec3::new(4.0, 3.5, 3.0),
+        ambient: Vec3::splat(0.1),
+    }
+}
+
+fn materials() -> Vec<Material> {
+    vec![
+        Material::Lambert {
+            albedo: Vec3::new(0.7, 0.5, 0.3),
+        },
+        Material::BlinnPhong {
+            kd: Vec3::splat(0.3),
+            ks: Vec3::splat(0.5),
+            exponent: 40.0,
+        },
+        Material::CookTorrance {
+            kd: Vec3::splat(0.2),
+            ks: Vec3::splat(0.6),
+            exponent: 120.0,
+        },
+    ]
+}
+
+/// Test scenes: (name, scene). All are free of occluders, so the visibility term
+/// is zero and every remaining term is smooth.
+fn scenes() -> Vec<(String, Scene)> {
+    let mut out = Vec::new();
+    for (mi, m) in materials().into_iter().enumerate() {
+        // Sphere under a near quad light.
+        let mut s = empty_scene(cam(40, 30));
+        let id = add_material(&mut s, m.clone());
+        let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+        add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, id, Vec3::ZERO);
+        add_quad(&mut s, near_quad_light(), black, Vec3::splat(8.0));
+        out.push((format!("sphere/near-quad/m{mi}"), s));
+
+        // Bumpy sphere under the sky (a distant light: no SV term).
+        let mut s = empty_scene(cam(40, 30));
+        let id = add_material(&mut s, m.clone());
+        let b = add_bump(
+            &mut s,
+            &[(0.01, [6.0, 4.0], 0.3), (0.006, [-3.0, 9.0], 1.0)],
+        );
+        add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, id, Vec3::ZERO);
+        s.spheres[0].bump = Some(b);
+        s.environment = Some(sky());
+        out.push((format!("bumpy-sphere/sky/m{mi}"), s));
+
+        // Flat table under a near quad light (no curvature: no CV/CDV).
+        let mut s = empty_scene(
+            Camera::new(
+                Vec3::new(0.0, 2.5, 4.0),
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::Y,
+                40.0,
+                40,
+                30,
+            )
+            .unwrap(),
+        );
+        let id = add_material(&mut s, m.clone());
+        let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+        add_quad(&mut s, ground(3.0), id, Vec3::ZERO);
+        add_quad(&mut s, near_quad_light(), black, Vec3::splat(8.0));
+        out.push((format!("table/near-quad/m{mi}"), s));
+
+        // Smooth mesh (interpolated normals) under sky + near light.
+        let mut s = empty_scene(cam(40, 30));
+        let id = add_material(&mut s, m);
+        let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+        add_icosphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, 2, id);
+        add_quad(&mut s, near_quad_light(), black, Vec3::splat(8.0));
+        s.environment = Some(sky());
+        out.push((format!("mesh/sky+quad/m{mi}"), s));
+    }
+    out
+}
+
+fn rel_err(a: Vec3, b: Vec3, floor: f32) -> f32 {
+    (a - b).length() / (b.length().max(a.length())).max(floor)
+}
+
+/// Level 1: ray-differential transfer, normal derivatives (sphere curvature,
+/// interpolated mesh normals, bump second derivatives) and view-direction
+/// derivatives against central differences of re-traced rays.
+#[test]
+fn geometric_lanes_match_retraced_rays() {
+    for (name, s) in scenes() {
+        let accel = Accel::build(&s.meshes, &s.spheres);
+        let c = &s.camera;
+        let (mut worst_x, mut worst_n, mut checked) = (0.0f32, 0.0f32, 0);
+        for py in (2..c.height - 2).step_by(3) {
+            for px in (2..c.width - 2).step_by(3) {
+                let p = Vec2::new(px as f32 + 0.37, py as f32 + 0.61);
+                let trace = |q: Vec2| {
+                    let ray = c.generate_ray(q);
+                    accel
+                        .intersect(&ray)
+                        .map(|hit| (ray, hit, interaction(&s, &ray, &hit)))
+                };
+                let Some((ray, _, si)) = trace(p) else {
+                    continue;
+                };
+                let dd = unit_direction_derivatives(
+                    ray.dir,
+                    1.0 / ray.dir.dot(c.forward()),
+                    c.direction_derivatives(),
+                );
+                let hd = hit_duals(&s, &si, &ray, dd);
+                let h = 2e-3;
+                for axis in 0..2 {
+                    let e = if axis == 0 { Vec2::X } else { Vec2::Y } * h;
+                    let (Some((ra, _, a)), Some((rb, _, b))) = (trace(p + e), trace(p - e)) else {
+                        continue;
+                    };
+                    if a.object_id != si.object_id || b.object_id != si.object_id {
+                        continue;
+                    }
+                    let fd_x = (a.p - b.p) / (2.0 * h);
+                    let fd_n = (a.frame.n - b.frame.n) / (2.0 * h);
+                    let fd_w = (-ra.dir + rb.dir) / (2.0 * h);
+                    let an_x = hd.x.lane(SV + axis);
+                    let an_n = hd.n.lane(CDV + axis);
+                    let an_w = hd.wo.lane(CAM + axis);
+                    let ex = rel_err(fd_x, an_x, 1e-4);
+                    let en = rel_err(fd_n, an_n, 1e-3);
+                    let ew = rel_err(fd_w, an_w, 1e-6);
+                    assert!(
+                        ex < 2e-2,
+                        "{name} ({px},{py}) axis {axis}: dx/du {fd_x} vs {an_x}"
+                    );
+                    assert!(
+                        en < 5e-2,
+                        "{name} ({px},{py}) axis {axis}: dn/du {fd_n} vs {an_n}"
+                    );
+                    assert!(ew < 1e-2, "{name}: dωo/du {fd_w} vs {an_w}");
+                    worst_x = worst_x.max(ex);
+                    worst_n = worst_n.max(en);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 40, "{name}: only {checked} pixels checked");
+        println!(
+            "{name}: {checked} checks, worst rel. err dx/du {worst_x:.2e}, dn/du {worst_n:.2e}"
+        );
+    }
+}
+
+/// Level 2: each lane of the integrand is the derivative with respect to its own
+/// input only (SV: position, CDV: normal, CAM/DV: view direction).
+#[test]
+fn integrand_terms_match_partial_differences() {
+    let x0 = Vec3::new(0.1, 0.2, -0.1);
+    let n0 = Vec3::new(0.1, 1.0, 0.2).normalize();
+    let wo0 = Vec3::new(-0.4, 0.8, 0.5).normalize();
+    let dirs = [Vec3::new(0.3, 0.1, -0.2), Vec3::new(-0.1, 0.05, 0.3)];
+    let lights = [
+        LightPoint::Area {
+            y: Vec3::new(0.6, 2.0, 0.3),
+            ny: Vec3::new(-0.1, -1.0, 0.0).normalize(),
+            radiance: Vec3::new(5.0, 4.0, 3.0),
+            pdf_area: 0.7,
+        },
+        LightPoint::Direction {
+            wi: Vec3::new(0.5, 0.8, -0.2).normalize(),
+            radiance: Vec3::new(2.0, 2.5, 3.0),
+            pdf: 0.3,
+        },
+    ];
+    let build = |x: Vec3, n: Vec3, wo: Vec3| -> HitDuals {
+        let mut xl = [Vec3::ZERO; LANES];
+        let mut nl = [Vec3::ZERO; LANES];
+        let mut wl = [Vec3::ZERO; LANES];
+        for k in 0..2 {
+            xl[SV + k] = dirs[k];
+            // Tangential perturbations of unit vectors.
+            nl[CDV + k] = dirs[k] - n * n.dot(dirs[k]);
+            wl[CAM + k] = dirs[k] - wo * wo.dot(dirs[k]);
+        }
+        let f = Frame::from_normal(wo);
+        wl[DV] = f.s;
+        wl[DV + 1] = f.t;
+        HitDuals {
+            x: GVec3::with_lanes(x, xl),
+            n: GVec3::with_lanes(n, nl),
+            wo: GVec3::with_lanes(wo, wl),
+            cv: 0.0,
+        }
+    };
+    let h = 1e-3f32;
+    for m in materials() {
+        for light in &lights {
+            let hd = build(x0, n0, wo0);
+            let g = direct_sample(&m, &hd, light);
+            let value = |x: Vec3, n: Vec3, wo: Vec3| {
+                let c = direct_sample(&m, &build(x, n.normalize(), wo.normalize()), light);
+                Vec3::new(c[0].v, c[1].v, c[2].v)
+            };
+            let lane = |l: usize| Vec3::new(g[0].d[l], g[1].d[l], g[2].d[l]);
+            for k in 0..2 {
+                let t_n = hd.n.lane(CDV + k);
+                let t_w = hd.wo.lane(CAM + k);
+                let fd_sv = (value(x0 + h * dirs[k], n0, wo0) - value(x0 - h * dirs[k], n0, wo0))
+                    / (2.0 * h);
+                let fd_cdv =
+                    (value(x0, n0 + h * t_n, wo0) - value(x0, n0 - h * t_n, wo0)) / (2.0 * h);
+                let fd_cam =
+                    (value(x0, n0, wo0 + h * t_w) - value(x0, n0, wo0 - h * t_w)) / (2.0 * h);
+                let t_d = hd.wo.lane(DV + k);
+                let fd_dv =
+                    (value(x0, n0, wo0 + h * t_d) - value(x0, n0, wo0 - h * t_d)) / (2.0 * h);
+                for (term, fd, an) in [
+                    ("SV", fd_sv, lane(SV + k)),
+                    ("CDV", fd_cdv, lane(CDV + k)),
+                    ("CAM", fd_cam, lane(CAM + k)),
+                    ("DV", fd_dv, lane(DV + k)),
+                ] {
+                    let e = rel_err(fd, an, 1e-3);
+                    assert!(e < 1e-2, "{m:?} {light:?} {term}[{k}]: fd {fd} vs {an}");
+                }
+                if matches!(light, LightPoint::Direction { .. }) {
+                    assert_eq!(lane(SV + k), Vec3::ZERO, "a distant light has no SV term");
+                }
+            }
+        }
+    }
+}
+
+/// Level 3a: per sample, the analytic gradient equals central differences of the
+/// same estimator at shifted pixel positions with the same random numbers.
+#[test]
+fn per_sample_gradient_matches_shifted_estimator() {
+    let mut summary = Vec::new();
+    for (name, s) in scenes() {
+        let accel = Accel::build(&s.meshes, &s.spheres);
+        let lights = LightSet::build(&s);
+        let tracer = PathTracer {
+            scene: &s,
+            accel: &accel,
+            lights: &lights,
+            max_depth: 2,
+            rr_depth: 5,
+        };
+        let c = &s.camera;
+        let h = 1e-2f32;
+        let mut errs = Vec::new();
+        let mut terms = [0.0f32; 3];
+        for pixel in (0..c.width * c.height).step_by(7) {
+            for sample in 0..2 {
+                let at = |shift: Vec2| camera_sample(&tracer, c, pixel, sample, 11, true, shift);
+                let mid = at(Vec2::ZERO);
+                let Some(g) = mid.gradient else { continue };
+                let Some(fh) = mid.first_hit else { continue };
+                for axis in 0..2 {
+                    let e = if axis == 0 { Vec2::X } else { Vec2::Y } * h;
+                    let (a, b) = (at(e), at(-e));
+                    let same = |r: &gradtrace::render::path::SampleResult| {
+                        r.first_hit.map(|f| f.object_id) == Some(fh.object_id)
+                    };
+                    if !same(&a) || !same(&b) {
+                        continue;
+                    }
+                    let va = a.gradient.unwrap().value;
+                    let vb = b.gradient.unwrap().value;
+                    let fd = (va - vb) / (2.0 * h);
+                    let an = g.total()[axis];
+                    // Skip kinks of the estimator itself (a light sample crossing a
+                    // horizon between the two shifted positions): detected by a
+                    // second step size disagreeing with the first.
+                    let (a2, b2) = (at(e * 0.5), at(-e * 0.5));
+                    let fd2 = (a2.gradient.unwrap().value - b2.gradient.unwrap().value) / h;
+                    if rel_err(fd, fd2, 1e-2) > 0.05 {
+                        continue;
+                    }
+                    errs.push(rel_err(fd, an, 1e-2 * g.value.length().max(1e-3)));
+                    terms[0] += g.sv[axis].length();
+                    terms[1] += g.cdv[axis].length();
+                    terms[2] += g.cam[axis].length();
+                }
+            }
+        }
+        assert!(errs.len() > 100, "{name}: only {} comparisons", errs.len());
+        errs.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        let median = errs[errs.len() / 2];
+        let p95 = errs[errs.len() * 95 / 100];
+        summary.push(format!(
+            "{name}: n={} median rel err {median:.2e}, p95 {p95:.2e}; Σ|SV| {:.3} Σ|CDV| {:.3} Σ|CAM| {:.3}",
+            errs.len(),
+            terms[0],
+            terms[1],
+            terms[2]
+        ));
+        assert!(median < 2e-3 && p95 < 2e-2, "{}", summary.last().unwrap());
+        if name.starts_with("bumpy-sphere/sky") {
+            assert_eq!(terms[0], 0.0, "{name}: distant light must have no SV term");
+            assert!(
+                terms[1] > 10.0 * terms[2].max(1e-6),
+                "{name}: CDV dominates on bumps"
+            );
+        }
+        if name.starts_with("table/") {
+            assert_eq!(terms[1], 0.0, "{name}: flat surface must have no CDV term");
+            assert!(terms[0] > 0.0);
+        }
+    }
+    for l in summary {
+        println!("{l}");
+    }
+}
+
+/// Level 3b: the converged gradient is the gradient of the converged image
+/// (MIS, both sampling strategies), including sphere lights sampled by cone.
+#[test]
+fn converged_gradient_matches_image_differences() {
+    let mut s = empty_scene(cam(24, 18));
+    let glossy = add_material(
+        &mut s,
+        Material::BlinnPhong {
+            kd: Vec3::splat(0.4),
+            ks: Vec3::splat(0.3),
+            exponent: 20.0,
+        },
+    );
+    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+    add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, glossy, Vec3::ZERO);
+    add_sphere(
+        &mut s,
+        Vec3::new(1.5, 2.5, 1.0),
+        0.3,
+        black,
+        Vec3::splat(20.0),
+    );
+    s.settings.integrator = Integrator::Direct;
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let spp = 4096;
+    let opts = RenderOptions {
+        spp: Some(spp),
+        gradients: true,
+        ..Default::default()
+    };
+    let base = render(&s, &accel, &opts, &|_, _| {}).unwrap();
+    let g = base.gradients.as_ref().unwrap();
+    // Image differences: re-render with the camera moved by ±h pixels along u.
+    let h = 0.25f32;
+    let lights = LightSet::build(&s);
+    let tracer = PathTracer {
+        scene: &s,
+        accel: &accel,
+        lights: &lights,
+        max_depth: 2,
+        rr_depth: 5,
+    };
+    let mut checked = 0;
+    for (px, py) in [(12u32, 9u32), (10, 8), (14, 11), (11, 12)] {
+        let pixel = py * s.camera.width + px;
+        let mean = |shift: Vec2| {
+            let mut acc = Vec3::ZERO;
+            for i in 0..spp {
+                acc += camera_sample(&tracer, &s.camera, pixel, i, 0, false, shift).radiance;
+            }
+            acc / spp as f32
+        };
+        for axis in 0..2 {
+            let e = if axis == 0 { Vec2::X } else { Vec2::Y } * h;
+            let fd = (mean(e) - mean(-e)) / (2.0 * h);
+            let an = if axis == 0 {
+                g.grad_u[pixel as usize]
+            } else {
+                g.grad_v[pixel as usize]
+            };
+            let err = rel_err(fd, an, 0.02);
+            assert!(
+                err < 0.08,
+                "pixel ({px},{py}) axis {axis}: image FD {fd} vs analytic {an}"
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 8);
+}
+
+/// Sanity of the dual lanes' layout: a DVec3 with lanes returns them.
+#[test]
+fn dvec3_lanes_round_trip() {
+    let mut l = [Vec3::ZERO; LANES];
+    l[3] = Vec3::new(1.0, 2.0, 3.0);
+    let v: DVec3<LANES> = DVec3::with_lanes(Vec3::ONE, l);
+    assert_eq!(v.lane(3), Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(v.value(), Vec3::ONE);
+}

@@ -1,0 +1,421 @@
+//! End-to-end checks of the path tracer on scenes built in code: known answers
+//! (furnace), light-sampling densities against their own integrals, determinism
+//! across thread counts, and finiteness on hard configurations.
+
+use gradtrace::accel::Accel;
+use gradtrace::brdf::Material;
+use gradtrace::math::sampler::PixelSampler;
+use gradtrace::math::{Vec2, Vec3};
+use gradtrace::render::lights::LightSet;
+use gradtrace::render::path::PathTracer;
+use gradtrace::render::{render, RenderOptions};
+use gradtrace::scene::{Camera, Environment, Integrator, Rect, Scene};
+use std::f32::consts::PI;
+
+mod scenes;
+use scenes::*;
+
+fn render_scene(s: &Scene, spp: u32, aovs: bool) -> gradtrace::render::RenderOutput {
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let opts = RenderOptions {
+        spp: Some(spp),
+        aovs,
+        ..Default::default()
+    };
+    render(s, &accel, &opts, &|_, _| {}).unwrap()
+}
+
+/// White furnace: a convex object inside a uniform environment. A path leaving a
+/// convex surface never returns to it, so every pixel sees exactly L_env·(albedo
+/// of one bounce); with albedo 1 that is L_env, for any BRDF that conserves energy.
+#[test]
+fn furnace_sphere_in_constant_environment() {
+    for (material, expected) in [
+        (Material::Lambert { albedo: Vec3::ONE }, 1.0),
+        (
+            Material::Lambert {
+                albedo: Vec3::splat(0.5),
+            },
+            0.5,
+        ),
+        (
+            Material::Mirror {
+                reflectance: Vec3::splat(0.8),
+            },
+            0.8,
+        ),
+    ] {
+        let mut s = empty_scene(camera(24, 16));
+        let m = add_material(&mut s, material.clone());
+        add_sphere(&mut s, Vec3::new(0.0, 0.5, 0.0), 1.0, m, Vec3::ZERO);
+        s.environment = Some(Environment::Constant {
+            radiance: Vec3::new(0.5, 1.0, 2.0),
+        });
+        let out = render_scene(&s, 64, false);
+        let n = out.beauty.len() as f32;
+        let mean = out.beauty.iter().fold(Vec3::ZERO, |a, &b| a + b) / n;
+        // Pixels on the sphere carry `expected`, the others 1: mix by coverage.
+        let cov = out
+            .beauty
+            .iter()
+            .filter(|c| (c.y - 1.0).abs() > 1e-6)
+            .count() as f32
+            / n;
+        let want = Vec3::new(0.5, 1.0, 2.0) * (1.0 - cov + cov * expected);
+        assert!(
+            (mean - want).abs().max_element() < 0.01 * want.max_element(),
+            "{material:?}: mean {mean} want {want} (coverage {cov})"
+        );
+        if expected == 1.0 {
+            // Every single pixel is exactly the environment (up to noise of cosine
+            // sampling a constant: none, since weight = albedo).
+            for c in &out.beauty {
+                assert!(
+                    (*c - Vec3::new(0.5, 1.0, 2.0)).abs().max_element() < 1e-3,
+                    "{c}"
+                );
+            }
+        }
+    }
+}
+
+/// A diffuse plane lit by a small sphere light far away follows the inverse-square
+/// law: irradiance E = Φ-free closed form L_e · π (r/d)² cos θ for a sphere of radius r at
+/// distance d (exact for a sphere: the subtended cap gives π sin²α cos θ).
+#[test]
+fn sphere_light_irradiance_matches_closed_form() {
+    let mut s = empty_scene(
+        Camera::new(Vec3::new(0.0, 3.0, 0.001), Vec3::ZERO, Vec3::Y, 10.0, 8, 8).unwrap(),
+    );
+    let white = add_material(&mut s, Material::Lambert { albedo: Vec3::ONE });
+    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+    add_quad(&mut s, ground(50.0), white, Vec3::ZERO);
+    let (r, d) = (0.25f32, 2.0f32);
+    add_sphere(&mut s, Vec3::new(0.0, d, 0.0), r, black, Vec3::splat(10.0));
+    s.settings.integrator = Integrator::Direct;
+    let out = render_scene(&s, 256, false);
+    // The camera sees a small patch straight below the light: cos θ ≈ 1.
+    let sin2 = (r / d) * (r / d);
+    let radiance = 10.0 * PI * sin2 / PI; // Lambert albedo 1: L = E / π.
+    let centre = out.beauty[4 * 8 + 4];
+    assert!(
+        (centre.x - radiance).abs() < 0.02 * radiance,
+        "{} vs {radiance}",
+        centre.x
+    );
+}
+
+/// The density each light-sampling routine reports must be the one it realises:
+/// E[1/pdf] over samples equals the solid angle covered, and `pdf_emitter`
+/// recomputes the same value from the sampled point.
+#[test]
+fn light_sample_densities_are_consistent() {
+    let mut s = empty_scene(camera(4, 4));
+    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+    add_sphere(&mut s, Vec3::new(0.0, 3.0, 0.0), 0.5, black, Vec3::ONE);
+    let lights = LightSet::build(&s);
+    let p = Vec3::ZERO;
+    let n = 40_000u32;
+    let mut inv_pdf = 0.0f64;
+    for i in 0..n {
+        let mut smp = PixelSampler::new(0, i, 3);
+        let ls = lights.sample(&s, p, smp.next_1d(), smp.next_2d()).unwrap();
+        let (q, nq) = ls.point.unwrap();
+        let again = lights.pdf_emitter(&s, gradtrace::accel::PrimRef::Sphere(0), p, q, nq);
+        assert!(
+            (again - ls.pdf).abs() < 1e-3 * ls.pdf,
+            "{again} vs {}",
+            ls.pdf
+        );
+        inv_pdf += 1.0 / ls.pdf as f64;
+    }
+    let cos_max = (1.0f64 - 0.25 / 9.0).sqrt();
+    let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - cos_max);
+    assert!(((inv_pdf / n as f64) - solid_angle).abs() < 1e-3 * solid_angle);
+
+    // A rectangle light: E[1/pdf] = its solid angle, estimated by brute force.
+    let mut s2 = empty_scene(camera(4, 4));
+    let black = add_material(&mut s2, Material::Lambert { albedo: Vec3::ZERO });
+    let rect = Rect {
+        corner: Vec3::new(-0.5, 2.0, -0.5),
+        edge_u: Vec3::new(1.0, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, 1.0),
+    };
+    assert!(rect.normal().y < 0.0, "light faces down");
+    add_quad(&mut s2, rect, black, Vec3::ONE);
+    let lights = LightSet::build(&s2);
+    let mut est = 0.0f64;
+    for i in 0..n {
+        let mut smp = PixelSampler::new(1, i, 3);
+        if let Some(ls) = lights.sample(&s2, p, smp.next_1d(), smp.next_2d()) {
+            let (_, nq) = ls.point.unwrap();
+            est += 1.0 / ls.pdf as f64;
+            assert!(nq.y < 0.0);
+        }
+    }
+    // Closed form: solid angle of a centred a×b rectangle at height h
+    // Ω = 4 asin(ab / sqrt((a²+4h²)(b²+4h²))).
+    let (a, b, h) = (1.0f64, 1.0f64, 2.0f64);
+    let omega = 4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
+    assert!(
+        ((est / n as f64) - omega).abs() < 5e-3 * omega,
+        "{} vs {omega}",
+        est / n as f64
+    );
+}
+
+/// Gaussian-sky importance sampling: E[L/pdf] = ∫ L dω = 4π·ambient + peak·2π(1−e^{−2κ})/κ.
+#[test]
+fn gaussian_sky_sampling_integrates_the_sky() {
+    for kappa in [2.0f32, 50.0, 2000.0] {
+        let mut s = empty_scene(camera(4, 4));
+        s.environment = Some(Environment::GaussianSky {
+            direction: Vec3::new(0.2, 1.0, 0.1).normalize(),
+            sharpness: kappa,
+            peak: Vec3::splat(5.0),
+            ambient: Vec3::splat(0.1),
+        });
+        let lights = LightSet::build(&s);
+        let n = 50_000u32;
+        let mut est = 0.0f64;
+        for i in 0..n {
+            let mut smp = PixelSampler::new(2, i, 9);
+            let ls = lights
+                .sample(&s, Vec3::ZERO, smp.next_1d(), smp.next_2d())
+                .unwrap();
+            assert!((lights.pdf_env(&s, ls.wi) - ls.pdf).abs() < 1e-3 * ls.pdf);
+            est += (ls.radiance.x / ls.pdf) as f64;
+        }
+        let k = kappa as f64;
+        let exact = 4.0 * std::f64::consts::PI * 0.1
+            + 5.0 * 2.0 * std::f64::consts::PI * (1.0 - (-2.0 * k).exp()) / k;
+        let got = est / n as f64;
+        assert!(
+            (got - exact).abs() < 0.01 * exact,
+            "kappa {kappa}: {got} vs {exact}"
+        );
+    }
+}
+
+/// Image environment sampling: E[L/pdf] over importance samples equals the
+/// integral of the (bilinear) map computed by dense quadrature.
+#[test]
+fn image_environment_sampling_integrates_the_map() {
+    let (w, h) = (32usize, 16usize);
+    let mut texels = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let bright = if (x / 4 + y / 4) % 3 == 0 { 20.0 } else { 0.2 };
+            texels.push(Vec3::new(bright, bright * 0.5, 1.0) * (1.0 + y as f32 / h as f32));
+        }
+    }
+    let env = Environment::Image {
+        width: w,
+        height: h,
+        texels,
+        scale: 1.5,
+    };
+    let mut s = empty_scene(camera(4, 4));
+    s.environment = Some(env.clone());
+    let lights = LightSet::build(&s);
+    // Quadrature on a fine lat-long grid.
+    let (qw, qh) = (1024usize, 512usize);
+    let mut exact = 0.0f64;
+    for y in 0..qh {
+        for x in 0..qw {
+            let uv = Vec2::new((x as f32 + 0.5) / qw as f32, (y as f32 + 0.5) / qh as f32);
+            let d = gradtrace::scene::environment::latlong_to_direction(uv);
+            let st = (uv.y * PI).sin() as f64;
+            exact += env.eval(d).x as f64 * st;
+        }
+    }
+    exact *= 2.0 * std::f64::consts::PI * std::f64::consts::PI / (qw * qh) as f64;
+    let n = 100_000u32;
+    let mut est = 0.0f64;
+    for i in 0..n {
+        let mut smp = PixelSampler::new(5, i, 1);
+        let (u1, u2) = (smp.next_1d(), smp.next_2d());
+        let ls = lights
+            .sample(&s, Vec3::ZERO, u1, u2)
+            .unwrap_or_else(|| panic!("{u1} {u2}"));
+        assert!((lights.pdf_env(&s, ls.wi) - ls.pdf).abs() < 1e-3 * ls.pdf.max(1e-3));
+        est += (ls.radiance.x / ls.pdf) as f64;
+    }
+    let got = est / n as f64;
+    assert!((got - exact).abs() < 0.01 * exact, "{got} vs {exact}");
+}
+
+fn hard_scene() -> Scene {
+    let mut s = empty_scene(camera(48, 32));
+    let white = add_material(
+        &mut s,
+        Material::Lambert {
+            albedo: Vec3::splat(0.8),
+        },
+    );
+    let glossy = add_material(
+        &mut s,
+        Material::BlinnPhong {
+            kd: Vec3::splat(0.2),
+            ks: Vec3::splat(0.7),
+            exponent: 1e5,
+        },
+    );
+    let ct = add_material(
+        &mut s,
+        Material::CookTorrance {
+            kd: Vec3::splat(0.3),
+            ks: Vec3::splat(0.6),
+            exponent: 3000.0,
+        },
+    );
+    let mirror = add_material(
+        &mut s,
+        Material::Mirror {
+            reflectance: Vec3::ONE,
+        },
+    );
+    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+    add_quad(&mut s, ground(4.0), white, Vec3::ZERO);
+    // Spheres resting exactly on the ground (tangent contact), a light touching it.
+    add_sphere(&mut s, Vec3::new(-1.2, 0.5, 0.0), 0.5, glossy, Vec3::ZERO);
+    add_sphere(&mut s, Vec3::new(0.0, 0.5, 0.0), 0.5, ct, Vec3::ZERO);
+    add_sphere(&mut s, Vec3::new(1.2, 0.5, 0.0), 0.5, mirror, Vec3::ZERO);
+    add_sphere(
+        &mut s,
+        Vec3::new(0.0, 0.2, 1.2),
+        0.2,
+        black,
+        Vec3::splat(50.0),
+    );
+    // A light grazing the ground: a rect standing on it, edge on the surface.
+    add_quad(
+        &mut s,
+        Rect {
+            corner: Vec3::new(-2.0, 0.0, -1.5),
+            edge_u: Vec3::new(0.0, 1.0, 0.0),
+            edge_v: Vec3::new(1.0, 0.0, 0.0),
+        },
+        black,
+        Vec3::splat(5.0),
+    );
+    s.environment = Some(Environment::GaussianSky {
+        direction: Vec3::Y,
+        sharpness: 1e4,
+        peak: Vec3::splat(100.0),
+        ambient: Vec3::splat(0.05),
+    });
+    s
+}
+
+/// No sample of the estimator itself (before the accumulation guard) is NaN or Inf
+/// on a scene of tangent contacts, touching and grazing lights, exponents up to
+/// 10^5 and a near-delta sky.
+#[test]
+fn estimator_is_finite_on_hard_configurations() {
+    let s = hard_scene();
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let lights = LightSet::build(&s);
+    let tracer = PathTracer {
+        scene: &s,
+        accel: &accel,
+        lights: &lights,
+        max_depth: 8,
+        rr_depth: 3,
+    };
+    let (w, h) = (s.camera.width, s.camera.height);
+    let mut bad = 0;
+    let mut nonzero = 0;
+    for y in 0..h {
+        for x in 0..w {
+            for i in 0..4 {
+                let mut smp = PixelSampler::new(y * w + x, i, 0);
+                let p = Vec2::new(x as f32, y as f32) + smp.next_2d();
+                let r = tracer.li(s.camera.generate_ray(p), &mut smp, None);
+                if !r.radiance.is_finite() || r.radiance.min_element() < 0.0 {
+                    bad += 1;
+                }
+                if r.radiance.max_element() > 0.0 {
+                    nonzero += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(bad, 0, "non-finite or negative samples");
+    assert!(nonzero > (w * h) as usize, "the scene is lit");
+}
+
+/// The image is bit-identical whatever the number of threads.
+#[test]
+fn image_is_identical_for_any_thread_count() {
+    let s = hard_scene();
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let opts = RenderOptions {
+        spp: Some(4),
+        aovs: true,
+        ..Default::default()
+    };
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render(&s, &accel, &opts, &|_, _| {}).unwrap())
+    };
+    let a = run(1);
+    let b = run(3);
+    assert!(a
+        .beauty
+        .iter()
+        .zip(&b.beauty)
+        .all(|(x, y)| x.to_array() == y.to_array()));
+    assert_eq!(
+        a.variance.as_ref().unwrap().len(),
+        b.variance.as_ref().unwrap().len()
+    );
+    assert!(a
+        .variance
+        .unwrap()
+        .iter()
+        .zip(b.variance.unwrap().iter())
+        .all(|(x, y)| x.to_array() == y.to_array()));
+    // A different seed changes the noise.
+    let c = render(
+        &s,
+        &accel,
+        &RenderOptions {
+            seed: Some(7),
+            ..opts.clone()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(a.beauty.iter().zip(&c.beauty).any(|(x, y)| x != y));
+}
+
+/// Every AOV plane exists when asked, has the right size and is finite; none
+/// exist when not asked (no work nobody asked for).
+#[test]
+fn aov_planes_are_finite_and_only_when_asked() {
+    let s = hard_scene();
+    let out = render_scene(&s, 2, true);
+    let n = out.width * out.height;
+    for v in [
+        out.variance.as_ref().unwrap(),
+        out.normal.as_ref().unwrap(),
+        out.albedo.as_ref().unwrap(),
+    ] {
+        assert_eq!(v.len(), n);
+        assert!(v.iter().all(|c| c.is_finite()));
+    }
+    assert!(out
+        .depth
+        .as_ref()
+        .unwrap()
+        .iter()
+        .all(|d| d.is_finite() && *d >= 0.0));
+    let ids = out.object_id.as_ref().unwrap();
+    assert!(ids.iter().any(|&i| i == 1.0), "the ground is visible");
+    let plain = render_scene(&s, 1, false);
+    assert!(plain.normal.is_none() && plain.variance.is_none() && plain.object_id.is_none());
+}

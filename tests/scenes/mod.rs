@@ -1,0 +1,177 @@
+//! Scenes built in code for the integration tests (no scene file needed).
+#![allow(dead_code)]
+
+use gradtrace::brdf::Material;
+use gradtrace::math::Vec3;
+use gradtrace::scene::{Camera, Mesh, Rect, RenderSettings, Scene, SceneStats, Sphere};
+
+pub fn empty_scene(camera: Camera) -> Scene {
+    Scene {
+        path: "test.toml".into(),
+        camera,
+        settings: RenderSettings::default(),
+        materials: vec![],
+        material_names: vec![],
+        meshes: vec![],
+        spheres: vec![],
+        bumps: vec![],
+        environment: None,
+        object_names: vec![],
+        stats: SceneStats::default(),
+    }
+}
+
+pub fn camera(w: u32, h: u32) -> Camera {
+    Camera::new(
+        Vec3::new(0.0, 1.0, 6.0),
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::Y,
+        35.0,
+        w,
+        h,
+    )
+    .unwrap()
+}
+
+pub fn add_material(s: &mut Scene, m: Material) -> u32 {
+    s.materials.push(m);
+    s.material_names.push(format!("m{}", s.materials.len()));
+    s.materials.len() as u32 - 1
+}
+
+pub fn add_sphere(s: &mut Scene, center: Vec3, radius: f32, material: u32, emission: Vec3) {
+    s.object_names.push(format!("sphere{}", s.spheres.len()));
+    s.spheres.push(Sphere {
+        name: String::new(),
+        center,
+        radius,
+        material,
+        emission,
+        bump: None,
+        object_id: s.object_names.len() as u32,
+    });
+}
+
+pub fn add_quad(s: &mut Scene, rect: Rect, material: u32, emission: Vec3) {
+    let c = rect.corner;
+    s.object_names.push(format!("quad{}", s.meshes.len()));
+    s.meshes.push(Mesh {
+        name: String::new(),
+        positions: vec![
+            c,
+            c + rect.edge_u,
+            c + rect.edge_u + rect.edge_v,
+            c + rect.edge_v,
+        ],
+        normals: vec![],
+        uvs: vec![],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        material,
+        emission,
+        bump: None,
+        rect: Some(rect),
+        object_id: s.object_names.len() as u32,
+    });
+}
+
+/// Ground quad facing +y, centred at the origin.
+pub fn ground(size: f32) -> Rect {
+    Rect {
+        corner: Vec3::new(-size, 0.0, size),
+        edge_u: Vec3::new(2.0 * size, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, -2.0 * size),
+    }
+}
+
+/// A unit icosphere subdivided `levels` times, with exact vertex normals (a
+/// smooth mesh whose shading normals vary across every triangle).
+pub fn add_icosphere(s: &mut Scene, center: Vec3, radius: f32, levels: u32, material: u32) {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut v: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut cache = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, v: &mut Vec<Vec3>| -> u32 {
+            let key = (a.min(b), a.max(b));
+            *cache.entry(key).or_insert_with(|| {
+                v.push(((v[a as usize] + v[b as usize]) * 0.5).normalize());
+                v.len() as u32 - 1
+            })
+        };
+        let mut nf = Vec::new();
+        for [a, b, c] in f {
+            let ab = mid(a, b, &mut v);
+            let bc = mid(b, c, &mut v);
+            let ca = mid(c, a, &mut v);
+            nf.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = nf;
+    }
+    s.object_names.push(format!("icosphere{}", s.meshes.len()));
+    s.meshes.push(Mesh {
+        name: String::new(),
+        positions: v.iter().map(|&p| center + radius * p).collect(),
+        normals: v.clone(),
+        uvs: vec![],
+        triangles: f,
+        material,
+        emission: Vec3::ZERO,
+        bump: None,
+        rect: None,
+        object_id: s.object_names.len() as u32,
+    });
+}
+
+/// Adds a sum-of-sinusoids bump map and returns its index.
+pub fn add_bump(s: &mut Scene, terms: &[(f32, [f32; 2], f32)]) -> u32 {
+    use gradtrace::scene::bump::{Bump, Sinusoid};
+    s.bumps.push(Bump {
+        name: format!("bump{}", s.bumps.len()),
+        terms: terms
+            .iter()
+            .map(|&(amplitude, f, phase)| Sinusoid {
+                amplitude,
+                frequency: gradtrace::math::Vec2::from(f),
+                phase,
+            })
+            .collect(),
+    });
+    s.bumps.len() as u32 - 1
+}
