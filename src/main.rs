@@ -11,9 +11,9 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use gradtrace::accel::Accel;
 use gradtrace::brdf::Material;
 use gradtrace::math::Vec3;
+use gradtrace::output;
 use gradtrace::render::{self, RenderOptions, RenderOutput};
 use gradtrace::scene::{self, Environment, Integrator, Scene};
-use gradtrace::output;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -79,6 +79,10 @@ struct RenderArgs {
     /// then holds only R, G, B.
     #[arg(long)]
     no_aovs: bool,
+    /// Also compute the analytic image gradients of the direct illumination and
+    /// write them as `grad.*` layers (∂I/∂u, ∂I/∂v and the per-term magnitudes).
+    #[arg(long)]
+    gradients: bool,
     /// No progress bar and no summary line.
     #[arg(long, short)]
     quiet: bool,
@@ -221,9 +225,15 @@ fn output_paths(out: Option<&Path>, scene_stem: &str) -> anyhow::Result<(PathBuf
 }
 
 fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
+    // Settle the output paths before spending time on loading and rendering. The
+    // stem is the scene file's, as `Scene::name` gives it.
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let (exr_path, png_path) = output_paths(args.out.as_deref(), &stem)?;
     let scene = scene::load(&args.scene)?;
-    // Settle the output paths before spending time on the render.
-    let (exr_path, png_path) = output_paths(args.out.as_deref(), &scene.name())?;
 
     let accel = Accel::build(&scene.meshes, &scene.spheres);
     let opts = RenderOptions {
@@ -234,6 +244,7 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
         threads: args.threads.map(|t| t as usize),
         resolution: args.width.zip(args.height),
         aovs: !args.no_aovs,
+        gradients: args.gradients,
     };
 
     let bar = progress_bar(args.quiet);
@@ -279,9 +290,9 @@ fn progress_bar(quiet: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
-    if let Ok(style) = ProgressStyle::with_template(
-        "{elapsed_precise} [{wide_bar}] {pos}/{len} tiles, ETA {eta}",
-    ) {
+    if let Ok(style) =
+        ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} tiles, ETA {eta}")
+    {
         bar.set_style(style.progress_chars("=> "));
     }
     bar
@@ -336,15 +347,21 @@ fn create_dirs(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 fn info_cmd(args: InfoArgs) -> anyhow::Result<()> {
     let scene = scene::load(&args.scene)?;
     let t0 = Instant::now();
-    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    // Kept alive until after the timing so that its drop is not measured.
+    let _accel = Accel::build(&scene.meshes, &scene.spheres);
     let build = t0.elapsed();
     print!("{}", describe(&scene));
+    println!("renderer: {}", render::describe(&scene));
     println!(
         "bvh: built in {:.3} ms ({} primitives)",
         build.as_secs_f64() * 1e3,
-        scene.meshes.iter().map(|m| m.triangles.len()).sum::<usize>() + scene.spheres.len()
+        scene
+            .meshes
+            .iter()
+            .map(|m| m.triangles.len())
+            .sum::<usize>()
+            + scene.spheres.len()
     );
-    drop(accel);
     Ok(())
 }
 
@@ -356,10 +373,18 @@ fn material_kind(m: &Material) -> String {
     match m {
         Material::Lambert { albedo } => format!("lambert albedo={}", v3(*albedo)),
         Material::BlinnPhong { kd, ks, exponent } => {
-            format!("blinn_phong kd={} ks={} exponent={exponent}", v3(*kd), v3(*ks))
+            format!(
+                "blinn_phong kd={} ks={} exponent={exponent}",
+                v3(*kd),
+                v3(*ks)
+            )
         }
         Material::CookTorrance { kd, ks, exponent } => {
-            format!("cook_torrance kd={} ks={} exponent={exponent}", v3(*kd), v3(*ks))
+            format!(
+                "cook_torrance kd={} ks={} exponent={exponent}",
+                v3(*kd),
+                v3(*ks)
+            )
         }
         Material::Mirror { reflectance } => format!("mirror reflectance={}", v3(*reflectance)),
     }
@@ -433,7 +458,11 @@ fn describe(s: &Scene) -> String {
             v3(sp.emission)
         );
     }
-    let _ = writeln!(o, "environment: {}", environment_kind(s.environment.as_ref()));
+    let _ = writeln!(
+        o,
+        "environment: {}",
+        environment_kind(s.environment.as_ref())
+    );
     let _ = writeln!(o, "bump maps: {}", s.bumps.len());
     for (i, b) in s.bumps.iter().enumerate() {
         let users: Vec<&str> = s

@@ -7,7 +7,7 @@ use gradtrace::output::{
     self, image_from_render, read_exr, srgb_oetf, to_srgb8, write_atomic, write_exr, write_png,
     write_png_exposure, Channel, OutputImage,
 };
-use gradtrace::render::{RenderOutput, RenderStats};
+use gradtrace::render::{GradientPlanes, RenderOutput, RenderStats};
 use gradtrace::Error;
 use std::path::{Path, PathBuf};
 
@@ -134,6 +134,7 @@ fn image_from_render_names_every_plane() {
         depth: Some(vec![4.0; n]),
         albedo: Some(v(5.0)),
         object_id: Some(vec![6.0; n]),
+        gradients: None,
         stats: RenderStats::default(),
     };
     let img = image_from_render(&r);
@@ -175,6 +176,43 @@ fn image_from_render_names_every_plane() {
     let img = image_from_render(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["R", "G", "B"]);
+
+    let s = |k: f32| vec![k; n];
+    r.gradients = Some(GradientPlanes {
+        grad_u: v(7.0),
+        grad_v: v(8.0),
+        sv: s(9.0),
+        dv: s(10.0),
+        cv: s(11.0),
+        cdv: s(12.0),
+        vis: s(13.0),
+        ratio: s(14.0),
+    });
+    let img = image_from_render(&r);
+    let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "R",
+            "G",
+            "B",
+            "grad.u.R",
+            "grad.u.G",
+            "grad.u.B",
+            "grad.v.R",
+            "grad.v.G",
+            "grad.v.B",
+            "grad.sv.Y",
+            "grad.dv.Y",
+            "grad.cv.Y",
+            "grad.cdv.Y",
+            "grad.vis.Y",
+            "grad.ratio.Y"
+        ]
+    );
+    assert_eq!(img.channel("grad.v.B").unwrap().data, vec![-8.0; n]);
+    assert_eq!(img.channel("grad.cdv.Y").unwrap().data, s(12.0));
+    assert_eq!(img.channel("grad.ratio.Y").unwrap().data, s(14.0));
 }
 
 #[test]
