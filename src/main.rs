@@ -270,7 +270,7 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
 
     if !args.quiet {
         println!(
-            "{}x{}, {} spp, {:.2} s, {}, wrote {} and {}",
+            "{}x{}, {} spp, {:.3} s, {}, wrote {} and {}",
             out.width,
             out.height,
             out.spp,

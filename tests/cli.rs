@@ -320,3 +320,26 @@ fn info_lists_the_tiny_scene() {
     }
     assert_eq!(tree(&dir), vec!["tiny.toml"], "info writes nothing");
 }
+
+#[test]
+fn thread_count_does_not_change_the_image() {
+    let dir = temp_dir("threads");
+    std::fs::write(dir.join("tiny.toml"), TINY_SCENE).unwrap();
+    let mut images = Vec::new();
+    for t in ["1", "3"] {
+        let exr = format!("t{t}.exr");
+        let out = run_in(
+            &dir,
+            &["render", "tiny.toml", "--threads", t, "--out", &exr, "-q"],
+        );
+        assert_eq!(out.status.code(), Some(0), "render succeeds");
+        images.push(read_exr(&dir.join(&exr)).unwrap());
+    }
+    let bits = |img: &gradtrace::output::OutputImage| -> Vec<(String, Vec<u32>)> {
+        img.channels
+            .iter()
+            .map(|c| (c.name.clone(), c.data.iter().map(|v| v.to_bits()).collect()))
+            .collect()
+    };
+    assert_eq!(bits(&images[0]), bits(&images[1]), "bit-identical layers");
+}
