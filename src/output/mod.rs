@@ -1,10 +1,17 @@
 //! rendered planes → files: one multi-layer EXR (linear, `layer.channel` names that
 //! tev groups) and a tone-mapped sRGB PNG, each written to a temporary file and
 //! renamed so that a failed run never leaves a broken or half-overwritten output.
-//!
-//! OWNED BY THE OUTPUT WORK ITEM — the bodies below are placeholders to be replaced.
 
-use std::path::Path;
+pub mod atomic;
+mod exr;
+mod png;
+
+use crate::math::Vec3;
+use crate::render::RenderOutput;
+
+pub use self::exr::{read_exr, stage_exr, write_exr};
+pub use self::png::{srgb_oetf, stage_png, to_srgb8, write_png, write_png_exposure};
+pub use atomic::{write_atomic, Staged};
 
 /// One named channel plane, e.g. `R`, `normal.X`, `depth.Z`; row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
@@ -21,16 +28,107 @@ pub struct OutputImage {
     pub channels: Vec<Channel>,
 }
 
-pub fn write_exr(_path: &Path, _image: &OutputImage) -> crate::Result<()> {
-    Ok(())
+impl OutputImage {
+    /// An image with no channels yet.
+    pub fn new(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            height,
+            channels: Vec::new(),
+        }
+    }
+
+    /// The channel called `name`, if present.
+    pub fn channel(&self, name: &str) -> Option<&Channel> {
+        self.channels.iter().find(|c| c.name == name)
+    }
+
+    /// Adds one scalar plane.
+    pub fn push_scalar(&mut self, name: &str, data: Vec<f32>) {
+        self.channels.push(Channel {
+            name: name.into(),
+            data,
+        });
+    }
+
+    /// Adds a three-component plane as `prefix` + each of `names` (e.g. prefix
+    /// `normal.` and names `["X", "Y", "Z"]`; prefix `""` for the beauty `R,G,B`).
+    pub fn push_vec3(&mut self, prefix: &str, names: [&str; 3], data: &[Vec3]) {
+        for (k, n) in names.iter().enumerate() {
+            self.push_scalar(&format!("{prefix}{n}"), data.iter().map(|v| v[k]).collect());
+        }
+    }
+
+    /// Reassembles a three-component plane from `prefix` + `names`; `None` when any
+    /// of the three channels is missing.
+    pub fn vec3(&self, prefix: &str, names: [&str; 3]) -> Option<Vec<Vec3>> {
+        let [a, b, c] = names.map(|n| self.channel(&format!("{prefix}{n}")));
+        let (a, b, c) = (a?, b?, c?);
+        Some(
+            a.data
+                .iter()
+                .zip(&b.data)
+                .zip(&c.data)
+                .map(|((x, y), z)| Vec3::new(*x, *y, *z))
+                .collect(),
+        )
+    }
 }
 
-/// Writes `rgb` (linear, row-major) as a tone-mapped sRGB PNG.
-pub fn write_png(
-    _path: &Path,
-    _rgb: &[glam::Vec3],
-    _width: usize,
-    _height: usize,
-) -> crate::Result<()> {
-    Ok(())
+/// Channel names of the beauty and AOV planes, in one place so that the writer,
+/// the tests and the validation scripts agree.
+pub mod names {
+    pub const RGB: [&str; 3] = ["R", "G", "B"];
+    pub const XYZ: [&str; 3] = ["X", "Y", "Z"];
+    pub const NORMAL: &str = "normal.";
+    pub const DEPTH: &str = "depth.Z";
+    pub const ALBEDO: &str = "albedo.";
+    pub const OBJECT_ID: &str = "object.id";
+    pub const VARIANCE: &str = "variance.";
+    pub const GRAD_U: &str = "grad.u.";
+    pub const GRAD_V: &str = "grad.v.";
+    /// Scalar gradient-term planes, in the order of `render::GradientPlanes`'
+    /// fields sv, dv, cv, cdv, vis, ratio.
+    pub const GRAD_TERMS: [&str; 6] = [
+        "grad.sv.Y",
+        "grad.dv.Y",
+        "grad.cv.Y",
+        "grad.cdv.Y",
+        "grad.vis.Y",
+        "grad.ratio.Y",
+    ];
+}
+
+/// Collects the beauty (`R,G,B`) and every AOV plane the render produced
+/// (`normal.X/Y/Z`, `depth.Z`, `albedo.R/G/B`, `object.id`, `variance.R/G/B`, and
+/// for gradient renders `grad.u.R/G/B`, `grad.v.R/G/B` and the term magnitudes
+/// `grad.{sv,dv,cv,cdv,vis,ratio}.Y`).
+pub fn image_from_render(render: &RenderOutput) -> OutputImage {
+    use names::*;
+    let mut img = OutputImage::new(render.width, render.height);
+    img.push_vec3("", RGB, &render.beauty);
+    if let Some(n) = &render.normal {
+        img.push_vec3(NORMAL, XYZ, n);
+    }
+    if let Some(d) = &render.depth {
+        img.push_scalar(DEPTH, d.clone());
+    }
+    if let Some(a) = &render.albedo {
+        img.push_vec3(ALBEDO, RGB, a);
+    }
+    if let Some(id) = &render.object_id {
+        img.push_scalar(OBJECT_ID, id.clone());
+    }
+    if let Some(v) = &render.variance {
+        img.push_vec3(VARIANCE, RGB, v);
+    }
+    if let Some(g) = &render.gradients {
+        img.push_vec3(GRAD_U, RGB, &g.grad_u);
+        img.push_vec3(GRAD_V, RGB, &g.grad_v);
+        let terms = [&g.sv, &g.dv, &g.cv, &g.cdv, &g.vis, &g.ratio];
+        for (name, plane) in GRAD_TERMS.iter().zip(terms) {
+            img.push_scalar(name, plane.clone());
+        }
+    }
+    img
 }

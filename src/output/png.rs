@@ -1,0 +1,109 @@
+//! Tone-mapped 8-bit sRGB PNG for quick viewing: linear radiance × 2^exposure,
+//! clamped to [0, 1], encoded with the sRGB transfer function (IEC 61966-2-1)
+//! and rounded to the nearest of 256 levels. No filmic curve on purpose: the PNG
+//! should show exactly what the EXR holds wherever it is in range.
+
+use super::atomic::{output_error, stage, Staged};
+use crate::math::Vec3;
+use image::codecs::png::PngEncoder;
+use image::{ExtendedColorType, ImageEncoder};
+use std::path::Path;
+
+/// The sRGB opto-electronic transfer function (IEC 61966-2-1): linear [0,1] →
+/// encoded [0,1]. Linear segment below 0.0031308, a 1/2.4 power above.
+pub fn srgb_oetf(linear: f32) -> f32 {
+    if linear <= 0.003_130_8 {
+        12.92 * linear
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear value → 8-bit sRGB code value: clamp, OETF, round to nearest.
+pub fn to_srgb8(linear: f32) -> u8 {
+    // `clamp` keeps NaN; callers reject NaN first, but map it to 0 rather than
+    // letting `as u8` decide.
+    let c = if linear.is_nan() {
+        0.0
+    } else {
+        linear.clamp(0.0, 1.0)
+    };
+    (srgb_oetf(c) * 255.0).round() as u8
+}
+
+/// Writes `rgb` (linear, row-major, top row first) as an sRGB PNG at exposure 0.
+pub fn write_png(path: &Path, rgb: &[Vec3], width: usize, height: usize) -> crate::Result<()> {
+    write_png_exposure(path, rgb, width, height, 0.0)
+}
+
+/// As [`write_png`], scaling the linear values by 2^`exposure` (photographic
+/// stops) before clamping.
+pub fn write_png_exposure(
+    path: &Path,
+    rgb: &[Vec3],
+    width: usize,
+    height: usize,
+    exposure: f32,
+) -> crate::Result<()> {
+    stage_png(path, rgb, width, height, exposure)?.commit()
+}
+
+/// Encodes the PNG into a temporary file next to `path` without touching `path`;
+/// [`Staged::commit`] puts it in place. Same checks as [`write_png`].
+pub fn stage_png(
+    path: &Path,
+    rgb: &[Vec3],
+    width: usize,
+    height: usize,
+    exposure: f32,
+) -> crate::Result<Staged> {
+    let bytes = encode_srgb8(path, rgb, width, height, exposure)?;
+    let (w, h) = (width as u32, height as u32);
+    stage(path, |out| {
+        PngEncoder::new(out)
+            .write_image(&bytes, w, h, ExtendedColorType::Rgb8)
+            .map_err(|e| format!("PNG encoder: {e}"))
+    })
+}
+
+/// Validates the input and tone-maps it to interleaved 8-bit RGB.
+fn encode_srgb8(
+    path: &Path,
+    rgb: &[Vec3],
+    width: usize,
+    height: usize,
+    exposure: f32,
+) -> crate::Result<Vec<u8>> {
+    let err = |m: String| Err(output_error(path, m));
+    if width == 0 || height == 0 {
+        return err(format!("empty resolution {width}x{height}"));
+    }
+    // The PNG header stores u32 dimensions.
+    if u32::try_from(width).is_err() || u32::try_from(height).is_err() {
+        return err(format!("resolution {width}x{height} is too large for PNG"));
+    }
+    if rgb.len() != width * height {
+        return err(format!(
+            "{} pixels given, expected {width}x{height} = {}",
+            rgb.len(),
+            width * height
+        ));
+    }
+    if !exposure.is_finite() {
+        return err(format!("exposure must be finite, got {exposure}"));
+    }
+    if let Some(i) = rgb.iter().position(|p| !p.is_finite()) {
+        return err(format!(
+            "non-finite pixel {} at ({}, {})",
+            rgb[i],
+            i % width,
+            i / width
+        ));
+    }
+    let scale = exposure.exp2();
+    Ok(rgb
+        .iter()
+        .flat_map(|p| (*p * scale).to_array())
+        .map(to_srgb8)
+        .collect())
+}
