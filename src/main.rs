@@ -83,6 +83,19 @@ struct RenderArgs {
     /// write them as `grad.*` layers (∂I/∂u, ∂I/∂v and the per-term magnitudes).
     #[arg(long)]
     gradients: bool,
+    /// With --gradients: shadow rays per azimuth line for the first hit's direct
+    /// light; the same rays give the radiance and the visibility (soft-shadow)
+    /// gradient [default: 32].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    vis_samples: Option<u32>,
+    /// With --gradients: bisection steps refining each visibility jump (extra
+    /// shadow rays per jump) [default: 0].
+    #[arg(long, value_name = "N")]
+    vis_refine: Option<u32>,
+    /// With --gradients: treat a near light as distant (no SV term) where
+    /// 2|n_x|·d exceeds F, the far-light criterion of the first-order paper, Sec. 5.2.
+    #[arg(long, value_name = "F")]
+    far_light: Option<f32>,
     /// No progress bar and no summary line.
     #[arg(long, short)]
     quiet: bool,
@@ -245,6 +258,9 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
         resolution: args.width.zip(args.height),
         aovs: !args.no_aovs,
         gradients: args.gradients,
+        vis_samples: args.vis_samples,
+        vis_refine: args.vis_refine,
+        far_light: args.far_light,
     };
 
     let bar = progress_bar(args.quiet);

@@ -248,11 +248,11 @@ fn integrand_terms_match_partial_differences() {
                 Vec3::new(c[0].v, c[1].v, c[2].v)
             };
             let lane = |l: usize| Vec3::new(g[0].d[l], g[1].d[l], g[2].d[l]);
-            for k in 0..2 {
+            for (k, &dir) in dirs.iter().enumerate() {
                 let t_n = hd.n.lane(CDV + k);
                 let t_w = hd.wo.lane(CAM + k);
-                let fd_sv = (value(x0 + h * dirs[k], n0, wo0) - value(x0 - h * dirs[k], n0, wo0))
-                    / (2.0 * h);
+                let fd_sv =
+                    (value(x0 + h * dir, n0, wo0) - value(x0 - h * dir, n0, wo0)) / (2.0 * h);
                 let fd_cdv =
                     (value(x0, n0 + h * t_n, wo0) - value(x0, n0 - h * t_n, wo0)) / (2.0 * h);
                 let fd_cam =

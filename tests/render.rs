@@ -417,7 +417,7 @@ fn aov_planes_are_finite_and_only_when_asked() {
         .iter()
         .all(|d| d.is_finite() && *d >= 0.0));
     let ids = out.object_id.as_ref().unwrap();
-    assert!(ids.iter().any(|&i| i == 1.0), "the ground is visible");
+    assert!(ids.contains(&1.0), "the ground is visible");
     let plain = render_scene(&s, 1, false);
     assert!(plain.normal.is_none() && plain.variance.is_none() && plain.object_id.is_none());
 }

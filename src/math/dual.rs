@@ -133,7 +133,14 @@ impl<const N: usize> Div for Dual<N> {
     type Output = Self;
     #[inline]
     fn div(self, o: Self) -> Self {
-        self * o.recip()
+        // (a/b)' = a'/b − a b'/b²
+        let inv = 1.0 / o.v;
+        let q = self.v * inv;
+        let mut d = [0.0; N];
+        for (i, x) in d.iter_mut().enumerate() {
+            *x = (self.d[i] - q * o.d[i]) * inv;
+        }
+        Self { v: q, d }
     }
 }
 

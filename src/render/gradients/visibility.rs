@@ -45,6 +45,11 @@ pub enum Domain {
     },
 }
 
+/// A blocker's hit distance and primitive, when a probe ray is blocked.
+type BlockerHit = Option<(f32, PrimRef)>;
+/// (visible, blocker hit, point on the light) of one probe ray.
+type Probe = (bool, BlockerHit, Option<(Vec3, Vec3)>);
+
 /// Result of one φ-line.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LineEstimate {
@@ -105,12 +110,12 @@ pub fn trace_line(
         } => rect_exit_angle(x, corner, edge_u, edge_v, &dir),
     };
     let mut out = LineEstimate::default();
-    if !(theta_max > 0.0) {
+    if theta_max.is_nan() || theta_max <= 0.0 {
         return out;
     }
     let step = theta_max / n_theta as f32;
     // Probe one direction: visible?, blocker hit (t, prim), light point.
-    let probe = |theta: f32| -> (bool, Option<(f32, PrimRef)>, Option<(Vec3, Vec3)>) {
+    let probe = |theta: f32| -> Probe {
         let w = dir(theta);
         let (t_max, lp) = light_extent(domain, x, w);
         if t_max <= 0.0 {
@@ -127,7 +132,8 @@ pub fn trace_line(
             None => (true, None, lp),
         }
     };
-    let mut prev: Option<(f32, bool, Option<(f32, PrimRef)>)> = None;
+    // (θ, visible, blocker hit) of the previous sample on the line.
+    let mut prev: Option<(f32, bool, BlockerHit)> = None;
     for i in 0..n_theta {
         let theta = (i as f32 + theta_jitter) * step;
         let (visible, hit, lp) = probe(theta);
@@ -169,8 +175,8 @@ pub fn trace_line(
                     if let Some(dalpha) = jump_derivatives(scene, x, w, c, t, prim, dx) {
                         let tr = transport(w);
                         // Integrated over φ with density 1/2π: weight 2π.
-                        for k in 0..2 {
-                            out.vis[k] += tr * (sgn * sa * dalpha[k] * TAU);
+                        for (v, da) in out.vis.iter_mut().zip(dalpha) {
+                            *v += tr * (sgn * sa * da * TAU);
                         }
                         out.jumps += 1;
                     }
@@ -225,7 +231,7 @@ fn jump_derivatives(
             (best.2, best.1)
         }
     };
-    if !(d > 0.0) || k == Vec3::ZERO {
+    if d.is_nan() || d <= 0.0 || k == Vec3::ZERO {
         return None;
     }
     let v = w.cross(c);
@@ -502,8 +508,8 @@ pub fn object_space_gradient(
             let jac = (pb - pa) * 0.5 * tau.sin() * 0.5 * std::f64::consts::PI;
             let (est, vis) =
                 object_space_line(spheres, x, frame, theta_max, phi as f32, dx, transport);
-            for k in 0..2 {
-                g[k] += est.vis[k].as_dvec3() * (wt * jac);
+            for (gk, v) in g.iter_mut().zip(est.vis) {
+                *gk += v.as_dvec3() * (wt * jac);
             }
             b += vis as f64 * wt * jac;
         }
@@ -519,7 +525,7 @@ fn gauss_legendre_16() -> ([f64; 16], [f64; 16]) {
         0.2816035507792589,
         0.4580167776572274,
         0.6178762444026438,
-        0.7554044083550030,
+        0.755404408355003,
         0.8656312023878318,
         0.9445750230732326,
         0.9894009349916499,
