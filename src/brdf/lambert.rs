@@ -22,11 +22,11 @@ pub(super) fn pdf(wi: DVec3) -> f64 {
 pub(super) fn sample(albedo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let wi = warp::square_to_cosine_hemisphere(u);
     let wi64 = unit(wi)?;
-    if !(wi64.z > 0.0) {
+    if wi64.z <= 0.0 {
         return None;
     }
     let pdf = pdf(wi64) as f32;
-    if !(pdf > 0.0) {
+    if pdf <= 0.0 {
         return None;
     }
     Some(BsdfSample {

@@ -9,7 +9,7 @@ use crate::math::Vec3;
 /// that `wo` is a finite direction above the horizon).
 pub(super) fn sample(reflectance: Vec3, wo: Vec3) -> Option<BsdfSample> {
     let wi = Vec3::new(-wo.x, -wo.y, wo.z).normalize_or_zero();
-    if !(wi.z > 0.0) {
+    if wi.z <= 0.0 {
         return None;
     }
     Some(BsdfSample {

@@ -117,7 +117,7 @@ impl Material {
     /// direction is unusable (below the horizon or of zero density).
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let wo64 = unit(wo)?;
-        if !(wo64.z > 0.0) {
+        if wo64.z <= 0.0 {
             return None;
         }
         match self {
@@ -128,7 +128,7 @@ impl Material {
                 // Evaluate f and pdf through exactly the path `eval`/`pdf` take, from
                 // the f32 direction handed out, so that `pdf(wo, s.wi) == s.pdf`.
                 let wi64 = unit(wi)?;
-                if !(wi64.z > 0.0) {
+                if wi64.z <= 0.0 {
                     return None;
                 }
                 let (f, pdf) = g.eval_pdf(wo64, wi64);

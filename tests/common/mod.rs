@@ -84,6 +84,7 @@ pub fn composite_gl(a: f64, b: f64, panels: usize, order: usize) -> Vec<(f64, f6
 /// Adaptive Simpson quadrature of `f` on [a, b] to absolute tolerance `tol`.
 /// Deterministic and robust for the sharply peaked integrands of high exponents.
 pub fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
+    #[allow(clippy::too_many_arguments)]
     fn rec(
         f: &dyn Fn(f64) -> f64,
         a: f64,
