@@ -21,7 +21,8 @@ const CHI2_EXPONENTS: [f32; 5] = [1.0, 10.0, 100.0, 1000.0, 1e4];
 const CHI2_THETA_O: [f64; 4] = [0.0, 45.0, 75.0, 89.5];
 /// Every chi-square test run by this file (Lambert + BlinnPhong + CookTorrance),
 /// for the Šidák correction of the family-wise significance 0.01.
-const CHI2_TESTS: usize = CHI2_THETA_O.len() * (1 + 2 * CHI2_EXPONENTS.len());
+/// (+1: Lambert once more on Mitsuba's uniform (cos θ, φ) grid.)
+const CHI2_TESTS: usize = CHI2_THETA_O.len() * (1 + 2 * CHI2_EXPONENTS.len()) + 1;
 const CHI2_SAMPLES: usize = 250_000;
 
 fn blinn_phong(n: f32) -> Material {
@@ -443,6 +444,25 @@ fn chi2_lambert() {
             "Lambert",
         );
     }
+    // The same on Mitsuba's `SphericalDomain` partition (uniform in cos θ and φ).
+    let wo = wo_at(60.0);
+    let mut rng = Rng::new(150);
+    let out = sphere_test(
+        &SphereBins::uniform(20, 40),
+        CHI2_SAMPLES,
+        || {
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            m.sample(wo, rng.next_f32(), u).map(|s| s.wi.as_dvec3())
+        },
+        &|d| m.pdf(wo, d.as_vec3()) as f64,
+    );
+    if let Ok(o) = &out {
+        println!(
+            "chi2 Lambert (uniform grid) θo=60 χ²={:.2} dof={} p={:.4}",
+            o.statistic, o.dof, o.p_value
+        );
+    }
+    assert_accepted(out, "Lambert on the uniform grid");
 }
 
 #[test]
@@ -529,6 +549,36 @@ fn chi2_negative_controls_are_rejected() {
         9,
     );
     rejected(out, "Cook-Torrance pdf with a wrong lobe probability");
+    // (d) Blinn-Phong n = 100 at θo = 60°, density with the half-vector Jacobian
+    //     1/(4 wo·h) replaced by 1/(4 cos θo) — a classic slip.
+    let m = Material::BlinnPhong {
+        kd: Vec3::ZERO,
+        ks: Vec3::ONE,
+        exponent: 100.0,
+    };
+    let wo = wo_at(60.0).as_dvec3();
+    let bins = glossy_bins(60f64.to_radians(), 100.0, 1.0);
+    let mut rng = Rng::new(10);
+    let out = sphere_test(
+        &bins,
+        CHI2_SAMPLES,
+        || {
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            m.sample(wo.as_vec3(), 0.0, u).map(|s| s.wi.as_dvec3())
+        },
+        &|wi| {
+            if wi.z <= 0.0 {
+                return 0.0;
+            }
+            let h = (wo + wi).normalize();
+            nz::blinn_phong_ndf(100.0) * h.z.powf(100.0) / (4.0 * wo.z)
+        },
+    );
+    match &out {
+        Ok(o) => println!("negative control (wrong Jacobian): p = {:.3e}", o.p_value),
+        Err(e) => println!("negative control (wrong Jacobian): hard failure: {e}"),
+    }
+    rejected(out, "Blinn-Phong pdf with the wrong half-vector Jacobian");
 }
 
 // ---------------------------------------------------------------------------
