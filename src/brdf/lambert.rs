@@ -1,0 +1,38 @@
+//! Lambertian reflection: f = albedo/π with cosine-weighted sampling, for which
+//! `f · cos θi / pdf = albedo` exactly (no division is performed).
+
+use super::{sanitize, unit, BsdfSample};
+use crate::math::{warp, Vec2, Vec3};
+use glam::DVec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// f = albedo/π (the caller has checked both directions are above the horizon).
+pub(super) fn eval(albedo: Vec3) -> Vec3 {
+    sanitize(albedo) * FRAC_1_PI
+}
+
+/// Cosine-weighted density cos θi / π (the caller has checked wi.z > 0).
+pub(super) fn pdf(wi: DVec3) -> f64 {
+    wi.z * std::f64::consts::FRAC_1_PI
+}
+
+/// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the
+/// horizon (checked by the caller). A direction on the horizon (the rim of the disk)
+/// has zero density and is rejected.
+pub(super) fn sample(albedo: Vec3, u: Vec2) -> Option<BsdfSample> {
+    let wi = warp::square_to_cosine_hemisphere(u);
+    let wi64 = unit(wi)?;
+    if wi64.z <= 0.0 {
+        return None;
+    }
+    let pdf = pdf(wi64) as f32;
+    if pdf <= 0.0 {
+        return None;
+    }
+    Some(BsdfSample {
+        wi,
+        weight: sanitize(albedo),
+        pdf,
+        is_delta: false,
+    })
+}

@@ -1,0 +1,123 @@
+//! Shared test support: deterministic quadrature, an independent random stream, and
+//! (in [`chi2`]) the Pearson chi-square goodness-of-fit machinery for samplers.
+//!
+//! Use from a test file with `mod common;`. Not every test file uses every helper.
+#![allow(dead_code)]
+
+pub mod chi2;
+
+/// SplitMix64: a small, statistically solid generator giving *independent* uniform
+/// samples. The chi-square test assumes independent draws; low-discrepancy points
+/// would match the expected counts too well and make p-values meaningless.
+#[derive(Clone, Debug)]
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1) with 24 random bits (every f32 in the grid is exact).
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+
+    /// Uniform in [0, 1) with 53 random bits.
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+/// Gauss-Legendre nodes and weights on [-1, 1] (Newton iteration on P_n; accurate to
+/// ~1e-15 for n up to a few hundred).
+pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut x = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    for i in 0..n.div_ceil(2) {
+        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 0.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, 0.0);
+            for j in 0..n {
+                let p2 = p1;
+                p1 = p0;
+                p0 = ((2 * j + 1) as f64 * z * p1 - j as f64 * p2) / (j + 1) as f64;
+            }
+            dp = n as f64 * (z * p0 - p1) / (z * z - 1.0);
+            let dz = p0 / dp;
+            z -= dz;
+            if dz.abs() < 1e-16 {
+                break;
+            }
+        }
+        x[i] = -z;
+        x[n - 1 - i] = z;
+        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+        w[n - 1 - i] = w[i];
+    }
+    (x, w)
+}
+
+/// A composite Gauss-Legendre rule on [a, b]: `panels` equal panels of `order` nodes.
+/// Returns (nodes, weights) so that Σ w f(x) ≈ ∫_a^b f.
+pub fn composite_gl(a: f64, b: f64, panels: usize, order: usize) -> Vec<(f64, f64)> {
+    let (x, w) = gauss_legendre(order);
+    let h = (b - a) / panels as f64;
+    let mut out = Vec::with_capacity(panels * order);
+    for p in 0..panels {
+        let lo = a + h * p as f64;
+        for k in 0..order {
+            out.push((lo + 0.5 * h * (x[k] + 1.0), 0.5 * h * w[k]));
+        }
+    }
+    out
+}
+
+/// Adaptive Simpson quadrature of `f` on [a, b] to absolute tolerance `tol`.
+/// Deterministic and robust for the sharply peaked integrands of high exponents.
+pub fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
+    #[allow(clippy::too_many_arguments)]
+    fn rec(
+        f: &dyn Fn(f64) -> f64,
+        a: f64,
+        b: f64,
+        fa: f64,
+        fm: f64,
+        fb: f64,
+        whole: f64,
+        tol: f64,
+        depth: u32,
+    ) -> f64 {
+        let m = 0.5 * (a + b);
+        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
+        let (flm, frm) = (f(lm), f(rm));
+        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
+        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+        let delta = left + right - whole;
+        if depth == 0 || delta.abs() <= 15.0 * tol {
+            return left + right + delta / 15.0;
+        }
+        rec(f, a, m, fa, flm, fm, left, 0.5 * tol, depth - 1)
+            + rec(f, m, b, fm, frm, fb, right, 0.5 * tol, depth - 1)
+    }
+    // Start from 64 panels so that a narrow peak cannot slip between the first nodes.
+    let panels = 64;
+    let h = (b - a) / panels as f64;
+    (0..panels)
+        .map(|i| {
+            let (lo, hi) = (a + h * i as f64, a + h * (i + 1) as f64);
+            let m = 0.5 * (lo + hi);
+            let (fa, fm, fb) = (f(lo), f(m), f(hi));
+            let whole = (hi - lo) / 6.0 * (fa + 4.0 * fm + fb);
+            rec(f, lo, hi, fa, fm, fb, whole, tol / panels as f64, 40)
+        })
+        .sum()
+}
