@@ -52,6 +52,7 @@ pub struct FigureSummary {
 
 /// Writes the flatland figures into `out_dir` (created if missing): `fig9a_scene.svg`,
 /// `fig9_shading_gradient.{csv,svg}`, `fig10_interpolation.{csv,svg}`,
+/// `fig10_coarse_samples.csv`,
 /// `angular_samples.{csv,svg}` and `summary.txt`. Each file is written to a
 /// temporary name and renamed, so a failed run leaves earlier outputs intact.
 pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
@@ -149,12 +150,12 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
     for i in 0..GRID {
         push_row(&mut csv, &[xs[i], b_exact[i], lin[i], her[i]]);
     }
-    csv.push_str("# coarse samples: x,shading,grad_analytic\n");
+    files.push(write(out_dir, "fig10_interpolation.csv", &csv)?);
+    let mut csv = String::from("x,shading_exact,grad_analytic\n");
     for i in 0..coarse_n {
-        csv.push_str("# ");
         push_row(&mut csv, &[cx[i], cb[i], cg[i]]);
     }
-    files.push(write(out_dir, "fig10_interpolation.csv", &csv)?);
+    files.push(write(out_dir, "fig10_coarse_samples.csv", &csv)?);
     let err = |v: &[f64]| {
         xs.iter()
             .zip(v.iter().zip(&b_exact))
