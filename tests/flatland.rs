@@ -32,7 +32,7 @@ fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Blocker {
 /// Receiver points that avoid the figure grid (odd count, irrational-ish offset).
 fn receiver_points(n: usize, lo: f64, hi: f64) -> Vec<f64> {
     (0..n)
-        .map(|i| lo + (hi - lo) * (i as f64 + 0.318_309_886) / n as f64)
+        .map(|i| lo + (hi - lo) * (i as f64 + 0.377_123_5) / n as f64)
         .collect()
 }
 

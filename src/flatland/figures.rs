@@ -393,7 +393,7 @@ fn scene_svg(scene: &Scene) -> String {
             (px(r * th.sin()), py(r * th.cos()))
         })
         .collect();
-    polyline(&mut s, &pts, "#ff7f0e", false);
+    polyline(&mut s, &pts, "#ff7f0e");
     s.push_str("</svg>\n");
     s
 }
@@ -404,14 +404,10 @@ fn svg_open(w: f64, h: f64) -> String {
     )
 }
 
-fn polyline(s: &mut String, pts: &[(f64, f64)], color: &str, dashed: bool) {
+fn polyline(s: &mut String, pts: &[(f64, f64)], color: &str) {
     s.push_str("<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"");
     s.push_str(color);
-    s.push('"');
-    if dashed {
-        s.push_str(" stroke-dasharray=\"6 3\"");
-    }
-    s.push_str(" points=\"");
+    s.push_str("\" points=\"");
     for (x, y) in pts {
         let _ = write!(s, "{x:.2},{y:.2} ");
     }
@@ -425,6 +421,13 @@ struct Svg {
     panels: Vec<Panel>,
 }
 
+/// One labelled polyline of a panel.
+struct Series {
+    label: String,
+    color: String,
+    points: Vec<(f64, f64)>,
+}
+
 struct Panel {
     row: f64,
     title: String,
@@ -432,7 +435,7 @@ struct Panel {
     ylabel: String,
     log_x: bool,
     log_y: bool,
-    series: Vec<(String, String, Vec<(f64, f64)>)>,
+    series: Vec<Series>,
     markers: Vec<(f64, f64)>,
 }
 
@@ -458,7 +461,11 @@ impl Panel {
         self
     }
     fn series(mut self, label: &str, color: &str, pts: Vec<(f64, f64)>) -> Self {
-        self.series.push((label.into(), color.into(), pts));
+        self.series.push(Series {
+            label: label.into(),
+            color: color.into(),
+            points: pts,
+        });
         self
     }
     fn markers(mut self, pts: Vec<(f64, f64)>) -> Self {
@@ -510,7 +517,7 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
     let all = p
         .series
         .iter()
-        .flat_map(|(_, _, pts)| pts.iter())
+        .flat_map(|sr| sr.points.iter())
         .chain(p.markers.iter())
         .filter(|q| ok(q));
     let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
@@ -581,13 +588,14 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
             tick(ly)
         );
     }
-    for (k, (label, color, pts)) in p.series.iter().enumerate() {
+    for (k, sr) in p.series.iter().enumerate() {
+        let (label, color, pts) = (&sr.label, &sr.color, &sr.points);
         let q: Vec<(f64, f64)> = pts
             .iter()
             .filter(|q| ok(q))
             .map(|&(x, y)| (sx(x), sy(y)))
             .collect();
-        polyline(s, &q, color, false);
+        polyline(s, &q, color);
         let ly = top + 16.0 + 16.0 * k as f64;
         let _ = writeln!(
             s,
