@@ -290,8 +290,9 @@ fn figure_writer_produces_finite_csv_and_svg() {
         );
     }
     println!(
-        "FD of exact B {:.3e}, FD of 256-sample B {:.3e}; Fig. 10: linear {:.3e}, gradient {:.3e}",
+        "FD of exact B {:.3e} ({:.3e} away from kinks), FD of 256-sample B {:.3e}; Fig. 10: linear {:.3e}, gradient {:.3e}",
         summary.fd_exact_rms,
+        summary.fd_exact_rms_smooth,
         summary.fd_sampled_rms,
         summary.interp_linear_rms,
         summary.interp_gradient_rms
@@ -326,6 +327,7 @@ fn figure_writer_produces_finite_csv_and_svg() {
     // sampled shading is very noisy (Fig. 9c); gradient interpolation beats linear
     // interpolation (Fig. 10); refined semianalytic gradients match analytic ones.
     assert!(summary.fd_sampled_rms > 0.1);
+    assert!(summary.fd_exact_rms_smooth < 1e-6);
     assert!(summary.interp_gradient_rms < summary.interp_linear_rms);
     assert!(summary.angular.iter().all(|r| r.bisection_gaps < 1e-5));
     std::fs::remove_dir_all(&dir).unwrap();
