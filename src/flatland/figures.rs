@@ -83,12 +83,14 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
         g_semi(Locate::Bisection)?,
         g_semi(Locate::BisectionGaps)?,
     );
+    let g_theta: Vec<f64> = xs.iter().map(|&x| scene.grad_angular_analytic(x)).collect();
     let g_fd = map(&xs, |x| scene.grad_numerical(x, FD_STEP_EXACT))?;
     let g_fd_sampled = map(&xs, |x| scene.grad_numerical_sampled(x, dx, FIG_SAMPLES))?;
     let mut csv = String::from(
         "x,shading_exact,shading_sampled_256,grad_analytic,grad_semianalytic_256_sample,\
          grad_semianalytic_256_midpoint,grad_semianalytic_256_bisection,\
-         grad_semianalytic_256_bisection_gaps,grad_fd_exact,grad_fd_sampled_256\n",
+         grad_semianalytic_256_bisection_gaps,grad_fd_exact,grad_fd_sampled_256,\
+         grad_theta_analytic\n",
     );
     for i in 0..GRID {
         let row = [
@@ -102,6 +104,7 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
             g_gaps[i],
             g_fd[i],
             g_fd_sampled[i],
+            g_theta[i],
         ];
         push_row(&mut csv, &row);
     }

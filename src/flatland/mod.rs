@@ -180,9 +180,16 @@ impl Scene {
     /// Exact shading `B(x) = ∫ T(θ) V(x, θ) dθ`: the lighting integrated over the
     /// complement of the blocked intervals (Eq. 32 with the visibility made explicit).
     pub fn shading(&self, x: f64) -> f64 {
+        self.shading_rotated(x, 0.0)
+    }
+
+    /// Shading with the transport rotated by `φ` against the fixed blockers,
+    /// `B(x, φ) = ∫ T(θ − φ) V(x, θ) dθ`, the convolution of Eq. (32) read at outgoing
+    /// angle `φ`; its `φ`-derivative at 0 is the angular gradient of Eq. (35).
+    pub fn shading_rotated(&self, x: f64, phi: f64) -> f64 {
         let mut start = -FRAC_PI_2;
         let mut sum = 0.0;
-        let t = |th: f64| self.lighting.transport(th);
+        let t = |th: f64| self.lighting.transport(th - phi);
         for iv in self.blocked_intervals(x) {
             sum += self.rule.integrate(start, iv.lo.angle.min(FRAC_PI_2), t);
             start = start.max(iv.hi.angle);
@@ -200,6 +207,27 @@ impl Scene {
                     + self.boundary_term(iv.hi.angle, iv.hi.distance, -1.0)
             })
             .sum()
+    }
+
+    /// Analytic angular gradient `∂B(x, φ)/∂φ` at `φ = 0`, Eq. (35):
+    /// `B_θ = −Σ_j sgn_j T(α_j)`. (The hemisphere limits add nothing: `T(±π/2) = 0`.)
+    /// For the diffuse receiver of Fig. 9 the seen shading does not depend on the view
+    /// angle; this is the derivative under a rotation of the lighting (cosine
+    /// included) relative to the blockers, the quantity Eq. (35) describes.
+    pub fn grad_angular_analytic(&self, x: f64) -> f64 {
+        self.blocked_intervals(x)
+            .iter()
+            .map(|iv| -self.lighting.transport(iv.lo.angle) + self.lighting.transport(iv.hi.angle))
+            .sum()
+    }
+
+    /// Eq. (35) at image-space discontinuities (no distance needed, only `α_j`).
+    pub fn grad_angular_semianalytic(&self, x: f64, n: usize, locate: Locate) -> Result<f64> {
+        Ok(self
+            .discontinuities_sampled(x, n, locate)?
+            .iter()
+            .map(|d| -d.sign * self.lighting.transport(d.angle))
+            .sum())
     }
 
     /// One term of Eq. (37) in this module's convention: `−sgn T(α) cos α / D`.
