@@ -342,13 +342,16 @@ fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
 }
 
 /// Interpolates the coarse samples at `x`: linear, or cubic Hermite using the
-/// gradients (the 1D form of gradient interpolation, Sec. 8.1 / Fig. 10).
+/// gradients (the 1D form of gradient interpolation, Sec. 8.1 / Fig. 10). The paper
+/// builds a quadratic Bézier per span from the two tangents; in 1D the cubic Hermite
+/// uses the same data (two values, two slopes) without the tangent-intersection
+/// control point, which is undefined when the two slopes are equal.
 fn interp(cx: &[f64], cb: &[f64], cg: &[f64], x: f64, hermite: bool) -> f64 {
     let n = cx.len();
-    let i = cx.partition_point(|&c| c <= x).clamp(1, n.max(2) - 1) - 1;
     if n < 2 {
         return cb.first().copied().unwrap_or(0.0);
     }
+    let i = cx.partition_point(|&c| c <= x).clamp(1, n - 1) - 1;
     let h = cx[i + 1] - cx[i];
     let t = (x - cx[i]) / h;
     if !hermite {
