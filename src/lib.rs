@@ -8,6 +8,7 @@
 pub mod accel;
 pub mod brdf;
 pub mod error;
+pub mod flatland;
 pub mod math;
 pub mod output;
 pub mod render;

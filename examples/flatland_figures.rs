@@ -1,0 +1,17 @@
+//! Writes the flatland figures (paper Fig. 9 and 10) as CSV + SVG into `out/flatland/`
+//! (or the directory given as the first argument) and prints the measured errors.
+
+fn main() -> anyhow::Result<()> {
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "out/flatland".to_string());
+    let summary = gradtrace::flatland::write_figures(std::path::Path::new(&dir))?;
+    print!(
+        "{}",
+        std::fs::read_to_string(std::path::Path::new(&dir).join("summary.txt"))?
+    );
+    for f in &summary.files {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,650 @@
+//! Data and plots of the paper's Fig. 9 (scene, shading, gradients) and Fig. 10
+//! (gradient vs. linear interpolation from uniform samples), plus a convergence table
+//! of the semianalytic gradient against the number of angular samples.
+//!
+//! Plots are hand-written SVG polylines: a few hundred lines of markup are simpler
+//! than pulling in `plotters`, and there is no font dependency (text elements are
+//! left to the viewer's default font).
+
+use super::{rms_relative, Locate, Scene};
+use crate::{Error, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Receiver points per figure (spacing 0.01 over the range [-3, 3]).
+const GRID: usize = 601;
+/// Angular samples of the semianalytic and sampled curves in Fig. 9c (the paper uses 256 or 512).
+const FIG_SAMPLES: usize = 256;
+/// Angular sample counts of the convergence table.
+const SAMPLE_COUNTS: [usize; 8] = [16, 32, 64, 128, 256, 512, 1024, 2048];
+/// Spacing of the uniform coarse samples of Fig. 10.
+const COARSE_SPACING: f64 = 0.5;
+/// Step of the central differences of the exact shading.
+const FD_STEP_EXACT: f64 = 1e-4;
+
+/// One row of the angular convergence table: normalised RMS error (see
+/// [`rms_relative`]) of each semianalytic variant and of the sampled shading,
+/// against the analytic gradient / exact shading on the figure grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AngularRow {
+    pub samples: usize,
+    pub sample: f64,
+    pub midpoint: f64,
+    pub bisection: f64,
+    pub bisection_gaps: f64,
+    pub shading: f64,
+}
+
+/// What [`write_figures`] wrote and the figures it measured on the way.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FigureSummary {
+    pub files: Vec<PathBuf>,
+    pub angular: Vec<AngularRow>,
+    /// Normalised RMS error of central differences of the exact shading (h = 1e-4).
+    pub fd_exact_rms: f64,
+    /// The same over the grid points with no kink of `B` within `h` (the two grid
+    /// points exactly at the box edges, where `B` is not differentiable, left out).
+    pub fd_exact_rms_smooth: f64,
+    /// Normalised RMS error of central differences of the 256-sample shading (h = grid spacing).
+    pub fd_sampled_rms: f64,
+    /// Fig. 10: normalised RMS error of linear interpolation from the coarse samples.
+    pub interp_linear_rms: f64,
+    /// Fig. 10: same with cubic Hermite interpolation using the analytic gradients.
+    pub interp_gradient_rms: f64,
+}
+
+/// Writes the flatland figures into `out_dir` (created if missing): `fig9a_scene.svg`,
+/// `fig9_shading_gradient.{csv,svg}`, `fig10_interpolation.{csv,svg}`,
+/// `fig10_coarse_samples.csv`,
+/// `angular_samples.{csv,svg}` and `summary.txt`. Each file is written to a
+/// temporary name and renamed, so a failed run leaves earlier outputs intact.
+pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::Output {
+        path: out_dir.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let scene = Scene::paper_fig9();
+    let (x0, x1) = Scene::FIG_RANGE;
+    let dx = (x1 - x0) / (GRID - 1) as f64;
+    let xs: Vec<f64> = (0..GRID).map(|i| x0 + i as f64 * dx).collect();
+    let mut files = Vec::new();
+
+    // Fig. 9a: the scene.
+    files.push(write(out_dir, "fig9a_scene.svg", &scene_svg(&scene))?);
+
+    // Fig. 9b/9c: shading and gradients across the receiver.
+    let b_exact: Vec<f64> = xs.iter().map(|&x| scene.shading(x)).collect();
+    let b_sampled = map(&xs, |x| scene.shading_sampled(x, FIG_SAMPLES))?;
+    let g_ana: Vec<f64> = xs.iter().map(|&x| scene.grad_analytic(x)).collect();
+    let g_semi = |loc| map(&xs, |x| scene.grad_semianalytic(x, FIG_SAMPLES, loc));
+    let (g_sample, g_mid, g_bis, g_gaps) = (
+        g_semi(Locate::Sample)?,
+        g_semi(Locate::Midpoint)?,
+        g_semi(Locate::Bisection)?,
+        g_semi(Locate::BisectionGaps)?,
+    );
+    let g_theta: Vec<f64> = xs.iter().map(|&x| scene.grad_angular_analytic(x)).collect();
+    let g_fd = map(&xs, |x| scene.grad_numerical(x, FD_STEP_EXACT))?;
+    let g_fd_sampled = map(&xs, |x| scene.grad_numerical_sampled(x, dx, FIG_SAMPLES))?;
+    let mut csv = String::from(
+        "x,shading_exact,shading_sampled_256,grad_analytic,grad_semianalytic_256_sample,\
+         grad_semianalytic_256_midpoint,grad_semianalytic_256_bisection,\
+         grad_semianalytic_256_bisection_gaps,grad_fd_exact,grad_fd_sampled_256,\
+         grad_theta_analytic\n",
+    );
+    for i in 0..GRID {
+        let row = [
+            xs[i],
+            b_exact[i],
+            b_sampled[i],
+            g_ana[i],
+            g_sample[i],
+            g_mid[i],
+            g_bis[i],
+            g_gaps[i],
+            g_fd[i],
+            g_fd_sampled[i],
+            g_theta[i],
+        ];
+        push_row(&mut csv, &row);
+    }
+    files.push(write(out_dir, "fig9_shading_gradient.csv", &csv)?);
+    let pts = |v: &[f64]| {
+        xs.iter()
+            .copied()
+            .zip(v.iter().copied())
+            .collect::<Vec<_>>()
+    };
+    let fig9 = Svg::new(900.0, 720.0)
+        .panel(
+            Panel::new(0.0, "Fig. 9b: shading B(x) on the receiver", "x", "B")
+                .series("exact", "#000000", pts(&b_exact))
+                .series("256 angular samples", "#d62728", pts(&b_sampled)),
+        )
+        .panel(
+            Panel::new(1.0, "Fig. 9c: gradient dB/dx", "x", "dB/dx")
+                .series(
+                    "central differences of 256-sample B",
+                    "#bbbbbb",
+                    pts(&g_fd_sampled),
+                )
+                .series("analytic (Eq. 37)", "#000000", pts(&g_ana))
+                .series(
+                    "semianalytic 256, sample position (paper)",
+                    "#ff7f0e",
+                    pts(&g_sample),
+                )
+                .series(
+                    "semianalytic 256, bisection + gaps",
+                    "#1f77b4",
+                    pts(&g_gaps),
+                ),
+        )
+        .finish();
+    files.push(write(out_dir, "fig9_shading_gradient.svg", &fig9)?);
+
+    // Fig. 10: interpolation from uniform coarse samples.
+    let coarse_n = ((x1 - x0) / COARSE_SPACING).round() as usize + 1;
+    let cx: Vec<f64> = (0..coarse_n)
+        .map(|i| x0 + i as f64 * COARSE_SPACING)
+        .collect();
+    let cb: Vec<f64> = cx.iter().map(|&x| scene.shading(x)).collect();
+    let cg: Vec<f64> = cx.iter().map(|&x| scene.grad_analytic(x)).collect();
+    let lin: Vec<f64> = xs
+        .iter()
+        .map(|&x| interp(&cx, &cb, &cg, x, false))
+        .collect();
+    let her: Vec<f64> = xs.iter().map(|&x| interp(&cx, &cb, &cg, x, true)).collect();
+    let interp_linear_rms = rms_relative(&lin, &b_exact);
+    let interp_gradient_rms = rms_relative(&her, &b_exact);
+    let mut csv = String::from("x,shading_exact,linear_interpolation,gradient_interpolation\n");
+    for i in 0..GRID {
+        push_row(&mut csv, &[xs[i], b_exact[i], lin[i], her[i]]);
+    }
+    files.push(write(out_dir, "fig10_interpolation.csv", &csv)?);
+    let mut csv = String::from("x,shading_exact,grad_analytic\n");
+    for i in 0..coarse_n {
+        push_row(&mut csv, &[cx[i], cb[i], cg[i]]);
+    }
+    files.push(write(out_dir, "fig10_coarse_samples.csv", &csv)?);
+    let err = |v: &[f64]| {
+        xs.iter()
+            .zip(v.iter().zip(&b_exact))
+            .map(|(&x, (a, b))| (x, a - b))
+            .collect::<Vec<_>>()
+    };
+    let fig10 = Svg::new(900.0, 720.0)
+        .panel(
+            Panel::new(
+                0.0,
+                &format!("Fig. 10: interpolation from samples every {COARSE_SPACING}"),
+                "x",
+                "B",
+            )
+            .series("exact", "#000000", pts(&b_exact))
+            .series("linear", "#d62728", pts(&lin))
+            .series("gradient (cubic Hermite)", "#1f77b4", pts(&her))
+            .markers(cx.iter().copied().zip(cb.iter().copied()).collect()),
+        )
+        .panel(
+            Panel::new(1.0, "interpolation error", "x", "error")
+                .series(
+                    &format!("linear, RMS rel {interp_linear_rms:.2e}"),
+                    "#d62728",
+                    err(&lin),
+                )
+                .series(
+                    &format!("gradient, RMS rel {interp_gradient_rms:.2e}"),
+                    "#1f77b4",
+                    err(&her),
+                ),
+        )
+        .finish();
+    files.push(write(out_dir, "fig10_interpolation.svg", &fig10)?);
+
+    // Convergence in the number of angular samples.
+    let mut angular = Vec::new();
+    let mut csv = String::from(
+        "samples,rms_sample,rms_midpoint,rms_bisection,rms_bisection_gaps,rms_shading\n",
+    );
+    for &n in &SAMPLE_COUNTS {
+        let e = |loc| -> Result<f64> {
+            Ok(rms_relative(
+                &map(&xs, |x| scene.grad_semianalytic(x, n, loc))?,
+                &g_ana,
+            ))
+        };
+        let row = AngularRow {
+            samples: n,
+            sample: e(Locate::Sample)?,
+            midpoint: e(Locate::Midpoint)?,
+            bisection: e(Locate::Bisection)?,
+            bisection_gaps: e(Locate::BisectionGaps)?,
+            shading: rms_relative(&map(&xs, |x| scene.shading_sampled(x, n))?, &b_exact),
+        };
+        push_row(
+            &mut csv,
+            &[
+                n as f64,
+                row.sample,
+                row.midpoint,
+                row.bisection,
+                row.bisection_gaps,
+                row.shading,
+            ],
+        );
+        angular.push(row);
+    }
+    files.push(write(out_dir, "angular_samples.csv", &csv)?);
+    let col = |f: fn(&AngularRow) -> f64| {
+        angular
+            .iter()
+            .map(|r| (r.samples as f64, f(r)))
+            .collect::<Vec<_>>()
+    };
+    let conv = Svg::new(900.0, 400.0)
+        .panel(
+            Panel::new(
+                0.0,
+                "semianalytic gradient vs angular samples",
+                "samples",
+                "RMS rel. error",
+            )
+            .log_x()
+            .log_y()
+            .series("sample position (paper)", "#d62728", col(|r| r.sample))
+            .series("midpoint", "#1f77b4", col(|r| r.midpoint))
+            .series("bisection", "#2ca02c", col(|r| r.bisection))
+            .series(
+                "bisection + object-id gaps",
+                "#9467bd",
+                col(|r| r.bisection_gaps),
+            )
+            .series("sampled shading B", "#7f7f7f", col(|r| r.shading)),
+        )
+        .finish();
+    files.push(write(out_dir, "angular_samples.svg", &conv)?);
+
+    let summary = FigureSummary {
+        files: Vec::new(),
+        angular,
+        fd_exact_rms: rms_relative(&g_fd, &g_ana),
+        fd_exact_rms_smooth: {
+            let smooth: Vec<usize> = (0..GRID)
+                .filter(|&i| {
+                    let s = scene.signature(xs[i]);
+                    scene.signature(xs[i] - FD_STEP_EXACT) == s
+                        && scene.signature(xs[i] + FD_STEP_EXACT) == s
+                })
+                .collect();
+            let pick = |v: &[f64]| smooth.iter().map(|&i| v[i]).collect::<Vec<_>>();
+            rms_relative(&pick(&g_fd), &pick(&g_ana))
+        },
+        fd_sampled_rms: rms_relative(&g_fd_sampled, &g_ana),
+        interp_linear_rms,
+        interp_gradient_rms,
+    };
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "flatland (paper Sec. 6.3): normalised RMS errors on {GRID} receiver points in [{x0}, {x1}]"
+    );
+    let _ = writeln!(
+        text,
+        "samples  sample_pos  midpoint   bisection  bis+gaps   shading"
+    );
+    for r in &summary.angular {
+        let _ = writeln!(
+            text,
+            "{:7}  {:.3e}  {:.3e}  {:.3e}  {:.3e}  {:.3e}",
+            r.samples, r.sample, r.midpoint, r.bisection, r.bisection_gaps, r.shading
+        );
+    }
+    let _ = writeln!(
+        text,
+        "central differences: exact B (h=1e-4) {:.3e} ({:.3e} away from kinks), 256-sample B (h={dx}) {:.3e}",
+        summary.fd_exact_rms, summary.fd_exact_rms_smooth, summary.fd_sampled_rms
+    );
+    let _ = writeln!(
+        text,
+        "Fig. 10 interpolation from spacing {COARSE_SPACING}: linear {:.3e}, gradient {:.3e}",
+        summary.interp_linear_rms, summary.interp_gradient_rms
+    );
+    files.push(write(out_dir, "summary.txt", &text)?);
+    Ok(FigureSummary { files, ..summary })
+}
+
+fn map(xs: &[f64], f: impl Fn(f64) -> Result<f64>) -> Result<Vec<f64>> {
+    xs.iter().map(|&x| f(x)).collect()
+}
+
+fn push_row(csv: &mut String, row: &[f64]) {
+    for (i, v) in row.iter().enumerate() {
+        if i > 0 {
+            csv.push(',');
+        }
+        let _ = write!(csv, "{v:.10e}");
+    }
+    csv.push('\n');
+}
+
+/// Writes `contents` to `dir/name` through a temporary file and a rename.
+fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
+    let path = dir.join(name);
+    let tmp = dir.join(format!(".{name}.tmp"));
+    let err = |e: std::io::Error| Error::Output {
+        path: path.clone(),
+        message: e.to_string(),
+    };
+    std::fs::write(&tmp, contents).map_err(err)?;
+    std::fs::rename(&tmp, &path).map_err(err)?;
+    Ok(path)
+}
+
+/// Interpolates the coarse samples at `x`: linear, or cubic Hermite using the
+/// gradients (the 1D form of gradient interpolation, Sec. 8.1 / Fig. 10). The paper
+/// builds a quadratic Bézier per span from the two tangents; in 1D the cubic Hermite
+/// uses the same data (two values, two slopes) without the tangent-intersection
+/// control point, which is undefined when the two slopes are equal.
+fn interp(cx: &[f64], cb: &[f64], cg: &[f64], x: f64, hermite: bool) -> f64 {
+    let n = cx.len();
+    if n < 2 {
+        return cb.first().copied().unwrap_or(0.0);
+    }
+    let i = cx.partition_point(|&c| c <= x).clamp(1, n - 1) - 1;
+    let h = cx[i + 1] - cx[i];
+    let t = (x - cx[i]) / h;
+    if !hermite {
+        return cb[i] + t * (cb[i + 1] - cb[i]);
+    }
+    let (t2, t3) = (t * t, t * t * t);
+    (2.0 * t3 - 3.0 * t2 + 1.0) * cb[i]
+        + (t3 - 2.0 * t2 + t) * h * cg[i]
+        + (-2.0 * t3 + 3.0 * t2) * cb[i + 1]
+        + (t3 - t2) * h * cg[i + 1]
+}
+
+/// Fig. 9a: the receiver, the blockers, and the lighting profile drawn above.
+fn scene_svg(scene: &Scene) -> String {
+    let (w, h) = (900.0, 450.0);
+    let (x0, x1) = Scene::FIG_RANGE;
+    let scale = (w - 80.0) / (x1 - x0);
+    let px = |x: f64| 40.0 + (x - x0) * scale;
+    let py = |y: f64| h - 40.0 - y * scale;
+    let mut s = svg_open(w, h);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="24" font-size="16">Fig. 9a: flatland scene (receiver y = 0, blockers, Gaussian lighting lobe)</text>"#,
+        40.0
+    );
+    let _ = writeln!(
+        s,
+        r#"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="black" stroke-width="3"/>"#,
+        px(x0),
+        py(0.0),
+        px(x1),
+        py(0.0)
+    );
+    for b in scene.blockers() {
+        match b {
+            super::Blocker::Rect(r) => {
+                let _ = writeln!(
+                    s,
+                    r##"<rect x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}" fill="#888888" stroke="black"/>"##,
+                    px(r.min[0]),
+                    py(r.max[1]),
+                    (r.max[0] - r.min[0]) * scale,
+                    (r.max[1] - r.min[1]) * scale
+                );
+            }
+            super::Blocker::Circle(c) => {
+                let _ = writeln!(
+                    s,
+                    r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="#888888" stroke="black"/>"##,
+                    px(c.center[0]),
+                    py(c.center[1]),
+                    c.radius * scale
+                );
+            }
+        }
+    }
+    // The lighting T(θ) as a polar curve around the receiver centre.
+    let l = scene.lighting();
+    let peak = l.transport(0.0).max(1e-12);
+    let pts: Vec<(f64, f64)> = (0..=180)
+        .map(|i| {
+            let th = -std::f64::consts::FRAC_PI_2 + i as f64 * std::f64::consts::PI / 180.0;
+            let r = 2.4 + 0.6 * l.transport(th) / peak;
+            (px(r * th.sin()), py(r * th.cos()))
+        })
+        .collect();
+    polyline(&mut s, &pts, "#ff7f0e");
+    s.push_str("</svg>\n");
+    s
+}
+
+fn svg_open(w: f64, h: f64) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n"
+    )
+}
+
+fn polyline(s: &mut String, pts: &[(f64, f64)], color: &str) {
+    s.push_str("<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"");
+    s.push_str(color);
+    s.push_str("\" points=\"");
+    for (x, y) in pts {
+        let _ = write!(s, "{x:.2},{y:.2} ");
+    }
+    s.push_str("\"/>\n");
+}
+
+/// A stack of plot panels, each one row of the document.
+struct Svg {
+    w: f64,
+    h: f64,
+    panels: Vec<Panel>,
+}
+
+/// One labelled polyline of a panel.
+struct Series {
+    label: String,
+    color: String,
+    points: Vec<(f64, f64)>,
+}
+
+struct Panel {
+    row: f64,
+    title: String,
+    xlabel: String,
+    ylabel: String,
+    log_x: bool,
+    log_y: bool,
+    series: Vec<Series>,
+    markers: Vec<(f64, f64)>,
+}
+
+impl Panel {
+    fn new(row: f64, title: &str, xlabel: &str, ylabel: &str) -> Self {
+        Self {
+            row,
+            title: title.into(),
+            xlabel: xlabel.into(),
+            ylabel: ylabel.into(),
+            log_x: false,
+            log_y: false,
+            series: Vec::new(),
+            markers: Vec::new(),
+        }
+    }
+    fn log_x(mut self) -> Self {
+        self.log_x = true;
+        self
+    }
+    fn log_y(mut self) -> Self {
+        self.log_y = true;
+        self
+    }
+    fn series(mut self, label: &str, color: &str, pts: Vec<(f64, f64)>) -> Self {
+        self.series.push(Series {
+            label: label.into(),
+            color: color.into(),
+            points: pts,
+        });
+        self
+    }
+    fn markers(mut self, pts: Vec<(f64, f64)>) -> Self {
+        self.markers = pts;
+        self
+    }
+}
+
+impl Svg {
+    fn new(w: f64, h: f64) -> Self {
+        Self {
+            w,
+            h,
+            panels: Vec::new(),
+        }
+    }
+    fn panel(mut self, p: Panel) -> Self {
+        self.panels.push(p);
+        self
+    }
+
+    fn finish(self) -> String {
+        let mut s = svg_open(self.w, self.h);
+        let rows = self.panels.len().max(1) as f64;
+        let ph = self.h / rows;
+        for p in &self.panels {
+            draw_panel(
+                &mut s,
+                p,
+                70.0,
+                p.row * ph + 30.0,
+                self.w - 100.0,
+                ph - 75.0,
+            );
+        }
+        s.push_str("</svg>\n");
+        s
+    }
+}
+
+/// Draws one panel with frame, 5 ticks per axis, the series and a legend. Non-finite
+/// values (and non-positive ones on log axes) are skipped, never written.
+fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
+    let tx = |v: f64| if p.log_x { v.log10() } else { v };
+    let ty = |v: f64| if p.log_y { v.log10() } else { v };
+    let ok = |(x, y): &(f64, f64)| {
+        x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0)
+    };
+    let all = p
+        .series
+        .iter()
+        .flat_map(|sr| sr.points.iter())
+        .chain(p.markers.iter())
+        .filter(|q| ok(q));
+    let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in all {
+        xmin = xmin.min(tx(x));
+        xmax = xmax.max(tx(x));
+        ymin = ymin.min(ty(y));
+        ymax = ymax.max(ty(y));
+    }
+    if xmin > xmax {
+        (xmin, xmax, ymin, ymax) = (0.0, 1.0, 0.0, 1.0);
+    }
+    if xmax - xmin < 1e-300 {
+        xmax = xmin + 1.0;
+    }
+    if ymax - ymin < 1e-300 {
+        ymax = ymin + 1.0;
+    }
+    let pad = 0.05 * (ymax - ymin);
+    let (ymin, ymax) = (ymin - pad, ymax + pad);
+    let sx = |x: f64| left + (tx(x) - xmin) / (xmax - xmin) * w;
+    let sy = |y: f64| top + h - (ty(y) - ymin) / (ymax - ymin) * h;
+    let _ = writeln!(
+        s,
+        r#"<rect x="{left}" y="{top}" width="{w}" height="{h}" fill="none" stroke="black"/>"#
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{left}" y="{}" font-size="14">{}</text>"#,
+        top - 8.0,
+        p.title
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" font-size="12" text-anchor="middle">{}</text>"#,
+        left + 0.5 * w,
+        top + h + 34.0,
+        p.xlabel
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" font-size="12" text-anchor="middle" transform="rotate(-90 {} {})">{}</text>"#,
+        left - 52.0,
+        top + 0.5 * h,
+        left - 52.0,
+        top + 0.5 * h,
+        p.ylabel
+    );
+    for i in 0..=4 {
+        let f = i as f64 / 4.0;
+        let (vx, vy) = (xmin + f * (xmax - xmin), ymin + f * (ymax - ymin));
+        let lx = if p.log_x { 10f64.powf(vx) } else { vx };
+        let ly = if p.log_y { 10f64.powf(vy) } else { vy };
+        let (gx, gy) = (left + f * w, top + h - f * h);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{gx:.2}" y1="{top}" x2="{gx:.2}" y2="{}" stroke="#eeeeee"/><text x="{gx:.2}" y="{}" font-size="11" text-anchor="middle">{}</text>"##,
+            top + h,
+            top + h + 16.0,
+            tick(lx)
+        );
+        let _ = writeln!(
+            s,
+            r##"<line x1="{left}" y1="{gy:.2}" x2="{}" y2="{gy:.2}" stroke="#eeeeee"/><text x="{}" y="{:.2}" font-size="11" text-anchor="end">{}</text>"##,
+            left + w,
+            left - 4.0,
+            gy + 4.0,
+            tick(ly)
+        );
+    }
+    for (k, sr) in p.series.iter().enumerate() {
+        let (label, color, pts) = (&sr.label, &sr.color, &sr.points);
+        let q: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|q| ok(q))
+            .map(|&(x, y)| (sx(x), sy(y)))
+            .collect();
+        polyline(s, &q, color);
+        let ly = top + 16.0 + 16.0 * k as f64;
+        let _ = writeln!(
+            s,
+            r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="2"/><text x="{}" y="{}" font-size="12">{label}</text>"#,
+            left + w - 250.0,
+            left + w - 225.0,
+            left + w - 220.0,
+            ly + 4.0
+        );
+    }
+    for q in p.markers.iter().filter(|q| ok(q)) {
+        let _ = writeln!(
+            s,
+            r#"<circle cx="{:.2}" cy="{:.2}" r="3.5" fill="none" stroke="black"/>"#,
+            sx(q.0),
+            sy(q.1)
+        );
+    }
+}
+
+fn tick(v: f64) -> String {
+    if v != 0.0 && (v.abs() >= 1e4 || v.abs() < 1e-2) {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.3}")
+    }
+}
