@@ -11,11 +11,15 @@ variance of each pixel mean) and Mitsuba's image of the converted scene
 
   1. the image means: |mean_ours - mean_mts| / mean_mts < 1 % per channel;
   2. a per-pixel z-test as in Mitsuba's src/render/tests/test_renders.py:
-     z = (a - b) / sqrt(var_a + var_b), two-sided p = erfc(|z| / sqrt 2), Sidak
-     correction over all pixel-channels, p_corr = 1 - (1 - min p)^N; fail if
-     p_corr < 0.01.
-Mitsuba's per-pixel variance of the mean comes from rendering it in K independent
-passes (different seeds): var = sample variance of the K pass images / K.
+     z = (a - b) / sqrt(var_a + var_b), two-sided p-value from Student's t with
+     Welch-Satterthwaite degrees of freedom (both variances are estimates: ours
+     from spp samples, Mitsuba's from K passes; the normal approximation gave
+     false alarms in Mitsuba-vs-Mitsuba runs), Sidak correction over all N
+     pixel-channels, p_corr = 1 - (1 - min p)^N; fail if p_corr < 0.01.
+Mitsuba's per-pixel variance of the mean comes from rendering it in K = 32
+independent passes (different seeds): var = sample variance of the passes / K.
+Images land in out/validation/ (NAME.exr ours, NAME_mitsuba.exr, NAME_z.exr = |z|
+when a scene fails).
 
 Before any of that the checker checks itself: the converter's camera and
 environment conventions against our formulas, Mitsuba-vs-Mitsuba (two disjoint
