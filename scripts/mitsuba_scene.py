@@ -573,6 +573,7 @@ def main(argv: list[str]) -> int:
     if len(argv) != 2:
         print(__doc__)
         return 2
+    ensure_venv()
     import pprint
 
     import mitsuba as mi
