@@ -5,7 +5,7 @@
 //! Lat-long convention (the same as Mitsuba 3's `envmap`, so scenes compare
 //! exactly): for a world direction d = (x, y, z) with y up,
 //! u = atan2(x, −z) / 2π wrapped to [0, 1), v = acos(y) / π; row 0 is the zenith
-//! and u = 0 looks along −z.
+//! and u = 0 looks along −z. Texel placement also follows Mitsuba (see [`bilinear`]).
 
 use crate::math::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
@@ -73,13 +73,26 @@ impl Environment {
     }
 }
 
-/// Bilinear lookup with texel centres at (i + ½)/width, wrapping in u and clamping
-/// in v.
+/// Bilinear lookup as Mitsuba 3's `envmap` does it: column i is centred at
+/// u = (i + ½)/width and wraps around; row j sits at v = j/(height − 1), so the
+/// first and last rows are exactly the poles.
 pub fn bilinear(texels: &[Vec3], width: usize, height: usize, uv: Vec2) -> Vec3 {
+    bilinear_with_derivatives(texels, width, height, uv).0
+}
+
+/// [`bilinear`] and its derivatives ∂L/∂u, ∂L/∂v inside the current cell (the
+/// gradient stage differentiates environment radiance through them).
+pub fn bilinear_with_derivatives(
+    texels: &[Vec3],
+    width: usize,
+    height: usize,
+    uv: Vec2,
+) -> (Vec3, Vec3, Vec3) {
     let x = uv.x * width as f32 - 0.5;
-    let y = (uv.y * height as f32 - 0.5).clamp(0.0, (height - 1) as f32);
+    let rows = (height.max(2) - 1) as f32;
+    let y = (uv.y * rows).clamp(0.0, (height - 1) as f32);
     let x0 = x.floor();
-    let y0 = y.floor();
+    let y0 = y.floor().min((height.max(2) - 2) as f32);
     let fx = x - x0;
     let fy = y - y0;
     let xi0 = (x0 as i64).rem_euclid(width as i64) as usize;
@@ -87,13 +100,45 @@ pub fn bilinear(texels: &[Vec3], width: usize, height: usize, uv: Vec2) -> Vec3 
     let yi0 = y0 as usize;
     let yi1 = (yi0 + 1).min(height - 1);
     let t = |xx: usize, yy: usize| texels[yy * width + xx];
-    (t(xi0, yi0) * (1.0 - fx) + t(xi1, yi0) * fx) * (1.0 - fy)
-        + (t(xi0, yi1) * (1.0 - fx) + t(xi1, yi1) * fx) * fy
+    let (t00, t10, t01, t11) = (t(xi0, yi0), t(xi1, yi0), t(xi0, yi1), t(xi1, yi1));
+    let value = (t00 * (1.0 - fx) + t10 * fx) * (1.0 - fy) + (t01 * (1.0 - fx) + t11 * fx) * fy;
+    let d_u = ((t10 - t00) * (1.0 - fy) + (t11 - t01) * fy) * width as f32;
+    let d_v = ((t01 - t00) * (1.0 - fx) + (t11 - t10) * fx) * rows;
+    (value, d_u, d_v)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bilinear_hits_texels_and_poles_and_derivatives_match() {
+        let (w, h) = (4usize, 3usize);
+        let texels: Vec<Vec3> = (0..w * h)
+            .map(|i| Vec3::splat(i as f32 * i as f32))
+            .collect();
+        // Row 0 at the zenith, the last row at the nadir, columns at (i + ½)/w.
+        assert_eq!(bilinear(&texels, w, h, Vec2::new(0.125, 0.0)), texels[0]);
+        assert_eq!(
+            bilinear(&texels, w, h, Vec2::new(0.375, 1.0)),
+            texels[2 * w + 1]
+        );
+        assert_eq!(
+            bilinear(&texels, w, h, Vec2::new(0.625, 0.5)),
+            texels[w + 2]
+        );
+        let p = Vec2::new(0.41, 0.63);
+        let (_, du, dv) = bilinear_with_derivatives(&texels, w, h, p);
+        let e = 1e-3;
+        let fd_u = (bilinear(&texels, w, h, p + Vec2::X * e)
+            - bilinear(&texels, w, h, p - Vec2::X * e))
+            / (2.0 * e);
+        let fd_v = (bilinear(&texels, w, h, p + Vec2::Y * e)
+            - bilinear(&texels, w, h, p - Vec2::Y * e))
+            / (2.0 * e);
+        assert!((fd_u - du).length() < 1e-2 * du.length(), "{fd_u} vs {du}");
+        assert!((fd_v - dv).length() < 1e-2 * dv.length(), "{fd_v} vs {dv}");
+    }
 
     #[test]
     fn latlong_round_trip_and_mitsuba_convention() {

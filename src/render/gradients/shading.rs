@@ -99,35 +99,17 @@ pub fn environment(env: &crate::scene::Environment, d: GVec3) -> [GDual; 3] {
             scale,
         } => {
             // (u, v) of the lat-long map as duals (same convention as
-            // `environment::direction_to_latlong`), then the bilinear lookup's
-            // exact derivative inside the current cell.
+            // `environment::direction_to_latlong`), chained with the bilinear
+            // lookup's exact derivative inside the current cell.
             let u = d.x.atan2(-d.z).scale(1.0 / std::f32::consts::TAU);
             let v = (d.x * d.x + d.z * d.z)
                 .sqrt()
                 .atan2(d.y)
                 .scale(1.0 / std::f32::consts::PI);
             let uv = crate::scene::environment::direction_to_latlong(d.value());
-            let (w, hgt) = (*width, *height);
-            let x = uv.x * w as f32 - 0.5;
-            let y = (uv.y * hgt as f32 - 0.5).clamp(0.0, (hgt - 1) as f32);
-            let (x0, y0) = (x.floor(), y.floor());
-            let (fx, fy) = (x - x0, y - y0);
-            let xi0 = (x0 as i64).rem_euclid(w as i64) as usize;
-            let xi1 = (xi0 + 1) % w;
-            let yi0 = y0 as usize;
-            let yi1 = (yi0 + 1).min(hgt - 1);
-            let t = |xx: usize, yy: usize| texels[yy * w + xx] * *scale;
-            let (t00, t10, t01, t11) = (t(xi0, yi0), t(xi1, yi0), t(xi0, yi1), t(xi1, yi1));
-            let val =
-                (t00 * (1.0 - fx) + t10 * fx) * (1.0 - fy) + (t01 * (1.0 - fx) + t11 * fx) * fy;
-            let dl_dx = ((t10 - t00) * (1.0 - fy) + (t11 - t01) * fy) * w as f32;
-            // Clamped rows (at the poles) have no v derivative.
-            let clamped = uv.y * hgt as f32 - 0.5 != y;
-            let dl_dy = if clamped || yi1 == yi0 {
-                Vec3::ZERO
-            } else {
-                ((t01 - t00) * (1.0 - fx) + (t11 - t10) * fx) * hgt as f32
-            };
+            let (val, dl_dx, dl_dy) =
+                crate::scene::environment::bilinear_with_derivatives(texels, *width, *height, uv);
+            let (val, dl_dx, dl_dy) = (val * *scale, dl_dx * *scale, dl_dy * *scale);
             [0, 1, 2].map(|c| {
                 let mut r = GDual::constant(val[c]);
                 for l in 0..super::LANES {
