@@ -5,6 +5,7 @@
 pub mod bump;
 pub mod camera;
 pub mod environment;
+mod geometry;
 mod obj;
 mod parse;
 
