@@ -148,7 +148,9 @@ pub fn load_latlong(path: &Path, scale: f32) -> crate::Result<Environment> {
         }
     };
     if width == 0 || height == 0 || texels.len() != width * height {
-        return Err(asset(format!("empty or truncated image ({width}×{height})")));
+        return Err(asset(format!(
+            "empty or truncated image ({width}×{height})"
+        )));
     }
     if let Some(i) = texels
         .iter()

@@ -21,7 +21,7 @@ impl Xform {
     pub(super) fn new(affine: Affine3A) -> Option<Self> {
         let linear = Mat3::from(affine.matrix3);
         let det = linear.determinant();
-        if !(det.is_finite() && det.abs() > 1e-12) || !affine.translation.is_finite() {
+        if !(det.is_finite() && det.abs() > 1e-12 && affine.translation.is_finite()) {
             return None;
         }
         Some(Self {

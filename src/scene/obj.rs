@@ -114,10 +114,7 @@ pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<
             .chunks_exact(3)
             .map(|p| xf.point(Vec3::new(p[0], p[1], p[2])))
             .collect();
-        let triangles = m
-            .indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]]);
+        let triangles = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]);
         let (triangles, degenerate) = filter_triangles(&positions, triangles, xf.mirrors());
         let uvs: Vec<Vec2> = if m.texcoords.len() == 2 * positions.len() {
             m.texcoords
@@ -165,7 +162,12 @@ pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<
 /// Vertex normals in world space (inverse transpose, renormalised). A normal that
 /// is zero or not finite is replaced by the area-weighted normal of the triangles
 /// around its vertex, so the renderer never sees a NaN shading frame.
-fn world_normals(raw: &[Vec3], positions: &[Vec3], triangles: &[[u32; 3]], xf: &Xform) -> Vec<Vec3> {
+fn world_normals(
+    raw: &[Vec3],
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    xf: &Xform,
+) -> Vec<Vec3> {
     let mut out: Vec<Option<Vec3>> = raw.iter().map(|&n| xf.normal(n)).collect();
     if out.iter().any(Option::is_none) {
         let mut acc = vec![Vec3::ZERO; positions.len()];

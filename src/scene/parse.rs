@@ -9,8 +9,8 @@
 //! know the key path, and a `toml_edit` parse of the same text maps between the two.
 
 use super::geometry::{self, Xform};
-use super::{obj, Bump, Camera, Environment, Integrator, Mesh, Rect, RenderSettings, Scene};
 use super::{bump::Sinusoid, SceneStats, Sphere};
+use super::{obj, Bump, Camera, Environment, Integrator, Mesh, Rect, RenderSettings, Scene};
 use crate::brdf::Material;
 use crate::math::{Vec2, Vec3};
 use glam::{Affine3A, Mat3, Quat};
@@ -400,11 +400,7 @@ impl Ctx<'_> {
     fn line_col(&self, offset: usize) -> (usize, usize) {
         let before = &self.text[..offset.min(self.text.len())];
         let line = before.matches('\n').count() + 1;
-        let col = before
-            .rsplit('\n')
-            .next()
-            .map_or(0, |l| l.chars().count())
-            + 1;
+        let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         (line, col)
     }
 
@@ -418,11 +414,7 @@ impl Ctx<'_> {
             let Some((key_span, child)) = node.child(seg) else {
                 break;
             };
-            best = child
-                .span()
-                .or(key_span)
-                .map(|s| s.start)
-                .or(best);
+            best = child.span().or(key_span).map(|s| s.start).or(best);
             node = child;
         }
         best
@@ -443,7 +435,12 @@ impl Ctx<'_> {
         }
         let mut best = (0, KeyPath::default());
         if let Some(doc) = &self.doc {
-            walk(Node::Table(doc.as_table()), &KeyPath::default(), offset, &mut best);
+            walk(
+                Node::Table(doc.as_table()),
+                &KeyPath::default(),
+                offset,
+                &mut best,
+            );
         }
         best.1
     }
@@ -468,10 +465,27 @@ impl Ctx<'_> {
     fn toml_err(&self, e: &toml::de::Error) -> crate::Error {
         let offset = e.span().map(|s| s.start);
         let path = offset.map(|o| self.path_at(o)).unwrap_or_default();
+        let mut message = e.message().trim().replace('\n', "; ");
+        if message == "missing field `type`" {
+            // serde cannot list the choices of a field that is absent; we can.
+            let choices = match path.0.first() {
+                Some(Seg::Key(k)) if k == "shapes" => "`sphere`, `quad`, `cube`, `mesh`",
+                Some(Seg::Key(k)) if k == "lights" => "`sphere`, `rect`",
+                Some(Seg::Key(k)) if k == "materials" => {
+                    "`lambert`, `blinn_phong`, `cook_torrance`, `mirror`"
+                }
+                Some(Seg::Key(k)) if k == "bumps" => "`sinusoids`",
+                Some(Seg::Key(k)) if k == "environment" => "`constant`, `image`, `gaussian_sky`",
+                _ => "",
+            };
+            if !choices.is_empty() {
+                message = format!("{message}: expected one of {choices}");
+            }
+        }
         crate::Error::Scene {
             path: self.file.to_path_buf(),
             location: self.location(&path, offset),
-            message: e.message().trim().replace('\n', "; "),
+            message,
         }
     }
 
@@ -548,10 +562,7 @@ impl Ctx<'_> {
         present: &[(&str, bool)],
         allowed: &[&str],
     ) -> crate::Result<()> {
-        match present
-            .iter()
-            .find(|(k, is)| *is && !allowed.contains(k))
-        {
+        match present.iter().find(|(k, is)| *is && !allowed.contains(k)) {
             Some((k, _)) => Err(self.err(
                 &at.key(k),
                 format!(
@@ -625,9 +636,8 @@ impl Ctx<'_> {
             }
             a
         };
-        Xform::new(affine).ok_or_else(|| {
-            self.err(at, "transform is singular (a zero scale?) or not finite")
-        })
+        Xform::new(affine)
+            .ok_or_else(|| self.err(at, "transform is singular (a zero scale?) or not finite"))
     }
 
     /// The quad geometry keys shared by `quad` shapes and `rect` lights:
@@ -652,7 +662,10 @@ impl Ctx<'_> {
             }
             let need = |k: &str, v: Option<V3>| {
                 v.ok_or_else(|| {
-                    self.err(at, format!("`corner`, `edge_u` and `edge_v` go together; `{k}` is missing"))
+                    self.err(
+                        at,
+                        format!("`corner`, `edge_u` and `edge_v` go together; `{k}` is missing"),
+                    )
                 })
             };
             (
@@ -668,12 +681,16 @@ impl Ctx<'_> {
             geometry::rectangle_edges(&xf, s)
         };
         for (k, e) in [("edge_u", u), ("edge_v", v)] {
-            if !(e.length() > 0.0) {
+            if e.length() <= 0.0 {
                 return Err(self.err(&at.key(k), format!("`{k}` must have non-zero length")));
             }
         }
-        if !(u.cross(v).length() > 1e-7 * u.length() * v.length()) {
-            return Err(self.err(at, "`edge_u` and `edge_v` are parallel: the quad has no area"));
+        // (Inputs are finite here, so `<=` is the exact negation of "has area".)
+        if u.cross(v).length() <= 1e-7 * u.length() * v.length() {
+            return Err(self.err(
+                at,
+                "`edge_u` and `edge_v` are parallel: the quad has no area",
+            ));
         }
         Ok((c, u, v))
     }
@@ -731,7 +748,8 @@ impl<'a> Builder<'a> {
         for (name, b) in &raw.bumps {
             let at = root("bumps").key(name);
             let bump = self.bump(&at, name, b)?;
-            self.bump_index.insert(name.clone(), self.bumps.len() as u32);
+            self.bump_index
+                .insert(name.clone(), self.bumps.len() as u32);
             self.bumps.push(bump);
         }
         for (i, s) in raw.shapes.iter().enumerate() {
@@ -784,7 +802,10 @@ impl<'a> Builder<'a> {
         let at = root("render");
         let spp = r.spp.unwrap_or(d.spp);
         if spp == 0 {
-            return Err(self.ctx.err(&at.key("spp"), "expected at least 1 sample per pixel, got 0"));
+            return Err(self.ctx.err(
+                &at.key("spp"),
+                "expected at least 1 sample per pixel, got 0",
+            ));
         }
         let max_depth = r.max_depth.unwrap_or(d.max_depth);
         if max_depth == 0 {
@@ -956,7 +977,9 @@ impl<'a> Builder<'a> {
             None => None,
         };
         let material = match &s.material {
-            Some(m) => Some(self.lookup(&at.key("material"), "material", m, &self.material_index)?),
+            Some(m) => {
+                Some(self.lookup(&at.key("material"), "material", m, &self.material_index)?)
+            }
             None => None,
         };
         let need_material = || ctx.need(at, kind, "material", material);
@@ -965,7 +988,8 @@ impl<'a> Builder<'a> {
         match s.kind {
             ShapeType::Sphere => {
                 ctx.only(at, kind, &present, &keys(&["center", "radius"]))?;
-                let center = ctx.vec3(&at.key("center"), ctx.need(at, kind, "center", s.center)?)?;
+                let center =
+                    ctx.vec3(&at.key("center"), ctx.need(at, kind, "center", s.center)?)?;
                 let radius =
                     ctx.positive(&at.key("radius"), ctx.need(at, kind, "radius", s.radius)?)?;
                 if let Some(b) = bump {
@@ -1040,7 +1064,16 @@ impl<'a> Builder<'a> {
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_else(|| format!("mesh{object_id}"));
                 let shape_name = name.clone().unwrap_or(stem);
-                self.push_obj(at, &file, &xf, &shape_name, material, emission, bump, object_id)?;
+                self.push_obj(
+                    at,
+                    &file,
+                    &xf,
+                    &shape_name,
+                    material,
+                    emission,
+                    bump,
+                    object_id,
+                )?;
                 self.object_names.push(shape_name);
                 return Ok(());
             }
@@ -1188,9 +1221,7 @@ impl<'a> Builder<'a> {
             Some(&id) => id,
             None => self.add_material(
                 LIGHT_MATERIAL.into(),
-                Material::Lambert {
-                    albedo: Vec3::ZERO,
-                },
+                Material::Lambert { albedo: Vec3::ZERO },
             ),
         }
     }
@@ -1208,12 +1239,21 @@ impl<'a> Builder<'a> {
             ("size", l.size.is_some()),
             ("transform", l.transform.is_some()),
         ];
-        let name = l.name.clone().unwrap_or_else(|| format!("light{object_id}"));
+        let name = l
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("light{object_id}"));
         match l.kind {
             LightType::Sphere => {
                 let kind = "sphere";
-                ctx.only(at, kind, &present, &["name", "radiance", "center", "radius"])?;
-                let center = ctx.vec3(&at.key("center"), ctx.need(at, kind, "center", l.center)?)?;
+                ctx.only(
+                    at,
+                    kind,
+                    &present,
+                    &["name", "radiance", "center", "radius"],
+                )?;
+                let center =
+                    ctx.vec3(&at.key("center"), ctx.need(at, kind, "center", l.center)?)?;
                 let radius =
                     ctx.positive(&at.key("radius"), ctx.need(at, kind, "radius", l.radius)?)?;
                 let material = self.light_material();
@@ -1233,7 +1273,15 @@ impl<'a> Builder<'a> {
                     at,
                     kind,
                     &present,
-                    &["name", "radiance", "corner", "edge_u", "edge_v", "size", "transform"],
+                    &[
+                        "name",
+                        "radiance",
+                        "corner",
+                        "edge_u",
+                        "edge_v",
+                        "size",
+                        "transform",
+                    ],
                 )?;
                 let (c, u, v) = ctx.rect_geometry(
                     at,
@@ -1273,20 +1321,30 @@ impl<'a> Builder<'a> {
                 let kind = "constant";
                 ctx.only(at, kind, &present, &["radiance"])?;
                 Environment::Constant {
-                    radiance: ctx
-                        .colour(&at.key("radiance"), ctx.need(at, kind, "radiance", e.radiance)?)?,
+                    radiance: ctx.colour(
+                        &at.key("radiance"),
+                        ctx.need(at, kind, "radiance", e.radiance)?,
+                    )?,
                 }
             }
             EnvironmentType::Image => {
                 let kind = "image";
                 ctx.only(at, kind, &present, &["file", "scale"])?;
-                let file = ctx.asset(&at.key("file"), &ctx.need(at, kind, "file", e.file.clone())?)?;
+                let file = ctx.asset(
+                    &at.key("file"),
+                    &ctx.need(at, kind, "file", e.file.clone())?,
+                )?;
                 let scale = ctx.non_negative(&at.key("scale"), e.scale.unwrap_or(1.0))?;
                 super::environment::load_latlong(&file, scale)?
             }
             EnvironmentType::GaussianSky => {
                 let kind = "gaussian_sky";
-                ctx.only(at, kind, &present, &["direction", "sharpness", "peak", "ambient"])?;
+                ctx.only(
+                    at,
+                    kind,
+                    &present,
+                    &["direction", "sharpness", "peak", "ambient"],
+                )?;
                 let dp = at.key("direction");
                 let direction = ctx
                     .vec3(&dp, e.direction.unwrap_or([0.0, 1.0, 0.0]))?
