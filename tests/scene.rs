@@ -278,6 +278,40 @@ fn obj_mesh_is_transformed_with_normals_and_degenerates_counted() {
 }
 
 #[test]
+fn smooth_normals_weld_split_vertices_and_average_faces() {
+    let dir = scratch("smooth");
+    // Two unit right triangles folded 90° along the x axis; the shared edge is
+    // stored twice (vertices 1, 2 and 4, 5), as exporters split seams.
+    write(
+        &dir,
+        "fold.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\nf 4 5 6\n",
+    );
+    let p = write(
+        &dir,
+        "s.toml",
+        &format!("{CAM}{WHITE}[[shapes]]\ntype = \"mesh\"\nfile = \"fold.obj\"\nmaterial = \"w\"\nsmooth_normals = true\n"),
+    );
+    let s = scene::load(&p).unwrap();
+    let m = &s.meshes[0];
+    assert_eq!(s.stats.meshes_with_normals, 1);
+    let diag = Vec3::new(0.0, 1.0, 1.0).normalize();
+    for (p, n) in m.positions.iter().zip(&m.normals) {
+        let expect = if p.y > 0.5 {
+            Vec3::Z // only in the +z-facing triangle
+        } else if p.z < -0.5 {
+            Vec3::Y // only in the +y-facing triangle
+        } else {
+            diag // on the shared edge: both faces, equal areas
+        };
+        assert!(
+            (*n - expect).length() < 1e-6,
+            "vertex {p:?}: normal {n:?}, expected {expect:?}"
+        );
+    }
+}
+
+#[test]
 fn mtl_ke_makes_an_emitter_and_ks_a_blinn_phong() {
     let dir = scratch("mtl");
     write(

@@ -7,6 +7,7 @@
 use super::geometry::{filter_triangles, Xform};
 use crate::brdf::Material;
 use crate::math::{Vec2, Vec3};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Kd when the MTL material does not give one (the MTL convention's default).
@@ -186,4 +187,47 @@ fn world_normals(
         }
     }
     out.into_iter().map(|n| n.unwrap_or(Vec3::Y)).collect()
+}
+
+/// Area-weighted vertex normals for a mesh that has none (the `smooth_normals`
+/// key). Vertices at bit-identical positions share one normal: OBJ exporters
+/// often split vertices along texture seams or patch borders (the Utah teapot),
+/// and unwelded normals would show those seams as creases.
+pub(super) fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    // `+ 0.0` turns −0.0 into +0.0 so that both weld together.
+    let key = |p: Vec3| {
+        [
+            (p.x + 0.0).to_bits(),
+            (p.y + 0.0).to_bits(),
+            (p.z + 0.0).to_bits(),
+        ]
+    };
+    let mut groups: HashMap<[u32; 3], usize> = HashMap::with_capacity(positions.len());
+    let group: Vec<usize> = positions
+        .iter()
+        .map(|&p| {
+            let next = groups.len();
+            *groups.entry(key(p)).or_insert(next)
+        })
+        .collect();
+    let mut acc = vec![Vec3::ZERO; groups.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        // |cross| = twice the area: the sum is area-weighted.
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            acc[group[i as usize]] += n;
+        }
+    }
+    group
+        .iter()
+        .map(|&g| {
+            let n = acc[g].normalize_or_zero();
+            if n == Vec3::ZERO {
+                Vec3::Y
+            } else {
+                n
+            }
+        })
+        .collect()
 }

@@ -166,6 +166,9 @@ struct ShapeRaw {
     size: Option<[f32; 2]>,
     transform: Option<TransformRaw>,
     file: Option<String>,
+    /// Mesh only: compute welded, area-weighted vertex normals (replacing any in
+    /// the file), so that a normal-less model is not shaded faceted.
+    smooth_normals: Option<bool>,
 }
 
 #[derive(Deserialize, Clone, Copy, Debug, PartialEq)]
@@ -957,6 +960,7 @@ impl<'a> Builder<'a> {
             ("size", s.size.is_some()),
             ("transform", s.transform.is_some()),
             ("file", s.file.is_some()),
+            ("smooth_normals", s.smooth_normals.is_some()),
         ];
         const COMMON: [&str; 4] = ["name", "material", "bump", "emission"];
         let keys = |extra: &[&'static str]| -> Vec<&'static str> {
@@ -1055,7 +1059,12 @@ impl<'a> Builder<'a> {
                 });
             }
             ShapeType::Mesh => {
-                ctx.only(at, kind, &present, &keys(&["file", "transform"]))?;
+                ctx.only(
+                    at,
+                    kind,
+                    &present,
+                    &keys(&["file", "transform", "smooth_normals"]),
+                )?;
                 let fp = at.key("file");
                 let file = ctx.asset(&fp, &ctx.need(at, kind, "file", s.file.clone())?)?;
                 let xf = ctx.transform(&at.key("transform"), s.transform.as_ref())?;
@@ -1064,11 +1073,13 @@ impl<'a> Builder<'a> {
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_else(|| format!("mesh{object_id}"));
                 let shape_name = name.clone().unwrap_or(stem);
+                let smooth = s.smooth_normals.unwrap_or(false);
                 self.push_obj(
                     at,
                     &file,
                     &xf,
                     &shape_name,
+                    smooth,
                     material,
                     emission,
                     bump,
@@ -1136,6 +1147,7 @@ impl<'a> Builder<'a> {
         file: &Path,
         xf: &Xform,
         shape_name: &str,
+        smooth: bool,
         material: Option<u32>,
         emission: Option<Vec3>,
         bump: Option<u32>,
@@ -1194,10 +1206,15 @@ impl<'a> Builder<'a> {
             } else {
                 format!("{shape_name}/{}", m.name)
             };
+            let normals = if smooth {
+                obj::smooth_normals(&m.positions, &m.triangles)
+            } else {
+                m.normals
+            };
             self.meshes.push(Mesh {
                 name,
                 positions: m.positions,
-                normals: m.normals,
+                normals,
                 uvs: m.uvs,
                 triangles: m.triangles,
                 material: mesh_material,
