@@ -537,6 +537,12 @@ fn every_bundled_scene_loads_and_frames_its_objects() {
     let s = bundled("spheres_table.toml");
     let table_top = bounds(&s, id_of(&s, "table")).1.y;
     assert!(table_top.abs() < 1e-3);
+    // Each ball touches the curved table: centre distance = R + r.
+    let table = s.spheres.iter().find(|sp| sp.name == "table").unwrap();
+    for sp in s.spheres.iter().filter(|sp| sp.name != "table") {
+        let gap = (sp.center - table.center).length() - (table.radius + sp.radius);
+        assert!(gap.abs() < 1e-3, "{} floats/sinks by {gap}", sp.name);
+    }
     assert_eq!(s.bumps.len(), 1);
     assert!(s.spheres.iter().any(|sp| sp.bump.is_some()));
 }
