@@ -166,6 +166,10 @@ fn malformed_scenes_name_key_line_and_choices() {
             vec!["line 6", "invalid table header"],
         ),
         (CAM.to_string(), vec!["scene is empty"]),
+        (
+            format!("{CAM}# φ θ — non-ASCII comment\n[render]\nspp = 0\n"),
+            vec!["render.spp", "line 8, column 7"],
+        ),
     ];
     for (text, wanted) in &cases {
         let msg = err_of(text);
@@ -256,6 +260,19 @@ fn obj_mesh_is_transformed_with_normals_and_degenerates_counted() {
         assert!((b - a).cross(c - a).z > 0.0);
     }
     assert_eq!(m.uvs.len(), m.positions.len());
+
+    // A malformed OBJ is one Asset error naming the OBJ file.
+    write(&dir, "broken.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");
+    let broken = write(
+        &dir,
+        "broken.toml",
+        &format!(
+            "{CAM}{WHITE}[[shapes]]\ntype = \"mesh\"\nfile = \"broken.obj\"\nmaterial = \"w\"\n"
+        ),
+    );
+    let e = scene::load(&broken).unwrap_err().to_string();
+    println!("{e}");
+    assert!(e.contains("broken.obj") && e.contains("invalid OBJ"), "{e}");
 
     // A mirroring transform keeps the geometric normal on the same side.
     let mirrored = write(
