@@ -607,3 +607,38 @@ fn cornell_matches_mitsuba_cornell_box() {
         }
     );
 }
+
+#[test]
+fn transforms_compose_scale_then_rotations_in_order_then_translate() {
+    let quad = |transform: &str| {
+        let text = format!(
+            "{CAM}{WHITE}[[shapes]]\ntype = \"quad\"\nmaterial = \"w\"\ntransform = {transform}\n"
+        );
+        let s = scene::load_from_str(&text, Path::new("t.toml")).unwrap();
+        s.meshes[0].rect.unwrap()
+    };
+    // Corner (−1, −1, 0) → scale (−2, −1, 0) → R_x(−90°) (−2, 0, 1) → R_y(90°)
+    // (1, 0, 2) → translate (1, 1, 2); the +z normal → +y.
+    let r = quad(
+        "{ scale = [2, 1, 1], rotate = [[1, 0, 0, -90], [0, 1, 0, 90]], translate = [0, 1, 0] }",
+    );
+    assert!(
+        (r.corner - Vec3::new(1.0, 1.0, 2.0)).length() < 1e-5,
+        "{r:?}"
+    );
+    assert!((r.normal() - Vec3::Y).length() < 1e-5, "{r:?}");
+    assert!((r.area() - 8.0).abs() < 1e-5);
+    // Mitsuba's floor matrix equals rotate x −90° then translate (0, −1, 0).
+    let a = quad("{ matrix = [[1, 0, 0, 0], [0, -4.37114e-08, 1, -1], [0, -1, -4.37114e-08, 0]] }");
+    let b = quad("{ rotate = [1, 0, 0, -90], translate = [0, -1, 0] }");
+    for (x, y) in [
+        (a.corner, b.corner),
+        (a.edge_u, b.edge_u),
+        (a.edge_v, b.edge_v),
+    ] {
+        assert!((x - y).length() < 1e-6, "{a:?} vs {b:?}");
+    }
+    // A mirroring transform keeps the front side on the transformed +z.
+    let m = quad("{ scale = [-1, 1, 1] }");
+    assert!((m.normal() - Vec3::Z).length() < 1e-6, "{m:?}");
+}
