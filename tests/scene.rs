@@ -550,7 +550,25 @@ fn every_bundled_scene_loads_and_frames_its_objects() {
     let s = bundled("bunny_env.toml");
     let (lo, hi) = bounds(&s, id_of(&s, "bunny"));
     assert!(lo.y.abs() < 2e-3 && hi.y < bounds(&s, id_of(&s, "bulb")).0.y);
-    assert!(matches!(s.environment, Some(Environment::Image { .. })));
+    // scripts/make_env.py's sky: 256×128, row 0 the (blue) zenith, the last row the
+    // brown ground (0.22, 0.19, 0.16) up to RGBE quantisation.
+    let Some(Environment::Image {
+        width,
+        height,
+        texels,
+        ..
+    }) = &s.environment
+    else {
+        panic!("bunny_env has an image environment");
+    };
+    assert_eq!((*width, *height), (256, 128));
+    let zenith = texels[0];
+    assert!(zenith.z > zenith.x && zenith.z > 0.9, "{zenith:?}");
+    let ground = texels[(height - 1) * width];
+    assert!(
+        (ground - Vec3::new(0.22, 0.19, 0.16)).length() < 0.01,
+        "{ground:?}"
+    );
     let s = bundled("spheres_table.toml");
     let table_top = bounds(&s, id_of(&s, "table")).1.y;
     assert!(table_top.abs() < 1e-3);
