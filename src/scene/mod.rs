@@ -6,6 +6,7 @@ pub mod bump;
 pub mod camera;
 pub mod environment;
 mod geometry;
+mod locate;
 mod obj;
 mod parse;
 
