@@ -9,6 +9,7 @@
 
 use crate::math::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
+use std::path::Path;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Environment {
@@ -105,6 +106,86 @@ pub fn bilinear_with_derivatives(
     let d_u = ((t10 - t00) * (1.0 - fy) + (t11 - t01) * fy) * width as f32;
     let d_v = ((t01 - t00) * (1.0 - fx) + (t11 - t10) * fx) * rows;
     (value, d_u, d_v)
+}
+
+/// Reads a lat-long environment image: `.hdr` (Radiance RGBE, via `image`) or
+/// `.exr` (RGB of the first layer, via `exr`). Row 0 is the zenith (see the
+/// convention above). Texels must be finite and non-negative: one NaN texel would
+/// otherwise poison every path that escapes towards it.
+pub fn load_latlong(path: &Path, scale: f32) -> crate::Result<Environment> {
+    let asset = |message: String| crate::Error::Asset {
+        path: path.to_path_buf(),
+        message,
+    };
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let (width, height, texels) = match ext.as_str() {
+        "hdr" => {
+            let img = image::ImageReader::open(path)
+                .map_err(|source| crate::Error::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?
+                .with_guessed_format()
+                .map_err(|source| crate::Error::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?
+                .decode()
+                .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
+                .into_rgb32f();
+            let (w, h) = (img.width() as usize, img.height() as usize);
+            let texels = img.pixels().map(|p| Vec3::from(p.0)).collect::<Vec<_>>();
+            (w, h, texels)
+        }
+        "exr" => {
+            use exr::prelude::*;
+            let img = read_first_rgba_layer_from_file(
+                path,
+                |res: exr::math::Vec2<usize>, _: &RgbaChannels| {
+                    (res.width(), vec![Vec3::ZERO; res.width() * res.height()])
+                },
+                |(w, texels): &mut (usize, Vec<Vec3>),
+                 pos: exr::math::Vec2<usize>,
+                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                    texels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+                },
+            )
+            .map_err(|e| asset(format!("invalid .exr image: {e}")))?;
+            let size = img.layer_data.size;
+            let (_, texels) = img.layer_data.channel_data.pixels;
+            (size.width(), size.height(), texels)
+        }
+        _ => {
+            return Err(asset(format!(
+                "unsupported environment image extension `.{ext}`; expected `.hdr` or `.exr`"
+            )))
+        }
+    };
+    if width == 0 || height == 0 || texels.len() != width * height {
+        return Err(asset(format!(
+            "empty or truncated image ({width}×{height})"
+        )));
+    }
+    if let Some(i) = texels
+        .iter()
+        .position(|t| !(t.is_finite() && t.min_element() >= 0.0))
+    {
+        return Err(asset(format!(
+            "texel ({}, {}) is {:?}; radiance must be finite and non-negative",
+            i % width,
+            i / width,
+            texels[i]
+        )));
+    }
+    Ok(Environment::Image {
+        width,
+        height,
+        texels,
+        scale,
+    })
 }
 
 #[cfg(test)]

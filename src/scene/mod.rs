@@ -5,6 +5,8 @@
 pub mod bump;
 pub mod camera;
 pub mod environment;
+mod geometry;
+mod locate;
 mod obj;
 mod parse;
 

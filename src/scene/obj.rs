@@ -1,1 +1,233 @@
-//! OWNED BY THE SCENE WORK ITEM — OBJ/MTL loading with tobj (placeholder).
+//! OBJ/MTL → world-space triangle meshes (tobj, triangulated, single index).
+//!
+//! MTL mapping: `Kd` → Lambert albedo; a non-zero `Ks` makes it a Blinn-Phong
+//! material (kd = Kd, ks = Ks, exponent = Ns); `Ke` → emitted radiance (the mesh
+//! becomes an area light). Texture maps and the other MTL keys are ignored.
+
+use super::geometry::{filter_triangles, Xform};
+use crate::brdf::Material;
+use crate::math::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Kd when the MTL material does not give one (the MTL convention's default).
+const DEFAULT_KD: f32 = 0.8;
+
+/// A material read from an MTL file.
+#[derive(Clone, Debug)]
+pub(super) struct ObjMaterial {
+    pub name: String,
+    pub material: Material,
+    pub emission: Vec3,
+}
+
+/// One OBJ object/group in world space, degenerate triangles removed.
+#[derive(Clone, Debug)]
+pub(super) struct ObjMesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Index into the returned material list.
+    pub material: Option<usize>,
+    pub degenerate: usize,
+}
+
+fn asset_err(path: &Path, message: impl Into<String>) -> crate::Error {
+    crate::Error::Asset {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+fn finite3(v: [f32; 3]) -> Option<Vec3> {
+    let v = Vec3::from(v);
+    v.is_finite().then_some(v)
+}
+
+/// Converts one MTL material; non-finite or negative values are an error rather
+/// than a silent black or NaN surface.
+fn convert_material(path: &Path, m: &tobj::Material) -> crate::Result<ObjMaterial> {
+    let colour = |key: &str, v: Option<[f32; 3]>| -> crate::Result<Option<Vec3>> {
+        match v {
+            None => Ok(None),
+            Some(c) => match finite3(c) {
+                Some(c) if c.min_element() >= 0.0 => Ok(Some(c)),
+                _ => Err(asset_err(
+                    path,
+                    format!(
+                        "material `{}`: `{key}` must be finite and non-negative, got {c:?}",
+                        m.name
+                    ),
+                )),
+            },
+        }
+    };
+    let kd = colour("Kd", m.diffuse)?.unwrap_or(Vec3::splat(DEFAULT_KD));
+    let ks = colour("Ks", m.specular)?.unwrap_or(Vec3::ZERO);
+    let emission = colour("Ke", m.emissive)?.unwrap_or(Vec3::ZERO);
+    let material = if ks == Vec3::ZERO {
+        Material::Lambert { albedo: kd }
+    } else {
+        // MTL's default Ns is 0 (a cosine-free, i.e. uniform, lobe); keep it as is.
+        let exponent = m.shininess.unwrap_or(0.0);
+        if !(exponent.is_finite() && exponent >= 0.0) {
+            return Err(asset_err(
+                path,
+                format!(
+                    "material `{}`: `Ns` must be finite and non-negative, got {exponent}",
+                    m.name
+                ),
+            ));
+        }
+        Material::BlinnPhong { kd, ks, exponent }
+    };
+    Ok(ObjMaterial {
+        name: m.name.clone(),
+        material,
+        emission,
+    })
+}
+
+/// Loads `path`, maps it through `xf` and drops degenerate triangles.
+pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<ObjMaterial>)> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, materials) =
+        tobj::load_obj(path, &options).map_err(|e| asset_err(path, format!("invalid OBJ: {e}")))?;
+    // tobj reports a missing or malformed `mtllib` separately; an OBJ without any
+    // `mtllib` gives an empty list, which is fine (the scene then names a material).
+    let materials = materials
+        .map_err(|e| asset_err(path, format!("cannot load its MTL library: {e}")))?
+        .iter()
+        .map(|m| convert_material(path, m))
+        .collect::<crate::Result<Vec<_>>>()?;
+
+    let mut meshes = Vec::with_capacity(models.len());
+    for model in models {
+        let m = &model.mesh;
+        let positions: Vec<Vec3> = m
+            .positions
+            .chunks_exact(3)
+            .map(|p| xf.point(Vec3::new(p[0], p[1], p[2])))
+            .collect();
+        let triangles = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]);
+        let (triangles, degenerate) = filter_triangles(&positions, triangles, xf.mirrors());
+        let uvs: Vec<Vec2> = if m.texcoords.len() == 2 * positions.len() {
+            m.texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], t[1]))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let normals = if m.normals.len() == 3 * positions.len() {
+            let raw: Vec<Vec3> = m
+                .normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2]))
+                .collect();
+            world_normals(&raw, &positions, &triangles, xf)
+        } else {
+            Vec::new()
+        };
+        if let Some(id) = m.material_id {
+            if id >= materials.len() {
+                return Err(asset_err(
+                    path,
+                    format!(
+                        "object `{}` uses material #{id} but the MTL library defines {}",
+                        model.name,
+                        materials.len()
+                    ),
+                ));
+            }
+        }
+        meshes.push(ObjMesh {
+            name: model.name,
+            positions,
+            normals,
+            uvs,
+            triangles,
+            material: m.material_id,
+            degenerate,
+        });
+    }
+    Ok((meshes, materials))
+}
+
+/// Vertex normals in world space (inverse transpose, renormalised). A normal that
+/// is zero or not finite is replaced by the area-weighted normal of the triangles
+/// around its vertex, so the renderer never sees a NaN shading frame.
+fn world_normals(
+    raw: &[Vec3],
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    xf: &Xform,
+) -> Vec<Vec3> {
+    let mut out: Vec<Option<Vec3>> = raw.iter().map(|&n| xf.normal(n)).collect();
+    if out.iter().any(Option::is_none) {
+        let mut acc = vec![Vec3::ZERO; positions.len()];
+        for t in triangles {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            for &i in t {
+                acc[i as usize] += n;
+            }
+        }
+        for (o, a) in out.iter_mut().zip(acc) {
+            if o.is_none() {
+                let n = a.normalize_or_zero();
+                *o = Some(if n == Vec3::ZERO { Vec3::Y } else { n });
+            }
+        }
+    }
+    out.into_iter().map(|n| n.unwrap_or(Vec3::Y)).collect()
+}
+
+/// Area-weighted vertex normals for a mesh that has none (the `smooth_normals`
+/// key). Vertices at bit-identical positions share one normal: OBJ exporters
+/// often split vertices along texture seams or patch borders (the Utah teapot),
+/// and unwelded normals would show those seams as creases.
+pub(super) fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    // `+ 0.0` turns −0.0 into +0.0 so that both weld together.
+    let key = |p: Vec3| {
+        [
+            (p.x + 0.0).to_bits(),
+            (p.y + 0.0).to_bits(),
+            (p.z + 0.0).to_bits(),
+        ]
+    };
+    let mut groups: HashMap<[u32; 3], usize> = HashMap::with_capacity(positions.len());
+    let group: Vec<usize> = positions
+        .iter()
+        .map(|&p| {
+            let next = groups.len();
+            *groups.entry(key(p)).or_insert(next)
+        })
+        .collect();
+    let mut acc = vec![Vec3::ZERO; groups.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        // |cross| = twice the area: the sum is area-weighted.
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            acc[group[i as usize]] += n;
+        }
+    }
+    group
+        .iter()
+        .map(|&g| {
+            let n = acc[g].normalize_or_zero();
+            if n == Vec3::ZERO {
+                Vec3::Y
+            } else {
+                n
+            }
+        })
+        .collect()
+}
