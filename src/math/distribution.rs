@@ -15,7 +15,10 @@ impl Distribution1D {
     /// Builds from non-negative cell weights; an all-zero input becomes uniform so
     /// that sampling never divides by zero.
     pub fn new(weights: &[f32]) -> Self {
-        assert!(!weights.is_empty(), "a distribution needs at least one cell");
+        assert!(
+            !weights.is_empty(),
+            "a distribution needs at least one cell"
+        );
         let n = weights.len();
         let func: Vec<f32> = weights
             .iter()

@@ -105,10 +105,7 @@ mod tests {
         let n = 200_000;
         let mut sum = 0.0f64;
         for i in 0..n {
-            let u = Vec2::new(
-                sobol_burley::sample(i, 0, 7),
-                sobol_burley::sample(i, 1, 7),
-            );
+            let u = Vec2::new(sobol_burley::sample(i, 0, 7), sobol_burley::sample(i, 1, 7));
             sum += (pdf(square_to_uniform_sphere(u)) / UNIFORM_SPHERE_PDF) as f64;
         }
         (sum / n as f64) as f32
@@ -135,10 +132,7 @@ mod tests {
     #[test]
     fn warps_land_in_their_domain() {
         for i in 0..1000u32 {
-            let u = Vec2::new(
-                sobol_burley::sample(i, 0, 1),
-                sobol_burley::sample(i, 1, 1),
-            );
+            let u = Vec2::new(sobol_burley::sample(i, 0, 1), sobol_burley::sample(i, 1, 1));
             assert!(square_to_disk_concentric(u).length() <= 1.0 + 1e-6);
             let h = square_to_cosine_hemisphere(u);
             assert!(h.z >= 0.0 && (h.length() - 1.0).abs() < 1e-5);

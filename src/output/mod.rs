@@ -26,6 +26,11 @@ pub fn write_exr(_path: &Path, _image: &OutputImage) -> crate::Result<()> {
 }
 
 /// Writes `rgb` (linear, row-major) as a tone-mapped sRGB PNG.
-pub fn write_png(_path: &Path, _rgb: &[glam::Vec3], _width: usize, _height: usize) -> crate::Result<()> {
+pub fn write_png(
+    _path: &Path,
+    _rgb: &[glam::Vec3],
+    _width: usize,
+    _height: usize,
+) -> crate::Result<()> {
     Ok(())
 }

@@ -114,8 +114,7 @@ mod tests {
 
     #[test]
     fn centre_pixel_looks_forward_and_projection_inverts() {
-        let c = Camera::new(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, Vec3::Y, 40.0, 64, 32)
-            .unwrap();
+        let c = Camera::new(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, Vec3::Y, 40.0, 64, 32).unwrap();
         let d = c.direction(Vec2::new(32.0, 16.0));
         assert!((d - c.forward()).length() < 1e-6);
         let p = Vec2::new(10.5, 3.25);

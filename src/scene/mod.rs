@@ -154,7 +154,10 @@ impl Scene {
     }
 
     pub fn emitter_count(&self) -> usize {
-        self.meshes.iter().filter(|m| m.emission != Vec3::ZERO).count()
+        self.meshes
+            .iter()
+            .filter(|m| m.emission != Vec3::ZERO)
+            .count()
             + self
                 .spheres
                 .iter()
