@@ -486,7 +486,7 @@ fn degenerate_input_does_not_panic() {
         sphere(Vec3::new(5.0, 0.0, 0.0), -1.0),
         sphere(Vec3::new(5.0, 0.0, 0.0), f32::INFINITY),
     ];
-    let accel = Accel::build(&[m.clone()], &spheres);
+    let accel = Accel::build(std::slice::from_ref(&m), &spheres);
     assert_eq!(accel.rejected_count(), 5);
     assert_eq!(accel.triangle_count(), 2);
     for r in [

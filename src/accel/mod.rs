@@ -497,19 +497,24 @@ impl Accel {
         let mut state = self.new_state(stack, tray.ray.direction);
         let mut hit = false;
         let mut node: &CwBvhNode;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node.intersect_ray(&tray.ray, state.oct_inv4),
-            {
-                let prim = &self.prims[state.primitive_id as usize];
-                if prim.intersect(ray, &wr, ray.t_max).is_some() {
-                    hit = true;
-                    break;
+        // The primitive block runs inside the macro's inner `while` loop: a plain
+        // `break` would only leave that loop and traversal would go on, so we leave
+        // the labelled block instead (as obvhs' `ray_traverse_miss` does).
+        'traversal: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                node.intersect_ray(&tray.ray, state.oct_inv4),
+                {
+                    let prim = &self.prims[state.primitive_id as usize];
+                    if prim.intersect(ray, &wr, ray.t_max).is_some() {
+                        hit = true;
+                        break 'traversal;
+                    }
                 }
-            }
-        );
+            );
+        }
         hit
     }
 }

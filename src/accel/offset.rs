@@ -125,7 +125,7 @@ impl SurfacePoint {
     fn segment(o: Vec3, end: Vec3) -> Ray {
         let d = end - o;
         let len = d.length();
-        if !(len > 0.0) || !len.is_finite() {
+        if len.is_nan() || len <= 0.0 || len.is_infinite() {
             // Coincident ends: an empty segment that hits nothing.
             return Ray {
                 origin: o,

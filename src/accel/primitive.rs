@@ -151,7 +151,7 @@ pub(crate) fn sphere_roots(org: Vec3, dir: Vec3, center: Vec3, radius: f32) -> O
     let l_len = l.length();
     // Δ/4 = a (r² − |l|²) (RTG eq. 7.6 in half-b form).
     let disc = a * (radius - l_len) * (radius + l_len);
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     // c = |f|² − r², factored to reduce cancellation for origins near the surface.
