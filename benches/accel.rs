@@ -129,6 +129,45 @@ fn bench_accel(c: &mut Criterion) {
     }
     g.finish();
 
+    // Baseline for context only: obvhs' own traversal and (non-watertight)
+    // Möller–Trumbore triangles on the same BVH preset, no sphere support.
+    let tris: Vec<obvhs::triangle::Triangle> = meshes[0]
+        .triangles
+        .iter()
+        .map(|t| obvhs::triangle::Triangle {
+            v0: meshes[0].positions[t[0] as usize].into(),
+            v1: meshes[0].positions[t[1] as usize].into(),
+            v2: meshes[0].positions[t[2] as usize].into(),
+        })
+        .collect();
+    let reference = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        &tris,
+        obvhs::BvhBuildParams::medium_build(),
+        &mut std::time::Duration::ZERO,
+    );
+    let mut g = c.benchmark_group("obvhs_baseline_closest_hit");
+    for (name, rays) in &sets {
+        let orays: Vec<obvhs::ray::Ray> = rays
+            .iter()
+            .map(|r| obvhs::ray::Ray::new_inf(r.origin.into(), r.dir.into()))
+            .collect();
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function(*name, |b| {
+            b.iter(|| {
+                orays
+                    .iter()
+                    .filter(|r| {
+                        let mut hit = obvhs::ray::RayHit::none();
+                        reference.ray_traverse(**black_box(r), &mut hit, |ray, id| {
+                            tris[reference.primitive_indices[id] as usize].intersect(ray)
+                        })
+                    })
+                    .count()
+            })
+        });
+    }
+    g.finish();
+
     let mut g = c.benchmark_group("shadow");
     for (name, rays) in &sets {
         g.throughput(Throughput::Elements(rays.len() as u64));

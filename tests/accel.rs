@@ -247,6 +247,16 @@ fn t_min_and_t_max_are_respected() {
     let far = hit_t(19.5, f32::INFINITY).expect("far root");
     assert!((far - (20.0 + half_chord)).abs() < 1e-5, "{far}");
     assert_eq!(hit_t(21.5, f32::INFINITY), None);
+    // A negative t_min admits hits behind the origin.
+    let behind = Ray {
+        origin: Vec3::new(0.1, 0.2, 4.5),
+        dir: Vec3::Z,
+        t_min: -2.0,
+        t_max: f32::INFINITY,
+    };
+    let t = accel.intersect(&behind).expect("hit behind the origin").t;
+    assert!((t + 1.5).abs() < 1e-6, "{t}");
+    assert_eq!(accel.intersect_brute_force(&behind).map(|h| h.t), Some(t));
     // Hits closer than obvhs' internal 1e-4 node epsilon are still found.
     let ray = Ray::new(Vec3::new(0.1, 0.2, 1.0 - 3.0e-5), Vec3::Z);
     let h = accel.intersect(&ray).expect("hit at t = 3e-5");
@@ -552,7 +562,7 @@ fn pathological_deep_scene_matches_brute_force() {
     // The point of this scene: deeper than obvhs' fixed 32-entry stack allows.
     assert!(accel.needs_heap_stack() && accel.depth() > 31);
     let mut rng = Rng::new(5);
-    let mut hits = 0;
+    let (mut hits, mut fixed_stack_wrong) = (0, 0);
     for i in 0..4000 {
         // Rays aimed at random triangles of the line from random directions, every
         // fourth one at the stack of coincident copies deep in the tree.
@@ -569,8 +579,13 @@ fn pathological_deep_scene_matches_brute_force() {
         same_hit(a, accel.intersect_brute_force(&ray), &ray);
         assert_eq!(accel.occluded(&ray), a.is_some());
         hits += a.is_some() as usize;
+        // What obvhs' clamping 32-entry stack would have answered.
+        let fixed = accel.intersect_with_fixed_stack(&ray);
+        fixed_stack_wrong += (fixed.map(|h| h.t) != a.map(|h| h.t)) as usize;
     }
-    println!("deep scene: {hits} / 4000 rays hit");
+    println!(
+        "deep scene: {hits} / 4000 rays hit; obvhs' fixed stack would get {fixed_stack_wrong} wrong"
+    );
     assert!(hits > 3500, "{hits}");
 }
 

@@ -122,8 +122,10 @@ struct TraversalRay {
 impl TraversalRay {
     fn new(ray: &Ray) -> Self {
         // Back-off: 2e-4 plus enough ulps of the origin that the shift survives
-        // rounding even for origins far from the world origin.
-        let back_off = 2.0e-4 + ray.origin.abs().max_element() * (1.0 / 262_144.0);
+        // rounding even for origins far from the world origin, plus |t_min| when
+        // t_min is negative (hits behind the origin are then legal too).
+        let back_off =
+            2.0e-4 + ray.origin.abs().max_element() * (1.0 / 262_144.0) + (-ray.t_min).max(0.0);
         // obvhs' `Ray::new` maps |d| <= f32::EPSILON to ±1/EPSILON in the inverse,
         // which for axis-parallel rays turns the "inside the slab" interval into a
         // short finite one and culls valid boxes. We clamp |d| to 1e-20 instead
@@ -394,6 +396,17 @@ impl Accel {
         self.depth as usize > OBVHS_STACK_SIZE - 2
     }
 
+    /// Closest hit forced through obvhs' fixed 32-entry stack even when the tree is
+    /// deeper — i.e. what `CwBvh::ray_traverse` would do. Only for the test that
+    /// shows why [`Accel::needs_heap_stack`] exists; never use it for rendering.
+    #[doc(hidden)]
+    pub fn intersect_with_fixed_stack(&self, ray: &Ray) -> Option<Hit> {
+        if !self.traversable(ray) {
+            return None;
+        }
+        self.closest_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+    }
+
     /// Reference closest hit: every primitive is tested, no BVH. For tests and
     /// debugging; uses the same primitive routines as [`Accel::intersect`].
     pub fn intersect_brute_force(&self, ray: &Ray) -> Option<Hit> {
@@ -519,13 +532,13 @@ impl Accel {
     }
 }
 
-/// Rays with NaN/∞ origin or direction, a zero direction or an empty/NaN interval
-/// hit nothing (instead of tripping obvhs' debug assertions).
+/// Rays with NaN/∞ origin or direction, a zero direction, a non-finite `t_min` or
+/// an empty/NaN interval hit nothing (instead of tripping obvhs' debug assertions).
 fn ray_is_valid(ray: &Ray) -> bool {
     ray.origin.is_finite()
         && ray.dir.is_finite()
         && ray.dir != Vec3::ZERO
-        && !ray.t_min.is_nan()
+        && ray.t_min.is_finite()
         && !ray.t_max.is_nan()
         && ray.t_min <= ray.t_max
 }
