@@ -185,6 +185,17 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
             hits += 1;
             sphere_hits += matches!(h.prim, PrimRef::Sphere(_)) as usize;
             assert!(h.t >= ray.t_min && h.t <= ray.t_max);
+            // The recomputed surface point is the ray's hit point, and the normal
+            // is unit length.
+            let sp = accel
+                .surface_point(&ray, &h)
+                .expect("hit refers to a primitive");
+            assert!(
+                (sp.p - ray.at(h.t)).length() < 1e-5,
+                "{sp:?} vs {}",
+                ray.at(h.t)
+            );
+            assert!((sp.n_geo.length() - 1.0).abs() < 1e-5);
         }
         let occ = accel.occluded(&ray);
         assert_eq!(occ, b.is_some(), "{ray:?}");
@@ -197,6 +208,12 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
     // The test must exercise both kinds of primitives and both outcomes.
     assert!(hits > n / 4 && hits < n, "{hits}");
     assert!(sphere_hits > 50, "{sphere_hits}");
+}
+
+#[test]
+fn accel_is_shareable_across_threads() {
+    fn assert_send_sync<T: Send + Sync>() {}
+    assert_send_sync::<Accel>();
 }
 
 #[test]

@@ -3,19 +3,22 @@
 //!
 //! One BVH holds every primitive of the scene: the build only sees per-primitive
 //! AABBs (a mix of triangle and sphere boxes), and traversal calls our own
-//! intersection routine per primitive ([`primitive`]), so spheres stay exact
+//! intersection routine per primitive (`primitive.rs`), so spheres stay exact
 //! analytic spheres and triangles use the watertight test.
 //!
 //! obvhs 0.4 pitfalls and where they are handled:
 //! 1. `Triangle::compute_barycentric` is scaled wrongly, 2. its triangle test is
-//!    not watertight → neither is used; see [`primitive::WatertightRay`].
+//!    not watertight → neither is used; see `primitive::WatertightRay`.
 //! 3. Node culling ignores the ray's `tmin` (it clamps the entry distance to a
 //!    fixed 1e-4 instead) → every primitive test filters by `t_min` itself, and
 //!    the traversal ray is backed up so the 1e-4 clamp cannot cull nodes that
-//!    hold hits at t < 1e-4 ([`TraversalRay`]).
+//!    hold hits at t < 1e-4 (`TraversalRay`).
 //! 4. The traversal stack is 32 entries and silently clamps in release → the
 //!    depth of the built tree is measured after every build, and deeper trees are
 //!    traversed with a heap stack sized to the depth ([`Accel::needs_heap_stack`]).
+//!    The depth is a conservative bound (a stack entry is only pushed where a node
+//!    has two or more inner children still to visit), so some deep trees that the
+//!    fixed stack would survive take the slower path; correctness first.
 //!
 //! Robustness of the ray/box test itself: `obvhs::ray::Ray::new` replaces
 //! direction components below `f32::EPSILON` by ±1/EPSILON in the inverse, which
