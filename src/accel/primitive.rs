@@ -15,15 +15,19 @@ use glam::Vec3;
 /// Per-ray precomputation of the watertight test (Woop et al. 2013, §3,
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
 /// axis, and the shear constants that map the ray to the +z axis of a unit space.
+///
+/// The permutation and shear are folded into three row vectors, so that e.g.
+/// `Ax = A[kx] − Sx·A[kz]` becomes `row_x · A`. The extra terms are exact zeros
+/// (`A[i]·0`) and the ±1 products are exact, so the result is bit-identical to the
+/// paper's formulation — what matters for watertightness is only that a shared
+/// vertex is transformed identically for every triangle, which holds either way —
+/// while avoiding three runtime-indexed (bounds-checked) accesses per vertex.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WatertightRay {
     org: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    row_x: Vec3,
+    row_y: Vec3,
+    row_z: Vec3,
 }
 
 impl WatertightRay {
@@ -47,16 +51,23 @@ impl WatertightRay {
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        // Shear constants (paper eq. in §3: Sx = dx/dz, Sy = dy/dz, Sz = 1/dz).
+        // Shear constants (paper §3: Sx = dx/dz, Sy = dy/dz, Sz = 1/dz).
         let sz = 1.0 / dir[kz];
+        let sx = dir[kx] * sz;
+        let sy = dir[ky] * sz;
+        let mut row_x = Vec3::ZERO;
+        row_x[kx] = 1.0;
+        row_x[kz] = -sx;
+        let mut row_y = Vec3::ZERO;
+        row_y[ky] = 1.0;
+        row_y[kz] = -sy;
+        let mut row_z = Vec3::ZERO;
+        row_z[kz] = sz;
         Self {
             org,
-            kx,
-            ky,
-            kz,
-            sx: dir[kx] * sz,
-            sy: dir[ky] * sz,
-            sz,
+            row_x,
+            row_y,
+            row_z,
         }
     }
 
@@ -71,18 +82,14 @@ impl WatertightRay {
         t_min: f32,
         t_max: f32,
     ) -> Option<(f32, f32, f32)> {
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         // Vertices relative to the ray origin.
         let a = v0 - self.org;
         let b = v1 - self.org;
         let c = v2 - self.org;
         // Shear and scale of the vertices (paper §3, Listing 1).
-        let ax = a[kx] - self.sx * a[kz];
-        let ay = a[ky] - self.sy * a[kz];
-        let bx = b[kx] - self.sx * b[kz];
-        let by = b[ky] - self.sy * b[kz];
-        let cx = c[kx] - self.sx * c[kz];
-        let cy = c[ky] - self.sy * c[kz];
+        let (ax, ay) = (self.row_x.dot(a), self.row_y.dot(a));
+        let (bx, by) = (self.row_x.dot(b), self.row_y.dot(b));
+        let (cx, cy) = (self.row_x.dot(c), self.row_y.dot(c));
         // Scaled barycentric coordinates = 2D edge functions (paper §3, eq. 3).
         // Rust never contracts `a*b - c*d` into an FMA, which is what makes the
         // edge function of a shared edge exactly anti-symmetric between the two
@@ -112,9 +119,9 @@ impl WatertightRay {
             return None;
         }
         // Scaled hit distance (paper eq. 5): T = U·Az + V·Bz + W·Cz.
-        let az = self.sz * a[kz];
-        let bz = self.sz * b[kz];
-        let cz = self.sz * c[kz];
+        let az = self.row_z.dot(a);
+        let bz = self.row_z.dot(b);
+        let cz = self.row_z.dot(c);
         let t_scaled = u * az + v * bz + w * cz;
         let rcp_det = 1.0 / det;
         let t = t_scaled * rcp_det;
