@@ -1,0 +1,183 @@
+//! Acceleration structure benchmarks on the Stanford bunny (69k triangles):
+//! BVH build time, and closest-hit / shadow-ray (any-hit) throughput for
+//! coherent (camera grid) and incoherent (random) rays. Criterion reports the
+//! throughput in elements/s, i.e. rays/s.
+//!
+//! Run: `cargo bench --bench accel -- --warm-up-time 1 --measurement-time 3`
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use gradtrace::accel::Accel;
+use gradtrace::math::{Ray, Vec3};
+use gradtrace::scene::Mesh;
+
+fn load_bunny() -> Mesh {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/models/stanford-bunny.obj"
+    );
+    let (models, _) = tobj::load_obj(
+        path,
+        &tobj::LoadOptions {
+            triangulate: true,
+            single_index: true,
+            ..Default::default()
+        },
+    )
+    .expect("scenes/models/stanford-bunny.obj loads");
+    let mut mesh = Mesh {
+        name: "bunny".into(),
+        ..Default::default()
+    };
+    for m in &models {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(
+            m.mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        mesh.triangles.extend(
+            m.mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
+    }
+    mesh
+}
+
+/// xorshift64* — deterministic rays without an extra dependency.
+struct Rng(u64);
+
+impl Rng {
+    fn f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32) / 16_777_216.0
+    }
+    fn unit(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(self.f32(), self.f32(), self.f32()) * 2.0 - 1.0;
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+const RES: usize = 256;
+
+/// A pinhole camera's primary rays over a 256×256 grid, framing the bunny.
+fn coherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
+    let c = (lo + hi) * 0.5;
+    let size = (hi - lo).max_element();
+    let eye = c + Vec3::new(0.0, 0.0, 2.0 * size);
+    (0..RES * RES)
+        .map(|i| {
+            let u = ((i % RES) as f32 + 0.5) / RES as f32 - 0.5;
+            let v = ((i / RES) as f32 + 0.5) / RES as f32 - 0.5;
+            Ray::new(eye, Vec3::new(u * 0.7, v * 0.7, -1.0).normalize())
+        })
+        .collect()
+}
+
+/// Random origins in the bunny's bounding box, random directions.
+fn incoherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    (0..RES * RES)
+        .map(|_| {
+            let t = Vec3::new(rng.f32(), rng.f32(), rng.f32());
+            Ray::new(lo + (hi - lo) * t, rng.unit())
+        })
+        .collect()
+}
+
+fn bench_accel(c: &mut Criterion) {
+    let bunny = load_bunny();
+    let meshes = [bunny];
+
+    let mut g = c.benchmark_group("build");
+    g.sample_size(10);
+    g.bench_function("bunny", |b| {
+        b.iter(|| Accel::build(black_box(&meshes), &[]))
+    });
+    g.finish();
+
+    let accel = Accel::build(&meshes, &[]);
+    let (lo, hi) = accel.bounds().expect("bunny is not empty");
+    let sets = [
+        ("coherent", coherent_rays(lo, hi)),
+        ("incoherent", incoherent_rays(lo, hi)),
+    ];
+    for (name, rays) in &sets {
+        let hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+        println!("{name}: {} rays, {hits} hit the bunny", rays.len());
+    }
+
+    let mut g = c.benchmark_group("closest_hit");
+    for (name, rays) in &sets {
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function(*name, |b| {
+            b.iter(|| {
+                rays.iter()
+                    .filter(|r| accel.intersect(black_box(r)).is_some())
+                    .count()
+            })
+        });
+    }
+    g.finish();
+
+    // Baseline for context only: obvhs' own traversal and (non-watertight)
+    // Möller–Trumbore triangles on the same BVH preset, no sphere support.
+    let tris: Vec<obvhs::triangle::Triangle> = meshes[0]
+        .triangles
+        .iter()
+        .map(|t| obvhs::triangle::Triangle {
+            v0: meshes[0].positions[t[0] as usize].into(),
+            v1: meshes[0].positions[t[1] as usize].into(),
+            v2: meshes[0].positions[t[2] as usize].into(),
+        })
+        .collect();
+    let mut core_build_time = std::time::Duration::ZERO;
+    let reference = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        &tris,
+        obvhs::BvhBuildParams::medium_build(),
+        &mut core_build_time,
+    );
+    let mut g = c.benchmark_group("obvhs_baseline_closest_hit");
+    for (name, rays) in &sets {
+        let orays: Vec<obvhs::ray::Ray> = rays
+            .iter()
+            .map(|r| obvhs::ray::Ray::new_inf(r.origin.into(), r.dir.into()))
+            .collect();
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function(*name, |b| {
+            b.iter(|| {
+                orays
+                    .iter()
+                    .filter(|r| {
+                        let mut hit = obvhs::ray::RayHit::none();
+                        reference.ray_traverse(**black_box(r), &mut hit, |ray, id| {
+                            tris[reference.primitive_indices[id] as usize].intersect(ray)
+                        })
+                    })
+                    .count()
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("shadow");
+    for (name, rays) in &sets {
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function(*name, |b| {
+            b.iter(|| rays.iter().filter(|r| accel.occluded(black_box(r))).count())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_accel);
+criterion_main!(benches);

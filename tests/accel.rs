@@ -1,0 +1,665 @@
+//! Acceleration structure tests: BVH traversal vs. brute force on a mixed scene,
+//! ray interval handling, watertightness on closed meshes, rays inside spheres,
+//! degenerate input, a pathologically deep scene, and robust ray spawning.
+
+use gradtrace::accel::{offset_ray_origin, Accel, Hit, PrimRef};
+use gradtrace::math::{Ray, Vec3};
+use gradtrace::scene::{Mesh, Sphere};
+use std::collections::HashMap;
+
+/// Small deterministic PCG32 so that failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Self(
+            seed.wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407),
+        )
+    }
+    fn next_u32(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        let rot = (old >> 59) as u32;
+        xorshifted.rotate_right(rot)
+    }
+    fn f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+    fn range(&mut self, a: f32, b: f32) -> f32 {
+        a + (b - a) * self.f32()
+    }
+    fn vec(&mut self, a: f32, b: f32) -> Vec3 {
+        Vec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
+    }
+    fn unit(&mut self) -> Vec3 {
+        loop {
+            let v = self.vec(-1.0, 1.0);
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+fn mesh(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Mesh {
+    Mesh {
+        name: name.into(),
+        positions,
+        triangles,
+        ..Default::default()
+    }
+}
+
+fn sphere(center: Vec3, radius: f32) -> Sphere {
+    Sphere {
+        name: "s".into(),
+        center,
+        radius,
+        material: 0,
+        emission: Vec3::ZERO,
+        bump: None,
+        object_id: 0,
+    }
+}
+
+fn bunny() -> Mesh {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/models/stanford-bunny.obj"
+    );
+    let (models, _) = tobj::load_obj(
+        path,
+        &tobj::LoadOptions {
+            triangulate: true,
+            single_index: true,
+            ..Default::default()
+        },
+    )
+    .expect("bunny OBJ loads");
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for m in &models {
+        let base = positions.len() as u32;
+        positions.extend(
+            m.mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        triangles.extend(
+            m.mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
+    }
+    mesh("bunny", positions, triangles)
+}
+
+/// Checks a BVH closest hit against the brute-force one: same distance (bit for
+/// bit: both use the same primitive routine); the primitive may only differ on an
+/// exact tie in t. Returns whether it was a tie with a different primitive.
+fn same_hit(bvh: Option<Hit>, brute: Option<Hit>, ray: &Ray) -> bool {
+    match (bvh, brute) {
+        (None, None) => false,
+        (Some(a), Some(b)) => {
+            assert_eq!(
+                a.t.to_bits(),
+                b.t.to_bits(),
+                "t differs for {ray:?}: {a:?} vs {b:?}"
+            );
+            if a.prim == b.prim {
+                assert_eq!(a.bary, b.bary);
+                false
+            } else {
+                true
+            }
+        }
+        _ => panic!("BVH {bvh:?} vs brute force {brute:?} for {ray:?}"),
+    }
+}
+
+/// The mixed scene: random triangles + spheres + the bunny (scaled ×8).
+fn mixed_scene(rng: &mut Rng) -> (Vec<Mesh>, Vec<Sphere>) {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for i in 0..400u32 {
+        let c = rng.vec(-1.0, 1.0);
+        let s = rng.range(0.02, 0.3);
+        positions.push(c + rng.vec(-s, s));
+        positions.push(c + rng.vec(-s, s));
+        positions.push(c + rng.vec(-s, s));
+        triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    let mut b = bunny();
+    for p in &mut b.positions {
+        *p = *p * 8.0 + Vec3::new(0.1, -0.3, 0.2);
+    }
+    let spheres = (0..40)
+        .map(|_| sphere(rng.vec(-1.2, 1.2), rng.range(0.01, 0.3)))
+        .collect();
+    (vec![mesh("random", positions, triangles), b], spheres)
+}
+
+#[test]
+fn bvh_agrees_with_brute_force_on_mixed_scene() {
+    let mut rng = Rng::new(7);
+    let (meshes, spheres) = mixed_scene(&mut rng);
+    let accel = Accel::build(&meshes, &spheres);
+    let tris: usize = meshes.iter().map(|m| m.triangles.len()).sum();
+    assert_eq!(accel.triangle_count(), tris);
+    assert_eq!(accel.sphere_count(), spheres.len());
+    assert_eq!(accel.primitive_count(), tris + spheres.len());
+    println!(
+        "mixed scene: {} triangles, {} spheres, {} nodes, depth {}, build {:?}",
+        tris,
+        spheres.len(),
+        accel.node_count(),
+        accel.depth(),
+        accel.build_time()
+    );
+    let (mut hits, mut sphere_hits, mut ties, mut occluded) = (0, 0, 0, 0);
+    let n = 2000;
+    for i in 0..n {
+        let origin = rng.vec(-1.5, 1.5);
+        let mut ray = Ray::new(origin, rng.unit());
+        if i % 4 == 1 {
+            // Restricted interval.
+            ray.t_min = rng.range(0.0, 1.0);
+            ray.t_max = ray.t_min + rng.range(0.0, 2.0);
+        } else if i % 4 == 2 {
+            // Shadow-like segment towards a random point.
+            let target = rng.vec(-1.5, 1.5);
+            let d = target - origin;
+            ray = Ray::segment(origin, d.normalize(), d.length());
+        }
+        let a = accel.intersect(&ray);
+        let b = accel.intersect_brute_force(&ray);
+        ties += same_hit(a, b, &ray) as usize;
+        if let Some(h) = a {
+            hits += 1;
+            sphere_hits += matches!(h.prim, PrimRef::Sphere(_)) as usize;
+            assert!(h.t >= ray.t_min && h.t <= ray.t_max);
+            // The recomputed surface point is the ray's hit point, and the normal
+            // is unit length.
+            let sp = accel
+                .surface_point(&ray, &h)
+                .expect("hit refers to a primitive");
+            assert!(
+                (sp.p - ray.at(h.t)).length() < 1e-5,
+                "{sp:?} vs {}",
+                ray.at(h.t)
+            );
+            assert!((sp.n_geo.length() - 1.0).abs() < 1e-5);
+        }
+        let occ = accel.occluded(&ray);
+        assert_eq!(occ, b.is_some(), "{ray:?}");
+        if i % 8 == 0 {
+            assert_eq!(occ, accel.occluded_brute_force(&ray), "{ray:?}");
+        }
+        occluded += occ as usize;
+    }
+    println!("{n} rays: {hits} hits ({sphere_hits} on spheres), {ties} ties, {occluded} occluded");
+    // The test must exercise both kinds of primitives and both outcomes.
+    assert!(hits > n / 4 && hits < n, "{hits}");
+    assert!(sphere_hits > 50, "{sphere_hits}");
+}
+
+#[test]
+fn accel_is_shareable_across_threads() {
+    fn assert_send_sync<T: Send + Sync>() {}
+    assert_send_sync::<Accel>();
+}
+
+#[test]
+fn t_min_and_t_max_are_respected() {
+    // Ten parallel quads at z = 1..=10 and a unit sphere at z = 20.
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for k in 1..=10u32 {
+        let z = k as f32;
+        let b = positions.len() as u32;
+        positions.extend([
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        ]);
+        triangles.extend([[b, b + 1, b + 2], [b, b + 2, b + 3]]);
+    }
+    let accel = Accel::build(
+        &[mesh("stack", positions, triangles)],
+        &[sphere(Vec3::new(0.0, 0.0, 20.0), 1.0)],
+    );
+    let o = Vec3::new(0.1, 0.2, 0.0);
+    let hit_t = |t_min: f32, t_max: f32| {
+        let ray = Ray {
+            origin: o,
+            dir: Vec3::Z,
+            t_min,
+            t_max,
+        };
+        let h = accel.intersect(&ray).map(|h| h.t);
+        assert_eq!(h.is_some(), accel.occluded(&ray));
+        h
+    };
+    assert_eq!(hit_t(0.0, f32::INFINITY), Some(1.0));
+    assert_eq!(hit_t(3.5, f32::INFINITY), Some(4.0));
+    assert_eq!(hit_t(0.0, 3.5), Some(1.0));
+    assert_eq!(hit_t(1.5, 3.5), Some(2.0));
+    assert_eq!(hit_t(0.0, 0.5), None);
+    assert_eq!(hit_t(4.2, 4.8), None);
+    // Closed interval: a hit exactly at t_min or t_max counts.
+    assert_eq!(hit_t(5.0, 5.0), Some(5.0));
+    // Beyond the quads: the sphere's near root, then its far root (the ray is
+    // 0.05 off the sphere's axis, so half the chord is √0.95).
+    let half_chord = 0.95f32.sqrt();
+    let near = hit_t(10.5, f32::INFINITY).expect("near root");
+    assert!((near - (20.0 - half_chord)).abs() < 1e-5, "{near}");
+    let far = hit_t(19.5, f32::INFINITY).expect("far root");
+    assert!((far - (20.0 + half_chord)).abs() < 1e-5, "{far}");
+    assert_eq!(hit_t(21.5, f32::INFINITY), None);
+    // A negative t_min admits hits behind the origin.
+    let behind = Ray {
+        origin: Vec3::new(0.1, 0.2, 4.5),
+        dir: Vec3::Z,
+        t_min: -2.0,
+        t_max: f32::INFINITY,
+    };
+    let t = accel.intersect(&behind).expect("hit behind the origin").t;
+    assert!((t + 1.5).abs() < 1e-6, "{t}");
+    assert_eq!(accel.intersect_brute_force(&behind).map(|h| h.t), Some(t));
+    // Hits closer than obvhs' internal 1e-4 node epsilon are still found.
+    let ray = Ray::new(Vec3::new(0.1, 0.2, 1.0 - 3.0e-5), Vec3::Z);
+    let h = accel.intersect(&ray).expect("hit at t = 3e-5");
+    assert!((h.t - 3.0e-5).abs() < 1e-6, "{}", h.t);
+}
+
+/// Icosphere with shared vertices (midpoint cache), `level` subdivisions.
+fn icosphere(level: u32, center: Vec3, radius: f32) -> Mesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut v: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut cache: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut mid = |a: u32, b: u32, v: &mut Vec<Vec3>| {
+            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                v.push(((v[a as usize] + v[b as usize]) * 0.5).normalize());
+                v.len() as u32 - 1
+            })
+        };
+        let mut nf = Vec::with_capacity(f.len() * 4);
+        for &[a, b, c] in &f {
+            let ab = mid(a, b, &mut v);
+            let bc = mid(b, c, &mut v);
+            let ca = mid(c, a, &mut v);
+            nf.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = nf;
+    }
+    let positions = v.iter().map(|&p| center + p * radius).collect();
+    mesh("icosphere", positions, f)
+}
+
+fn cube(min: Vec3, max: Vec3) -> Mesh {
+    let p = |i: u32| {
+        Vec3::new(
+            if i & 1 != 0 { max.x } else { min.x },
+            if i & 2 != 0 { max.y } else { min.y },
+            if i & 4 != 0 { max.z } else { min.z },
+        )
+    };
+    let positions = (0..8).map(p).collect();
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    mesh("cube", positions, triangles)
+}
+
+/// Shoots rays from interior points exactly at every vertex and at points on
+/// every edge of a closed mesh; every ray must hit (closest and any-hit).
+/// Returns (rays, leaks of the BVH, leaks of obvhs' non-watertight test).
+fn leak_count(
+    m: &Mesh,
+    interior: &[Vec3],
+    per_edge: usize,
+    rng: &mut Rng,
+) -> (usize, usize, usize) {
+    let accel = Accel::build(std::slice::from_ref(m), &[]);
+    let mut edges: Vec<(u32, u32)> = m
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let naive: Vec<obvhs::triangle::Triangle> = m
+        .triangles
+        .iter()
+        .map(|t| obvhs::triangle::Triangle {
+            v0: m.positions[t[0] as usize].into(),
+            v1: m.positions[t[1] as usize].into(),
+            v2: m.positions[t[2] as usize].into(),
+        })
+        .collect();
+    let (mut rays, mut leaks, mut naive_leaks) = (0, 0, 0);
+    let mut shoot = |o: Vec3, target: Vec3| {
+        let ray = Ray::new(o, (target - o).normalize());
+        rays += 1;
+        let hit = accel.intersect(&ray);
+        let occ = accel.occluded(&ray);
+        if hit.is_none() || !occ {
+            leaks += 1;
+        }
+        let r = obvhs::ray::Ray::new_inf(o.into(), ray.dir.into());
+        if naive.iter().all(|t| t.intersect(&r) == f32::INFINITY) {
+            naive_leaks += 1;
+        }
+    };
+    for &o in interior {
+        for &p in &m.positions {
+            shoot(o, p);
+        }
+        for &(a, b) in &edges {
+            let (pa, pb) = (m.positions[a as usize], m.positions[b as usize]);
+            for k in 0..per_edge {
+                // Midpoint, then random points along the edge.
+                let s = if k == 0 { 0.5 } else { rng.f32() };
+                shoot(o, pa + (pb - pa) * s);
+            }
+        }
+    }
+    (rays, leaks, naive_leaks)
+}
+
+#[test]
+fn closed_meshes_are_watertight_at_edges_and_vertices() {
+    let mut rng = Rng::new(3);
+    // Icosphere (level 3: 1280 triangles) at an odd position and scale.
+    let c = Vec3::new(10.3, -2.1, 5.7);
+    let ico = icosphere(3, c, 3.7);
+    let interior = [
+        c,
+        c + Vec3::new(0.5, -1.1, 0.3),
+        c + Vec3::new(-2.0, 1.3, 1.7),
+        c + Vec3::new(1e-3, 2e-3, -3.0),
+    ];
+    let (rays, leaks, naive) = leak_count(&ico, &interior, 22, &mut rng);
+    println!(
+        "icosphere: {rays} rays at vertices/edges, {leaks} leaks (obvhs Möller–Trumbore: {naive})"
+    );
+    assert!(rays >= 100_000, "{rays}");
+    assert_eq!(leaks, 0);
+
+    // Cube: faces on the root box planes, axis-aligned edges.
+    let cube = cube(Vec3::new(-1.0, -2.0, 0.5), Vec3::new(3.0, 1.5, 4.0));
+    let interior = [
+        Vec3::new(1.0, -0.25, 2.25),
+        Vec3::new(-0.5, 1.0, 0.75),
+        Vec3::new(2.9, -1.9, 3.9),
+        Vec3::new(0.0, 0.0, 1.0),
+    ];
+    let (rays, leaks, naive) = leak_count(&cube, &interior, 2000, &mut rng);
+    println!("cube: {rays} rays at vertices/edges, {leaks} leaks (obvhs Möller–Trumbore: {naive})");
+    assert_eq!(leaks, 0);
+
+    // Axis-parallel rays grazing the cube's faces from inside, through an edge.
+    let accel = Accel::build(std::slice::from_ref(&cube), &[]);
+    for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+        let ray = Ray::new(Vec3::new(1.0, -0.25, 2.25), d);
+        assert!(
+            accel.intersect(&ray).is_some() && accel.occluded(&ray),
+            "{d}"
+        );
+    }
+}
+
+#[test]
+fn rays_from_inside_a_sphere_hit_its_far_side() {
+    let mut rng = Rng::new(11);
+    let c = Vec3::new(-3.0, 7.5, 100.0);
+    let r = 2.5;
+    let accel = Accel::build(&[], &[sphere(c, r), sphere(c + Vec3::X * 10.0, 1.0)]);
+    let mut worst = 0.0f32;
+    for _ in 0..20_000 {
+        let o = c + rng.unit() * (r * rng.f32().sqrt() * 0.999);
+        let d = rng.unit();
+        let h = accel.intersect(&Ray::new(o, d)).expect("inside ray hits");
+        assert_eq!(h.prim, PrimRef::Sphere(0));
+        // Analytic far root in f64.
+        let f = (o - c).as_dvec3();
+        let dd = d.as_dvec3();
+        let b = f.dot(dd);
+        let t = -b + (b * b - (f.dot(f) - (r as f64).powi(2))).sqrt();
+        let err = (h.t as f64 - t).abs();
+        worst = worst.max(err as f32);
+        assert!(err < 1e-4 * r as f64, "t {} vs {}", h.t, t);
+    }
+    println!("inside-sphere rays: worst |t − t_exact| = {worst:e}");
+}
+
+#[test]
+fn degenerate_input_does_not_panic() {
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    let empty = Accel::build(&[], &[]);
+    assert!(empty.intersect(&ray).is_none() && !empty.occluded(&ray));
+    assert_eq!(empty.bounds(), None);
+
+    // A zero-area triangle, a point triangle, bad indices, NaN vertex, bad spheres.
+    let m = mesh(
+        "bad",
+        vec![
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(f32::NAN, 0.0, 0.0),
+        ],
+        vec![[0, 1, 2], [0, 0, 0], [0, 1, 7], [0, 1, 3]],
+    );
+    let spheres = [
+        sphere(Vec3::new(5.0, 0.0, 0.0), 0.0),
+        sphere(Vec3::new(5.0, 0.0, 0.0), -1.0),
+        sphere(Vec3::new(5.0, 0.0, 0.0), f32::INFINITY),
+    ];
+    let accel = Accel::build(std::slice::from_ref(&m), &spheres);
+    assert_eq!(accel.rejected_count(), 5);
+    assert_eq!(accel.triangle_count(), 2);
+    for r in [
+        ray,
+        Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::X),
+        Ray::new(Vec3::new(1.0, 0.0, -1.0), Vec3::Z),
+        Ray::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::ZERO),
+        Ray::new(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0)),
+        Ray {
+            t_min: 2.0,
+            t_max: 1.0,
+            ..ray
+        },
+    ] {
+        assert!(accel.intersect(&r).is_none(), "{r:?}");
+        assert!(!accel.occluded(&r), "{r:?}");
+    }
+    // A single valid primitive (the root of the BVH is a leaf) and a single point.
+    let one = Accel::build(&[], &[sphere(Vec3::new(5.0, 0.0, 0.0), 1.0)]);
+    assert_eq!(one.intersect(&ray).map(|h| h.t), Some(4.0));
+    let point = Accel::build(&[mesh("p", vec![Vec3::ONE; 3], vec![[0, 1, 2]])], &[]);
+    assert!(point
+        .intersect(&Ray::new(Vec3::ZERO, Vec3::ONE.normalize()))
+        .is_none());
+}
+
+#[test]
+fn pathological_deep_scene_matches_brute_force() {
+    // Many tiny, nearly coincident triangles along a line whose spacing shrinks
+    // geometrically: PLOC merges them into a chain, the deepest tree shape.
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    // x from 1 down to 2^-40 ≈ 1e-12: below that the triangles' area (s² ≈ 1e-30)
+    // approaches the f32 underflow limit and no f32 triangle test can hit them.
+    let n = 1000u32;
+    let x_of = |k: u32| 0.5f32.powf(k as f32 * 0.04);
+    for k in 0..n {
+        let x = x_of(k);
+        let s = x * 1e-3;
+        let b = positions.len() as u32;
+        positions.extend([
+            Vec3::new(x, 0.0, 0.0),
+            Vec3::new(x + s, s, 0.0),
+            Vec3::new(x, s, s),
+        ]);
+        triangles.push([b, b + 1, b + 2]);
+    }
+    // Plus exactly coincident copies of one tiny triangle: identical boxes, which
+    // PLOC can only chain (this is what makes the tree deep).
+    let copies = 1500;
+    let t = triangles[500];
+    triangles.extend(std::iter::repeat_n(t, copies));
+    let meshes = [mesh("line", positions, triangles)];
+    let accel = Accel::build(&meshes, &[]);
+    println!(
+        "deep scene: depth {}, heap stack: {}, nodes {}",
+        accel.depth(),
+        accel.needs_heap_stack(),
+        accel.node_count()
+    );
+    assert_eq!(accel.primitive_count(), n as usize + copies);
+    // The point of this scene: deeper than obvhs' fixed 32-entry stack allows.
+    assert!(accel.needs_heap_stack() && accel.depth() > 31);
+    let mut rng = Rng::new(5);
+    let (mut hits, mut fixed_stack_wrong) = (0, 0);
+    for i in 0..4000 {
+        // Rays aimed at random triangles of the line from random directions, every
+        // fourth one at the stack of coincident copies deep in the tree.
+        let k = if i % 4 == 0 { 500 } else { rng.next_u32() % n };
+        let x = x_of(k);
+        // The triangle's centroid.
+        let s = x * 1e-3;
+        let target = Vec3::new(x + s / 3.0, 2.0 * s / 3.0, s / 3.0);
+        // Origins at a distance proportional to the triangle's scale, so that the
+        // direction can resolve it in f32.
+        let o = target + rng.unit() * x * rng.range(1e-2, 2.0);
+        let ray = Ray::new(o, (target - o).normalize());
+        let a = accel.intersect(&ray);
+        same_hit(a, accel.intersect_brute_force(&ray), &ray);
+        assert_eq!(accel.occluded(&ray), a.is_some());
+        hits += a.is_some() as usize;
+        // What obvhs' clamping 32-entry stack would have answered.
+        let fixed = accel.intersect_with_fixed_stack(&ray);
+        fixed_stack_wrong += (fixed.map(|h| h.t) != a.map(|h| h.t)) as usize;
+    }
+    println!(
+        "deep scene: {hits} / 4000 rays hit; obvhs' fixed stack would get {fixed_stack_wrong} wrong"
+    );
+    assert!(hits > 3500, "{hits}");
+}
+
+#[test]
+fn spawned_rays_do_not_self_intersect() {
+    let mut rng = Rng::new(13);
+    let c = Vec3::new(40.0, -20.0, 7.0);
+    let ico_center = Vec3::new(-30.0, 12.0, 3.0);
+    let ico = icosphere(2, ico_center, 5.0);
+    let accel = Accel::build(&[ico], &[sphere(c, 3.0)]);
+    let mut checked = 0;
+    for _ in 0..20_000 {
+        // Hit one of the two convex objects from outside.
+        let target = if rng.f32() < 0.5 { c } else { ico_center };
+        let o = target + rng.unit() * 20.0;
+        let ray = Ray::new(o, (target + rng.vec(-1.0, 1.0) - o).normalize());
+        let Some(h) = accel.intersect(&ray) else {
+            continue;
+        };
+        let sp = accel.surface_point(&ray, &h).expect("valid hit");
+        // Leaving a convex object outward must not hit it again…
+        let outward = if sp.n_geo.dot(sp.p - target) < 0.0 {
+            -sp.n_geo
+        } else {
+            sp.n_geo
+        };
+        let mut out = rng.unit();
+        if out.dot(outward) < 0.0 {
+            out = -out;
+        }
+        // (it may hit the *other* object, far away).
+        let is_sphere = |h: &Hit| matches!(h.prim, PrimRef::Sphere(_));
+        if let Some(h3) = accel.intersect(&sp.spawn_ray(out)) {
+            assert_ne!(
+                is_sphere(&h3),
+                is_sphere(&h),
+                "self-hit leaving {h:?}: {h3:?}"
+            );
+            assert!(h3.t > 10.0);
+        }
+        // …and the plain helper gives the same guarantee.
+        let o2 = offset_ray_origin(sp.p, sp.n_geo, out);
+        if let Some(h3) = accel.intersect(&Ray::new(o2, out)) {
+            assert_ne!(
+                is_sphere(&h3),
+                is_sphere(&h),
+                "self-hit leaving {h:?}: {h3:?}"
+            );
+        }
+        // Entering it must hit the same primitive kind again, beyond the origin.
+        let inward = -out;
+        let h2 = accel
+            .intersect(&sp.spawn_ray(inward))
+            .expect("entering ray hits the far side");
+        assert!(h2.t > 0.0);
+        assert_eq!(is_sphere(&h2), is_sphere(&h));
+        checked += 1;
+    }
+    assert!(checked > 5000, "{checked}");
+}
