@@ -238,7 +238,9 @@ fn integrand_terms_match_partial_differences() {
             cv: 0.0,
         }
     };
-    let h = 1e-3f32;
+    // f32 central differences: large enough a step that rounding (amplified by
+    // exponents like 40) stays below the O(h²) truncation error.
+    let h = 1e-2f32;
     for m in materials() {
         for light in &lights {
             let hd = build(x0, n0, wo0);
@@ -267,7 +269,7 @@ fn integrand_terms_match_partial_differences() {
                     ("DV", fd_dv, lane(DV + k)),
                 ] {
                     let e = rel_err(fd, an, 1e-3);
-                    assert!(e < 1e-2, "{m:?} {light:?} {term}[{k}]: fd {fd} vs {an}");
+                    assert!(e < 2e-2, "{m:?} {light:?} {term}[{k}]: fd {fd} vs {an}");
                 }
                 if matches!(light, LightPoint::Direction { .. }) {
                     assert_eq!(lane(SV + k), Vec3::ZERO, "a distant light has no SV term");

@@ -371,8 +371,22 @@ pub fn object_space_line(
     dx: [Vec3; 2],
     transport: &dyn Fn(Vec3) -> Vec3,
 ) -> (LineEstimate, f32) {
+    object_space_line_f64(spheres, x, frame, theta_max, phi as f64, dx, transport)
+}
+
+/// [`object_space_line`] with φ in f64: quadrature nodes next to a tangent φ sit
+/// closer to it than an f32 can resolve.
+fn object_space_line_f64(
+    spheres: &[crate::scene::Sphere],
+    x: Vec3,
+    frame: &Frame,
+    theta_max: f32,
+    phi: f64,
+    dx: [Vec3; 2],
+    transport: &dyn Fn(Vec3) -> Vec3,
+) -> (LineEstimate, f32) {
     use glam::DVec3;
-    let (sp, cp) = (phi as f64).sin_cos();
+    let (sp, cp) = phi.sin_cos();
     let a = frame.n.as_dvec3();
     let dphi = frame.s.as_dvec3() * cp + frame.t.as_dvec3() * sp;
     let v = a.cross(dphi);
@@ -501,17 +515,25 @@ pub fn object_space_gradient(
         if pb - pa <= 1e-12 {
             continue;
         }
-        for (&t, &wt) in nodes.iter().zip(&weights) {
-            // τ ∈ [0, π] from the node t ∈ [−1, 1].
-            let tau = 0.5 * std::f64::consts::PI * (t + 1.0);
-            let phi = pa + (pb - pa) * 0.5 * (1.0 - tau.cos());
-            let jac = (pb - pa) * 0.5 * tau.sin() * 0.5 * std::f64::consts::PI;
-            let (est, vis) =
-                object_space_line(spheres, x, frame, theta_max, phi as f32, dx, transport);
-            for (gk, v) in g.iter_mut().zip(est.vis) {
-                *gk += v.as_dvec3() * (wt * jac);
+        // Composite over τ panels: the integrand also jumps where the sphere that
+        // bounds a merged interval changes, which one Gauss rule would smear.
+        const PANELS: usize = 24;
+        for panel in 0..PANELS {
+            let (ta, tb) = (
+                std::f64::consts::PI * panel as f64 / PANELS as f64,
+                std::f64::consts::PI * (panel + 1) as f64 / PANELS as f64,
+            );
+            for (&t, &wt) in nodes.iter().zip(&weights) {
+                let tau = ta + (tb - ta) * 0.5 * (t + 1.0);
+                let phi = pa + (pb - pa) * 0.5 * (1.0 - tau.cos());
+                let jac = (pb - pa) * 0.5 * tau.sin() * 0.5 * (tb - ta);
+                let (est, vis) =
+                    object_space_line_f64(spheres, x, frame, theta_max, phi, dx, transport);
+                for (gk, v) in g.iter_mut().zip(est.vis) {
+                    *gk += v.as_dvec3() * (wt * jac);
+                }
+                b += vis as f64 * wt * jac;
             }
-            b += vis as f64 * wt * jac;
         }
     }
     let inv = 1.0 / std::f64::consts::TAU;
