@@ -6,10 +6,12 @@
 //! `brdf` holds the materials, `math` the shared numerics (frames, warps, samplers).
 
 pub mod accel;
+pub mod adaptive;
 pub mod brdf;
 pub mod error;
 pub mod math;
 pub mod output;
+pub mod reconstruct;
 pub mod render;
 pub mod scene;
 
