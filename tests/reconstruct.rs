@@ -129,15 +129,20 @@ fn c1_matches_spade_interpolate_gradient() {
         for y in 0..h as usize {
             for x in 0..w as usize {
                 let p = Point2::new(x as f64 + 0.5, y as f64 + 0.5);
-                if let Some(v) = nn.interpolate_gradient(|v| v.data().h, |v| v.data().g, 0.5, p)
-                {
+                if let Some(v) = nn.interpolate_gradient(|v| v.data().h, |v| v.data().g, 0.5, p) {
                     let ours = pick(r.image[y * w as usize + x]) as f64;
-                    assert!((ours - v).abs() < 1e-5, "channel {ch} at ({x},{y}): {ours} vs {v}");
+                    assert!(
+                        (ours - v).abs() < 1e-5,
+                        "channel {ch} at ({x},{y}): {ours} vs {v}"
+                    );
                     compared += 1;
                 }
             }
         }
-        assert!(compared > (w * h) as usize / 2, "only {compared} pixels inside the hull");
+        assert!(
+            compared > (w * h) as usize / 2,
+            "only {compared} pixels inside the hull"
+        );
     }
 }
 
@@ -232,7 +237,10 @@ fn degenerate_inputs() {
         };
         for mode in [Interpolation::Linear, Interpolation::Gradient] {
             let r = reconstruct(&set, mode).unwrap();
-            assert!(r.image.iter().all(|c| c.is_finite()), "{n} samples, {mode:?}");
+            assert!(
+                r.image.iter().all(|c| c.is_finite()),
+                "{n} samples, {mode:?}"
+            );
         }
         // C1 extrapolates with the analytic gradient, so it stays exact.
         let r = reconstruct(&set, Interpolation::Gradient).unwrap();

@@ -448,7 +448,9 @@ impl Tree {
     /// The metric two neighbouring samples of one surface give each other.
     fn pair_metric(&self, a: u32, b: u32) -> f32 {
         let (va, vb) = (&self.values[a as usize], &self.values[b as usize]);
-        let d = self.cells[a as usize].pos.distance(self.cells[b as usize].pos);
+        let d = self.cells[a as usize]
+            .pos
+            .distance(self.cells[b as usize].pos);
         if d <= 0.0 {
             return 0.0;
         }
@@ -531,9 +533,13 @@ impl Tree {
     }
 
     fn push(&mut self, id: u32) {
-        let weight = self.values[id as usize]
-            .importance
-            .map_or(1.0, |w| if w.is_finite() { w.max(0.0) } else { 0.0 });
+        let weight = self.values[id as usize].importance.map_or(1.0, |w| {
+            if w.is_finite() {
+                w.max(0.0)
+            } else {
+                0.0
+            }
+        });
         let c = &mut self.cells[id as usize];
         if c.split != 0 || !c.splittable() {
             return;

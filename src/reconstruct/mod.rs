@@ -64,7 +64,9 @@ impl Interpolation {
             "gradient" => Ok(Interpolation::Gradient),
             _ => Err(Error::Option {
                 option: "interpolation".into(),
-                message: format!("unknown interpolation '{name}', expected one of: linear, gradient"),
+                message: format!(
+                    "unknown interpolation '{name}', expected one of: linear, gradient"
+                ),
             }),
         }
     }
@@ -173,8 +175,8 @@ pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstructio
         .collect();
     // `bulk_load_stable` keeps the first of duplicate positions, so a duplicated
     // sample simply does not take part.
-    let dt = Dt::bulk_load_stable(nodes)
-        .map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
+    let dt =
+        Dt::bulk_load_stable(nodes).map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
 
     let centre = |x: usize, y: usize| Point2::new(x as f64 + 0.5, y as f64 + 0.5);
     let mut row_start = Vec::with_capacity(h);
@@ -334,7 +336,10 @@ impl<'a> Ctx<'a> {
                 .fold(f64::NEG_INFINITY, |m, t| m.max(t.1));
             let ties = totals[..n_obj].iter().filter(|t| t.1 == best).count();
             if ties == 1 {
-                totals[..n_obj].iter().find(|t| t.1 == best).map_or(heaviest.0, |t| t.0)
+                totals[..n_obj]
+                    .iter()
+                    .find(|t| t.1 == best)
+                    .map_or(heaviest.0, |t| t.0)
             } else {
                 heaviest.0
             }
@@ -372,7 +377,8 @@ impl<'a> Ctx<'a> {
                 return self.data.value[i];
             }
             let c1_w = w / r2.sqrt();
-            let zeta = self.data.value[i] + self.data.grad_u[i] * diff.x + self.data.grad_v[i] * diff.y;
+            let zeta =
+                self.data.value[i] + self.data.grad_u[i] * diff.x + self.data.grad_v[i] * diff.y;
             alpha += c1_w * r2;
             beta += w * r2;
             sum_c1_w += c1_w;
@@ -408,7 +414,9 @@ impl<'a> Ctx<'a> {
                     }
                     let diff = pd - self.data.pos[k];
                     let r2 = diff.length_squared();
-                    let taylor = self.data.value[k] + self.data.grad_u[k] * diff.x + self.data.grad_v[k] * diff.y;
+                    let taylor = self.data.value[k]
+                        + self.data.grad_u[k] * diff.x
+                        + self.data.grad_v[k] * diff.y;
                     if r2 == 0.0 {
                         return taylor;
                     }
