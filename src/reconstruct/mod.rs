@@ -385,12 +385,16 @@ impl<'a> Ctx<'a> {
             sum_c1 += zeta * c1_w;
             sum_c0 += self.data.value[i] * w;
         }
-        if sum_c1_w <= 0.0 || !(alpha + beta > 0.0) {
+        if sum_c1_w.is_nan() || sum_c1_w <= 0.0 {
             return sum_c0;
         }
         alpha /= sum_c1_w;
         sum_c1 /= sum_c1_w;
-        (sum_c0 * alpha + sum_c1 * beta) / (alpha + beta)
+        let denom = alpha + beta;
+        if denom.is_nan() || denom <= 0.0 {
+            return sum_c0;
+        }
+        (sum_c0 * alpha + sum_c1 * beta) / denom
     }
 
     /// Extrapolation outside the convex hull (see the module documentation).
