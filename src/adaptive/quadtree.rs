@@ -94,6 +94,15 @@ fn validate(width: u32, height: u32, settings: &Settings) -> Result<usize> {
             format!("budget {b} gives no sample at all on a {width}x{height} image"),
         ));
     }
+    if target >= NONE as usize {
+        return Err(option_error(
+            "budget",
+            format!(
+                "{target} samples exceed the quadtree's limit of {}",
+                NONE - 1
+            ),
+        ));
+    }
     if settings.block_size == 0 {
         return Err(option_error("block_size", "must be at least 1".into()));
     }

@@ -37,7 +37,7 @@ use crate::{Error, Result};
 use glam::{DVec2, DVec3};
 use hint::ScanlineHint;
 use rayon::prelude::*;
-use spade::handles::{FixedVertexHandle, VertexHandle};
+use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag, VertexHandle};
 use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation, Triangulation};
 
 /// How pixel values are interpolated from the samples.
@@ -223,6 +223,8 @@ struct Ctx<'a> {
     nn: spade::NaturalNeighbor<'a, Dt>,
     weights: Vec<(FixedVertexHandle, f64)>,
     kept: Vec<(usize, f64)>,
+    /// The triangle of the previous pixel (linear mode), tried before walking.
+    last_face: Option<FixedFaceHandle<InnerTag>>,
 }
 
 impl<'a> Ctx<'a> {
@@ -233,6 +235,7 @@ impl<'a> Ctx<'a> {
             nn: dt.natural_neighbor(),
             weights: Vec::with_capacity(16),
             kept: Vec::with_capacity(16),
+            last_face: None,
         }
     }
 
@@ -247,31 +250,36 @@ impl<'a> Ctx<'a> {
         hint: FixedVertexHandle,
         mode: Interpolation,
     ) -> (DVec3, Option<FixedVertexHandle>) {
-        let loc = self.dt.locate_with_hint(p, hint);
-        let next = vertex_of(self.dt, loc);
-        let inside = !matches!(
-            loc,
-            PositionInTriangulation::OutsideOfConvexHull(_)
-                | PositionInTriangulation::NoTriangulation
-        );
-        if !inside {
-            return (self.outside(p, next.unwrap_or(hint), mode), next);
-        }
         self.weights.clear();
+        let mut next = None;
         match mode {
-            Interpolation::Linear => self.barycentric(p, loc),
+            Interpolation::Linear => {
+                // Neighbouring pixels mostly fall in the same triangle: test it first
+                // (strictly inside, so the answer is the one `locate` would give).
+                if !self.in_last_face(p) {
+                    let loc = self.dt.locate_with_hint(p, hint);
+                    next = vertex_of(self.dt, loc);
+                    self.last_face = match loc {
+                        PositionInTriangulation::OnFace(f) => Some(f),
+                        _ => None,
+                    };
+                    self.barycentric(p, loc);
+                }
+            }
             Interpolation::Gradient => {
                 // spade's natural-neighbour query locates `p` through the hint
-                // generator; point it at this pixel's answer so the walk is short and
-                // thread-independent.
-                ScanlineHint::set(next.unwrap_or(hint));
+                // generator; point it at the previous pixel's neighbourhood so the
+                // walk is short and depends only on the row, not on the thread.
+                ScanlineHint::set(hint);
                 let mut weights = std::mem::take(&mut self.weights);
                 self.nn.get_weights(p, &mut weights);
                 self.weights = weights;
+                next = self.weights.first().map(|w| w.0);
             }
         }
         if self.weights.is_empty() {
-            return (self.outside(p, next.unwrap_or(hint), mode), next);
+            let (value, nearest) = self.outside(p, hint, mode);
+            return (value, nearest.or(next));
         }
         self.keep_majority_object();
         let value = match mode {
@@ -282,6 +290,24 @@ impl<'a> Ctx<'a> {
             Interpolation::Gradient => self.sibson_c1(p),
         };
         (value, next)
+    }
+
+    /// Fills the barycentric weights when `p` lies strictly inside the previous
+    /// pixel's triangle.
+    fn in_last_face(&mut self, p: Point2<f64>) -> bool {
+        let Some(f) = self.last_face else {
+            return false;
+        };
+        let face = self.dt.face(f);
+        let c = face.barycentric_interpolation(p);
+        if c.iter().all(|&w| w > 1e-9) {
+            let v = face.vertices();
+            self.weights
+                .extend([(v[0].fix(), c[0]), (v[1].fix(), c[1]), (v[2].fix(), c[2])]);
+            true
+        } else {
+            false
+        }
     }
 
     /// Barycentric weights of `p` in the located element.
@@ -398,11 +424,20 @@ impl<'a> Ctx<'a> {
     }
 
     /// Extrapolation outside the convex hull (see the module documentation).
-    fn outside(&mut self, p: Point2<f64>, hint: FixedVertexHandle, mode: Interpolation) -> DVec3 {
+    fn outside(
+        &mut self,
+        p: Point2<f64>,
+        hint: FixedVertexHandle,
+        mode: Interpolation,
+    ) -> (DVec3, Option<FixedVertexHandle>) {
         ScanlineHint::set(hint);
         let Some(s) = self.dt.nearest_neighbor(p) else {
-            return DVec3::ZERO;
+            return (DVec3::ZERO, None);
         };
+        (self.extrapolate(s, p, mode), Some(s.fix()))
+    }
+
+    fn extrapolate(&self, s: VHandle<'_>, p: Point2<f64>, mode: Interpolation) -> DVec3 {
         let si = s.data().idx as usize;
         let obj = self.data.object[si];
         let pd = DVec2::new(p.x, p.y);
