@@ -371,3 +371,24 @@ fn analytic_gradient_sees_what_contrast_aliases_away() {
         v.1
     );
 }
+
+#[test]
+fn progress_is_monotone_and_ends_at_the_total() {
+    use std::sync::Mutex;
+    for strategy in [Strategy::Gradient, Strategy::Uniform] {
+        let seen = Mutex::new(Vec::new());
+        let set = gradtrace::adaptive::refine_with_progress(
+            &bump,
+            96,
+            80,
+            &Settings::new(strategy, 0.3),
+            &|done, total| seen.lock().unwrap().push((done, total)),
+        )
+        .unwrap();
+        let seen = seen.into_inner().unwrap();
+        let n = set.samples.len();
+        assert!(seen.windows(2).all(|w| w[0].0 <= w[1].0));
+        assert!(seen.iter().all(|&(_, t)| t == n));
+        assert_eq!(seen.last().unwrap().0, n);
+    }
+}

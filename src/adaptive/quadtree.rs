@@ -56,13 +56,28 @@ pub fn refine<E: Estimator + ?Sized>(
     height: u32,
     settings: &Settings,
 ) -> Result<SampleSet> {
+    refine_with_progress(estimator, width, height, settings, &|_, _| {})
+}
+
+/// [`refine`], calling `progress(done, total)` after every evaluated batch (from the
+/// calling thread), so that a caller with an expensive estimator can drive a progress bar.
+pub fn refine_with_progress<E: Estimator + ?Sized>(
+    estimator: &E,
+    width: u32,
+    height: u32,
+    settings: &Settings,
+    progress: &dyn Fn(usize, usize),
+) -> Result<SampleSet> {
     let target = validate(width, height, settings)?;
     if settings.strategy == Strategy::Uniform {
-        return Ok(stratified(estimator, width, height, target));
+        let set = stratified(estimator, width, height, target);
+        progress(target, target);
+        return Ok(set);
     }
     let mut tree = Tree::new(width, height, settings, target);
     tree.start(estimator)?;
-    tree.run(estimator)?;
+    progress(tree.cells.len(), target);
+    tree.run(estimator, progress)?;
     Ok(tree.into_set())
 }
 
@@ -330,7 +345,11 @@ impl Tree {
         self.values.extend(new);
     }
 
-    fn run<E: Estimator + ?Sized>(&mut self, est: &E) -> Result<()> {
+    fn run<E: Estimator + ?Sized>(
+        &mut self,
+        est: &E,
+        progress: &dyn Fn(usize, usize),
+    ) -> Result<()> {
         while self.cells.len() < self.target {
             let remaining = self.target - self.cells.len();
             let first = self.cells.len();
@@ -354,6 +373,7 @@ impl Tree {
             self.evaluate(est, first);
             let n = self.cells.len();
             self.process_new(first, n);
+            progress(n, self.target);
         }
         Ok(())
     }
