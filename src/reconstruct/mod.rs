@@ -336,6 +336,19 @@ impl<'a> Ctx<'a> {
     /// Keeps the samples of the object with the largest total weight (ties: the object
     /// of the heaviest single sample) and renormalises their weights into `kept`.
     fn keep_majority_object(&mut self) {
+        // Common case first: every contributing sample sees the same object.
+        let first = self.data.object[self.sample(self.weights[0].0)];
+        if self
+            .weights
+            .iter()
+            .all(|&(v, _)| self.data.object[self.sample(v)] == first)
+        {
+            self.kept.clear();
+            for &(v, w) in &self.weights {
+                self.kept.push((self.sample(v), w));
+            }
+            return;
+        }
         let mut totals: [(u32, f64); 16] = [(0, 0.0); 16];
         let mut n_obj = 0;
         let mut heaviest = (0u32, f64::NEG_INFINITY);
