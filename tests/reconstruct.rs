@@ -63,6 +63,7 @@ fn scattered(width: u32, height: u32, n: usize, f: impl Fn(Vec2) -> SampleValue)
         width,
         height,
         samples,
+        depth_tolerance: 0.1,
     }
 }
 
@@ -162,42 +163,53 @@ fn c1_beats_linear_on_smooth_image() {
     }
 }
 
-/// A disc of object 1 (value 1) on object 0 (value 0), constant per object. No pixel may
-/// be a blend of the two (0 < v < 1), whatever the sample layout; once the quadtree
-/// has refined the silhouette to pixel size, every pixel also gets its own object.
-/// The uniform layout leaves pixel centres between samples of both objects, which is
-/// where a missing silhouette rule would blend.
+/// A disc (value 1) on a background (value 0), constant per surface; the disc is
+/// another object, or the same object at a fifth of the depth. No pixel may be a blend
+/// of the two (0 < v < 1), whatever the sample layout; once the quadtree has refined the
+/// silhouette to pixel size, every pixel also gets its own surface. The uniform layout
+/// leaves pixel centres between samples of both surfaces, which is where a missing
+/// silhouette rule would blend.
 #[test]
 fn never_interpolates_across_silhouettes() {
-    let disc = |p: Vec2| {
-        let inside = p.distance(Vec2::new(50.3, 41.7)) < 23.0;
-        let mut v = SampleValue::new(Vec3::splat(inside as u32 as f32), Vec3::ZERO, Vec3::ZERO);
-        v.object_id = inside as u32;
-        v
-    };
-    for strategy in [Strategy::Gradient, Strategy::Uniform] {
-        let set = refine(&disc, 100, 90, &Settings::new(strategy, 0.25)).unwrap();
-        for mode in [Interpolation::Linear, Interpolation::Gradient] {
-            let r = reconstruct(&set, mode).unwrap();
-            let mut wrong = 0;
-            let mut blended = 0;
-            for y in 0..r.height {
-                for x in 0..r.width {
-                    let v = r.image[y * r.width + x].x;
-                    let t = disc(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).radiance.x;
-                    if v > 1e-5 && v < 1.0 - 1e-5 {
-                        blended += 1;
-                    } else if (v - t).abs() > 1e-5 {
-                        wrong += 1;
-                    }
+    for by_depth in [false, true] {
+        let disc = move |p: Vec2| {
+            let inside = p.distance(Vec2::new(50.3, 41.7)) < 23.0;
+            let mut v = SampleValue::new(Vec3::splat(inside as u32 as f32), Vec3::ZERO, Vec3::ZERO);
+            if inside {
+                if by_depth {
+                    v.depth = 0.2;
+                } else {
+                    v.object_id = 1;
                 }
             }
-            println!(
-                "{strategy:?} samples, {mode:?}: {blended} blended pixels, {wrong} pixels of the wrong object"
-            );
-            assert_eq!(blended, 0);
-            if strategy != Strategy::Uniform {
-                assert_eq!(wrong, 0);
+            v
+        };
+        for strategy in [Strategy::Gradient, Strategy::Uniform] {
+            let set = refine(&disc, 100, 90, &Settings::new(strategy, 0.25)).unwrap();
+            for mode in [Interpolation::Linear, Interpolation::Gradient] {
+                let r = reconstruct(&set, mode).unwrap();
+                let mut wrong = 0;
+                let mut blended = 0;
+                for y in 0..r.height {
+                    for x in 0..r.width {
+                        let v = r.image[y * r.width + x].x;
+                        let t = disc(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).radiance.x;
+                        if v > 1e-5 && v < 1.0 - 1e-5 {
+                            blended += 1;
+                        } else if (v - t).abs() > 1e-5 {
+                            wrong += 1;
+                        }
+                    }
+                }
+                println!(
+                    "disc by {}, {strategy:?} samples, {mode:?}: {blended} blended pixels, \
+                     {wrong} pixels of the wrong surface",
+                    if by_depth { "depth" } else { "object id" }
+                );
+                assert_eq!(blended, 0);
+                if strategy != Strategy::Uniform {
+                    assert_eq!(wrong, 0);
+                }
             }
         }
     }
@@ -222,6 +234,7 @@ fn degenerate_inputs() {
         width: 8,
         height: 8,
         samples: vec![],
+        depth_tolerance: 0.1,
     };
     assert!(reconstruct(&empty, Interpolation::Linear).is_err());
     // One sample, or collinear samples: constant / Taylor extrapolation everywhere.
@@ -242,6 +255,7 @@ fn degenerate_inputs() {
             width: 20,
             height: 9,
             samples,
+            depth_tolerance: 0.1,
         };
         for mode in [Interpolation::Linear, Interpolation::Gradient] {
             let r = reconstruct(&set, mode).unwrap();

@@ -39,7 +39,8 @@ pub struct SampleValue {
     pub object_id: u32,
     /// Distance along the camera ray (any monotone depth works); `INFINITY` for the
     /// background. A relative jump above [`Settings::depth_tolerance`] between
-    /// neighbouring samples counts as an object boundary (self-occlusion silhouettes).
+    /// neighbouring samples counts as an object boundary (self-occlusion silhouettes),
+    /// for refinement and for reconstruction alike.
     pub depth: f32,
     /// Optional non-negative weight multiplied into every strategy's metric (e.g. to
     /// down-weight a region the caller cares less about). `None` means 1.
@@ -203,6 +204,9 @@ pub struct SampleSet {
     pub width: u32,
     pub height: u32,
     pub samples: Vec<Sample>,
+    /// The [`Settings::depth_tolerance`] the set was refined with; the reconstruction
+    /// uses it to keep surfaces of one object apart.
+    pub depth_tolerance: f32,
 }
 
 impl SampleSet {
@@ -260,10 +264,14 @@ pub(crate) fn quadrant(min: Vec2, max: Vec2, centre: Vec2, q: u8) -> (Vec2, Vec2
 /// True when two samples lie on different surfaces: a different object id, or a
 /// relative depth jump above `tolerance`. Two infinite depths (background) match.
 pub fn is_discontinuous(a: &SampleValue, b: &SampleValue, tolerance: f32) -> bool {
-    if a.object_id != b.object_id {
+    surfaces_differ(a.object_id, a.depth, b.object_id, b.depth, tolerance)
+}
+
+/// [`is_discontinuous`] on the raw fields.
+pub fn surfaces_differ(obj_a: u32, da: f32, obj_b: u32, db: f32, tolerance: f32) -> bool {
+    if obj_a != obj_b {
         return true;
     }
-    let (da, db) = (a.depth, b.depth);
     if !da.is_finite() || !db.is_finite() {
         return da.is_finite() != db.is_finite();
     }

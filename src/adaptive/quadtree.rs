@@ -70,7 +70,7 @@ pub fn refine_with_progress<E: Estimator + ?Sized>(
 ) -> Result<SampleSet> {
     let target = validate(width, height, settings)?;
     if settings.strategy == Strategy::Uniform {
-        let set = stratified(estimator, width, height, target);
+        let set = stratified(estimator, width, height, target, settings.depth_tolerance);
         progress(target, target);
         return Ok(set);
     }
@@ -133,7 +133,13 @@ fn validate(width: u32, height: u32, settings: &Settings) -> Result<usize> {
 
 /// The `Uniform` baseline: `n` samples in `ny ≈ √(n·H/W)` rows, row `j` holding
 /// `⌊(j+1)n/ny⌋ − ⌊jn/ny⌋` evenly spaced cells, each sample at its cell's centre.
-fn stratified<E: Estimator + ?Sized>(est: &E, width: u32, height: u32, n: usize) -> SampleSet {
+fn stratified<E: Estimator + ?Sized>(
+    est: &E,
+    width: u32,
+    height: u32,
+    n: usize,
+    depth_tolerance: f32,
+) -> SampleSet {
     let (w, h) = (width as f64, height as f64);
     let ny = ((n as f64 * h / w).sqrt().round() as usize).clamp(1, n);
     let mut cells = Vec::with_capacity(n);
@@ -166,6 +172,7 @@ fn stratified<E: Estimator + ?Sized>(est: &E, width: u32, height: u32, n: usize)
         width,
         height,
         samples,
+        depth_tolerance,
     }
 }
 
@@ -602,6 +609,7 @@ impl Tree {
             width: self.width,
             height: self.height,
             samples,
+            depth_tolerance: self.settings.depth_tolerance,
         }
     }
 }

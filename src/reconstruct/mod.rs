@@ -8,18 +8,21 @@
 //!   functions exactly and follows the first-order Taylor expansion near every sample,
 //!   which is what makes sparse gradient samples worth more than plain values (Fig. 13).
 //!
-//! **Silhouettes.** A pixel is never interpolated across objects: of the samples that
-//! would contribute (the triangle's corners, or the natural neighbours), the pixel takes
-//! the object that carries the largest share of the interpolation weight (ties: the
-//! object of the single heaviest sample), keeps only that object's samples and
-//! renormalises their weights. Inside one object nothing changes.
+//! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
+//! the same surface when they have the same object id and their depths differ by at
+//! most `SampleSet::depth_tolerance` (relative), the same test the quadtree uses to
+//! force refinement. Of the samples that would contribute (the triangle's corners, or
+//! the natural neighbours), the pixel takes the surface that carries the largest share
+//! of the interpolation weight (each contributing sample is tried as the anchor of a
+//! group; ties go to the heavier anchor), keeps only that surface's samples and
+//! renormalises their weights. Where all contributors share a surface nothing changes.
 //!
 //! **Outside the convex hull** of the samples (a border strip, at most half a block wide
 //! for the quadtree) the image is extrapolated from the nearest sample `s`:
 //! `Linear` extends the plane of the best-shaped triangle around `s` whose corners all
-//! belong to `s`'s object (the one whose smallest barycentric weight is largest), or
+//! lie on `s`'s surface (the one whose smallest barycentric weight is largest), or
 //! takes `s`'s value if there is none; `Gradient` blends the first-order Taylor
-//! expansions `I_k + J_k (p − p_k)` of `s` and its same-object Delaunay neighbours with
+//! expansions `I_k + J_k (p − p_k)` of `s` and its same-surface Delaunay neighbours with
 //! weights `1/|p − p_k|²`. Both are exact on linear images.
 //!
 //! **Determinism and speed.** Rows run in parallel; inside a row the pixels are located
@@ -30,7 +33,7 @@
 
 mod hint;
 
-use crate::adaptive::SampleSet;
+use crate::adaptive::{surfaces_differ, SampleSet};
 use crate::math::Vec3;
 use crate::output::{Channel, OutputImage};
 use crate::{Error, Result};
@@ -135,6 +138,9 @@ struct Data {
     grad_u: Vec<DVec3>,
     grad_v: Vec<DVec3>,
     object: Vec<u32>,
+    depth: Vec<f32>,
+    /// Relative depth jump that separates two surfaces of one object.
+    tolerance: f32,
 }
 
 /// Interpolates the samples to every pixel centre `(x + 0.5, y + 0.5)`.
@@ -163,6 +169,8 @@ pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstructio
         grad_u: set.samples.iter().map(|s| d(s.value.grad_u)).collect(),
         grad_v: set.samples.iter().map(|s| d(s.value.grad_v)).collect(),
         object: set.samples.iter().map(|s| s.value.object_id).collect(),
+        depth: set.samples.iter().map(|s| s.value.depth).collect(),
+        tolerance: set.depth_tolerance,
     };
     let nodes: Vec<Node> = data
         .pos
@@ -239,6 +247,18 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// Whether samples `a` and `b` lie on different surfaces.
+    fn differ(&self, a: usize, b: usize) -> bool {
+        let d = self.data;
+        surfaces_differ(
+            d.object[a],
+            d.depth[a],
+            d.object[b],
+            d.depth[b],
+            d.tolerance,
+        )
+    }
+
     fn sample(&self, v: FixedVertexHandle) -> usize {
         self.dt.vertex(v).data().idx as usize
     }
@@ -281,7 +301,7 @@ impl<'a> Ctx<'a> {
             let (value, nearest) = self.outside(p, hint, mode);
             return (value, nearest.or(next));
         }
-        self.keep_majority_object();
+        self.keep_majority_surface();
         let value = match mode {
             Interpolation::Linear => self
                 .kept
@@ -333,66 +353,49 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Keeps the samples of the object with the largest total weight (ties: the object
-    /// of the heaviest single sample) and renormalises their weights into `kept`.
-    fn keep_majority_object(&mut self) {
-        // Common case first: every contributing sample sees the same object.
-        let first = self.data.object[self.sample(self.weights[0].0)];
-        if self
-            .weights
-            .iter()
-            .all(|&(v, _)| self.data.object[self.sample(v)] == first)
-        {
-            self.kept.clear();
-            for &(v, w) in &self.weights {
-                self.kept.push((self.sample(v), w));
-            }
+    /// Keeps the samples of the surface with the largest total weight and
+    /// renormalises their weights into `kept`. A surface is the set of samples
+    /// compatible with an anchor sample (same object id, relative depth difference within
+    /// the set's tolerance); every contributing sample is tried as the anchor and the
+    /// heaviest group wins (ties: the heavier anchor, then the earlier one).
+    fn keep_majority_surface(&mut self) {
+        self.kept.clear();
+        for k in 0..self.weights.len() {
+            let (v, w) = self.weights[k];
+            self.kept.push((self.sample(v), w));
+        }
+        let (obj, depth, tol) = (&self.data.object, &self.data.depth, self.data.tolerance);
+        let differ = |a: usize, b: usize| surfaces_differ(obj[a], depth[a], obj[b], depth[b], tol);
+        // Common case first: one object, depths within the tolerance of each other.
+        let first = self.kept[0].0;
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        let mut one_object = true;
+        for &(i, _) in &self.kept {
+            one_object &= obj[i] == obj[first];
+            lo = lo.min(depth[i].abs());
+            hi = hi.max(depth[i].abs());
+        }
+        let one_surface = one_object
+            && ((lo.is_finite() && hi - lo <= tol * lo) || (lo.is_infinite() && hi.is_infinite()));
+        if one_surface {
             return;
         }
-        let mut totals: [(u32, f64); 16] = [(0, 0.0); 16];
-        let mut n_obj = 0;
-        let mut heaviest = (0u32, f64::NEG_INFINITY);
-        let mut overflow = false;
-        for &(v, w) in &self.weights {
-            let obj = self.data.object[self.sample(v)];
-            if w > heaviest.1 {
-                heaviest = (obj, w);
-            }
-            match totals[..n_obj].iter_mut().find(|t| t.0 == obj) {
-                Some(t) => t.1 += w,
-                None if n_obj < 16 => {
-                    totals[n_obj] = (obj, w);
-                    n_obj += 1;
-                }
-                None => overflow = true,
-            }
-        }
-        let chosen = if overflow || n_obj == 0 {
-            heaviest.0
-        } else {
-            let best = totals[..n_obj]
+        let mut best = (f64::NEG_INFINITY, f64::NEG_INFINITY, 0usize);
+        for &(a, wa) in &self.kept {
+            let group: f64 = self
+                .kept
                 .iter()
-                .fold(f64::NEG_INFINITY, |m, t| m.max(t.1));
-            let ties = totals[..n_obj].iter().filter(|t| t.1 == best).count();
-            if ties == 1 {
-                totals[..n_obj]
-                    .iter()
-                    .find(|t| t.1 == best)
-                    .map_or(heaviest.0, |t| t.0)
-            } else {
-                heaviest.0
-            }
-        };
-        self.kept.clear();
-        let mut sum = 0.0;
-        for &(v, w) in &self.weights {
-            let i = self.sample(v);
-            if self.data.object[i] == chosen {
-                self.kept.push((i, w));
-                sum += w;
+                .filter(|&&(b, _)| !differ(a, b))
+                .map(|&(_, wb)| wb)
+                .sum();
+            if group > best.0 || (group == best.0 && wa > best.1) {
+                best = (group, wa, a);
             }
         }
-        if sum > 0.0 && n_obj > 1 {
+        let anchor = best.2;
+        self.kept.retain(|&(b, _)| !differ(anchor, b));
+        let sum: f64 = self.kept.iter().map(|k| k.1).sum();
+        if sum > 0.0 {
             for k in &mut self.kept {
                 k.1 /= sum;
             }
@@ -452,7 +455,6 @@ impl<'a> Ctx<'a> {
 
     fn extrapolate(&self, s: VHandle<'_>, p: Point2<f64>, mode: Interpolation) -> DVec3 {
         let si = s.data().idx as usize;
-        let obj = self.data.object[si];
         let pd = DVec2::new(p.x, p.y);
         match mode {
             Interpolation::Linear => self.extend_plane(s, pd).unwrap_or(self.data.value[si]),
@@ -461,7 +463,7 @@ impl<'a> Ctx<'a> {
                 let mut wsum = 0.0;
                 let neighbours = s.out_edges().map(|e| e.to().data().idx as usize);
                 for k in std::iter::once(si).chain(neighbours) {
-                    if self.data.object[k] != obj {
+                    if self.differ(si, k) {
                         continue;
                     }
                     let diff = pd - self.data.pos[k];
@@ -483,14 +485,14 @@ impl<'a> Ctx<'a> {
     /// Linear extrapolation with the plane of the best-shaped same-object triangle
     /// around `s` (largest smallest barycentric weight of `p`).
     fn extend_plane(&self, s: VHandle<'_>, p: DVec2) -> Option<DVec3> {
-        let obj = self.data.object[s.data().idx as usize];
+        let si = s.data().idx as usize;
         let mut best: Option<(f64, [usize; 3], [f64; 3])> = None;
         for e in s.out_edges() {
             let Some(face) = e.face().as_inner() else {
                 continue;
             };
             let idx = face.vertices().map(|v| v.data().idx as usize);
-            if idx.iter().any(|&i| self.data.object[i] != obj) {
+            if idx.iter().any(|&i| self.differ(si, i)) {
                 continue;
             }
             let [a, b, c] = idx.map(|i| self.data.pos[i]);
