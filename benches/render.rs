@@ -14,10 +14,7 @@ fn cornell(c: &mut Criterion) {
     let mut group = c.benchmark_group("cornell_128x128_4spp");
     group.sample_size(10);
     group.throughput(Throughput::Elements((w * h * spp) as u64));
-    for (name, integrator) in [
-        ("path_depth8", Integrator::Path),
-        ("direct", Integrator::Direct),
-    ] {
+    for (name, integrator) in [("path_depth8", Integrator::Path), ("direct", Integrator::Direct)] {
         let opts = RenderOptions {
             spp: Some(spp),
             max_depth: Some(8),
