@@ -6,11 +6,13 @@
 //! `brdf` holds the materials, `math` the shared numerics (frames, warps, samplers).
 
 pub mod accel;
+pub mod adaptive;
 pub mod brdf;
 pub mod error;
 pub mod flatland;
 pub mod math;
 pub mod output;
+pub mod reconstruct;
 pub mod render;
 pub mod scene;
 

@@ -1,0 +1,280 @@
+//! estimator + budget → adaptively placed image samples (quadtree of Sec. 9.1).
+//!
+//! This stage decides *where* the image is evaluated; it never renders anything itself.
+//! Whatever produces per-point estimates (the path tracer, or an analytic image in the
+//! tests and benches) implements [`Estimator`]; [`refine`] spends a fixed sample budget
+//! on a quadtree whose squares are refined in order of `metric × area`, and hands back a
+//! [`SampleSet`] that `reconstruct` turns into pixels.
+//!
+//! Coordinates are continuous pixel coordinates: the image covers `[0, W] × [0, H]`, the
+//! origin is the top-left corner, `u` grows to the right, `v` grows downwards and pixel
+//! `(i, j)` has its centre at `(i + 0.5, j + 0.5)`. Gradients are per pixel in the same axes.
+
+mod quadtree;
+
+use crate::math::Vec2;
+use crate::math::Vec3;
+use crate::{Error, Result};
+
+pub use quadtree::{refine, refine_with_progress};
+
+/// Object id for "no object" (background / environment). Only equality matters.
+pub const NO_OBJECT: u32 = u32::MAX;
+
+/// What one evaluation of the image at a point returns.
+///
+/// `radiance`, the image gradient and the geometric ids are required; the optional
+/// scalars feed the strategies that need renderer-side knowledge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleValue {
+    /// Linear RGB radiance at the point.
+    pub radiance: Vec3,
+    /// ∂I/∂u, per pixel (u to the right), per channel — Eq. 26–28 in the renderer.
+    pub grad_u: Vec3,
+    /// ∂I/∂v, per pixel (v downwards), per channel.
+    pub grad_v: Vec3,
+    /// Id of the visible object ([`NO_OBJECT`] for the background). Squares whose
+    /// neighbouring samples see different ids are always refined to pixel size, and the
+    /// reconstruction never interpolates across different ids.
+    pub object_id: u32,
+    /// Distance along the camera ray (any monotone depth works); `INFINITY` for the
+    /// background. A relative jump above [`Settings::depth_tolerance`] between
+    /// neighbouring samples counts as an object boundary (self-occlusion silhouettes),
+    /// for refinement and for reconstruction alike.
+    pub depth: f32,
+    /// Optional non-negative weight multiplied into every strategy's metric (e.g. to
+    /// down-weight a region the caller cares less about). `None` means 1.
+    pub importance: Option<f32>,
+    /// Durand et al. 2005 frequency metric `(1/γ) 2kz/(n₀·v) Ω_ρ` (Sec. 9.1). The
+    /// renderer fills it; required by [`Strategy::Durand`].
+    pub durand: Option<f32>,
+    /// Magnitude of the visibility (soft-shadow) image gradient, Eq. 45–49. The renderer
+    /// fills it; required by [`Strategy::GradientVis`].
+    pub vis_gradient: Option<f32>,
+}
+
+impl SampleValue {
+    /// A sample of a smooth image on one object at unit depth, no optional data.
+    pub fn new(radiance: Vec3, grad_u: Vec3, grad_v: Vec3) -> Self {
+        Self {
+            radiance,
+            grad_u,
+            grad_v,
+            object_id: 0,
+            depth: 1.0,
+            importance: None,
+            durand: None,
+            vis_gradient: None,
+        }
+    }
+
+    /// Frobenius norm of the 3×2 image Jacobian: |∇I| over all colour channels, so that
+    /// an iso-luminant colour edge still counts.
+    pub fn gradient_norm(&self) -> f32 {
+        (self.grad_u.length_squared() + self.grad_v.length_squared()).sqrt()
+    }
+}
+
+/// Something that can evaluate the image at a continuous pixel position.
+///
+/// The renderer implements it (one converged estimate per call); the tests and benches
+/// implement it with analytic images so that sampling and reconstruction can be checked
+/// against exact answers. Must be deterministic: the same `p` gives the same value.
+pub trait Estimator: Sync {
+    fn estimate(&self, p: Vec2) -> SampleValue;
+}
+
+impl<F: Fn(Vec2) -> SampleValue + Sync> Estimator for F {
+    fn estimate(&self, p: Vec2) -> SampleValue {
+        self(p)
+    }
+}
+
+/// Where the samples go. All strategies spend exactly the same number of samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Strategy {
+    /// A regular (row-stratified) pattern, no quadtree: the baseline.
+    Uniform,
+    /// Analytic gradient magnitude |∇I| from the estimator (the paper's method, Sec. 9.1).
+    Gradient,
+    /// The Durand et al. 2005 metric, taken from [`SampleValue::durand`].
+    Durand,
+    /// Numerical contrast between neighbouring samples, |ΔI| / distance — the classic
+    /// adaptive sampler the paper compares against (Sec. 9.2, Fig. 16–18).
+    Variance,
+    /// |∇I| plus the visibility-gradient magnitude [`SampleValue::vis_gradient`]
+    /// (the extension suggested in Sec. 9.3).
+    GradientVis,
+    /// A Hessian estimate |ΔJ| / distance from the analytic gradients of neighbouring
+    /// samples: the second-order criterion of Sec. 9.3 (Eq. 29 would give it exactly).
+    SecondOrder,
+}
+
+impl Strategy {
+    /// All strategies, for tables and CLI listings.
+    pub const ALL: [Strategy; 6] = [
+        Strategy::Uniform,
+        Strategy::Gradient,
+        Strategy::Durand,
+        Strategy::Variance,
+        Strategy::GradientVis,
+        Strategy::SecondOrder,
+    ];
+
+    /// The snake_case name used in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Uniform => "uniform",
+            Strategy::Gradient => "gradient",
+            Strategy::Durand => "durand",
+            Strategy::Variance => "variance",
+            Strategy::GradientVis => "gradient_vis",
+            Strategy::SecondOrder => "second_order",
+        }
+    }
+
+    /// Parses [`Strategy::name`]; the error lists the valid choices.
+    pub fn from_name(name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|s| s.name() == name)
+            .ok_or_else(|| Error::Option {
+                option: "strategy".into(),
+                message: format!(
+                    "unknown strategy '{name}', expected one of: {}",
+                    Self::ALL.map(|s| s.name()).join(", ")
+                ),
+            })
+    }
+}
+
+/// Parameters of [`refine`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub strategy: Strategy,
+    /// Samples per pixel: the refiner returns exactly `round(budget · W · H)` samples.
+    /// Must lie in `(0, 16]`.
+    pub budget: f32,
+    /// Side of the initial blocks in pixels (the paper uses 8). Doubled as often as
+    /// needed when the budget cannot pay for one sample per block.
+    pub block_size: u32,
+    /// Relative depth jump `|d₁ − d₂| / min(d₁, d₂)` above which two neighbouring
+    /// samples of the same object are treated as lying on different surfaces.
+    pub depth_tolerance: f32,
+}
+
+impl Settings {
+    /// The paper's setup: 8×8 initial blocks, the given strategy and budget.
+    pub fn new(strategy: Strategy, budget: f32) -> Self {
+        Self {
+            strategy,
+            budget,
+            block_size: 8,
+            depth_tolerance: 0.1,
+        }
+    }
+}
+
+/// One evaluated sample and the quadtree square it is the centre of.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Position in continuous pixel coordinates (the centre of its cell).
+    pub pos: Vec2,
+    /// The cell (square, or rectangle where it is clipped by the image border).
+    pub cell_min: Vec2,
+    pub cell_max: Vec2,
+    /// Bit `q` set when quadrant `q` (0 top-left, 1 top-right, 2 bottom-left,
+    /// 3 bottom-right) was refined into a child cell. 0 for a leaf, 15 for a full split;
+    /// anything else only for the one partial split that lands the budget exactly.
+    pub split: u8,
+    pub value: SampleValue,
+}
+
+impl Sample {
+    /// The longer side of the cell, in pixels.
+    pub fn size(&self) -> f32 {
+        let e = self.cell_max - self.cell_min;
+        e.x.max(e.y)
+    }
+}
+
+/// The samples of one image, in creation order (deterministic).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleSet {
+    pub width: u32,
+    pub height: u32,
+    pub samples: Vec<Sample>,
+    /// The [`Settings::depth_tolerance`] the set was refined with; the reconstruction
+    /// uses it to keep surfaces of one object apart.
+    pub depth_tolerance: f32,
+}
+
+impl SampleSet {
+    /// The final partition of the image: every leaf cell, plus the quadrants of a
+    /// partially split cell that got no child. Rectangles as `(min, max)`.
+    pub fn leaf_regions(&self) -> Vec<(Vec2, Vec2)> {
+        let mut out = Vec::new();
+        for s in &self.samples {
+            if s.split == 0 {
+                out.push((s.cell_min, s.cell_max));
+            } else if s.split != 15 {
+                for q in 0..4u8 {
+                    if s.split & (1 << q) == 0 {
+                        out.push(quadrant(s.cell_min, s.cell_max, s.pos, q));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The `samples.density` plane: number of samples whose position falls in each
+    /// pixel (row-major, top row first). It sums to the sample count, so it shows the
+    /// sample locations as the paper's Fig. 14/15 do and integrates to the budget.
+    pub fn density(&self) -> Vec<f32> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut d = vec![0.0f32; w * h];
+        if w == 0 || h == 0 {
+            return d;
+        }
+        for s in &self.samples {
+            let x = (s.pos.x.floor().max(0.0) as usize).min(w - 1);
+            let y = (s.pos.y.floor().max(0.0) as usize).min(h - 1);
+            d[y * w + x] += 1.0;
+        }
+        d
+    }
+}
+
+/// Quadrant `q` of the cell `[min, max]` split at `centre`.
+pub(crate) fn quadrant(min: Vec2, max: Vec2, centre: Vec2, q: u8) -> (Vec2, Vec2) {
+    let (x0, x1) = if q & 1 == 0 {
+        (min.x, centre.x)
+    } else {
+        (centre.x, max.x)
+    };
+    let (y0, y1) = if q & 2 == 0 {
+        (min.y, centre.y)
+    } else {
+        (centre.y, max.y)
+    };
+    (Vec2::new(x0, y0), Vec2::new(x1, y1))
+}
+
+/// True when two samples lie on different surfaces: a different object id, or a
+/// relative depth jump above `tolerance`. Two infinite depths (background) match.
+pub fn is_discontinuous(a: &SampleValue, b: &SampleValue, tolerance: f32) -> bool {
+    surfaces_differ(a.object_id, a.depth, b.object_id, b.depth, tolerance)
+}
+
+/// [`is_discontinuous`] on the raw fields.
+pub fn surfaces_differ(obj_a: u32, da: f32, obj_b: u32, db: f32, tolerance: f32) -> bool {
+    if obj_a != obj_b {
+        return true;
+    }
+    if !da.is_finite() || !db.is_finite() {
+        return da.is_finite() != db.is_finite();
+    }
+    let near = da.abs().min(db.abs());
+    (da - db).abs() > tolerance * near
+}

@@ -1,0 +1,515 @@
+//! samples → pixels: Delaunay triangulation of the sample positions (spade) and
+//! interpolation at every pixel centre, linear or gradient-aware C1 (Sec. 8.1, 9.1).
+//!
+//! * [`Interpolation::Linear`]: barycentric interpolation in the Delaunay triangle that
+//!   contains the pixel centre — the paper's "simple linear interpolation" baseline.
+//! * [`Interpolation::Gradient`]: Sibson's C1 natural-neighbour interpolant (flatness
+//!   0.5) fed with the samples' analytic gradients ∂I/∂u, ∂I/∂v. It reproduces linear
+//!   functions exactly and follows the first-order Taylor expansion near every sample,
+//!   which is what makes sparse gradient samples worth more than plain values (Fig. 13).
+//!
+//! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
+//! the same surface when they have the same object id and their depths differ by at
+//! most `SampleSet::depth_tolerance` (relative), the same test the quadtree uses to
+//! force refinement. Of the samples that would contribute (the triangle's corners, or
+//! the natural neighbours), the pixel takes the surface that carries the largest share
+//! of the interpolation weight (each contributing sample is tried as the anchor of a
+//! group; ties go to the heavier anchor), keeps only that surface's samples and
+//! renormalises their weights. Where all contributors share a surface nothing changes.
+//!
+//! **Outside the convex hull** of the samples (a border strip, at most half a block wide
+//! for the quadtree) the image is extrapolated from the nearest sample `s`:
+//! `Linear` extends the plane of the best-shaped triangle around `s` whose corners all
+//! lie on `s`'s surface (the one whose smallest barycentric weight is largest), or
+//! takes `s`'s value if there is none; `Gradient` blends the first-order Taylor
+//! expansions `I_k + J_k (p − p_k)` of `s` and its same-surface Delaunay neighbours with
+//! weights `1/|p − p_k|²`. Both are exact on linear images.
+//!
+//! **Determinism and speed.** Rows run in parallel; inside a row the pixels are located
+//! in scanline order, each walk starting at a vertex of the previous pixel's answer, and
+//! each row starts from a hint computed sequentially beforehand. A walk then depends
+//! only on the row, never on which thread ran it, so the image is bit-identical for
+//! any thread count.
+
+mod hint;
+
+use crate::adaptive::{surfaces_differ, SampleSet};
+use crate::math::Vec3;
+use crate::output::{Channel, OutputImage};
+use crate::{Error, Result};
+use glam::{DVec2, DVec3};
+use hint::ScanlineHint;
+use rayon::prelude::*;
+use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag, VertexHandle};
+use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation, Triangulation};
+
+/// How pixel values are interpolated from the samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Interpolation {
+    /// Barycentric (piecewise linear over the Delaunay triangles); ignores gradients.
+    Linear,
+    /// Sibson C1 natural-neighbour interpolation with the samples' analytic gradients.
+    Gradient,
+}
+
+impl Interpolation {
+    pub fn name(self) -> &'static str {
+        match self {
+            Interpolation::Linear => "linear",
+            Interpolation::Gradient => "gradient",
+        }
+    }
+
+    /// Parses [`Interpolation::name`]; the error lists the valid choices.
+    pub fn from_name(name: &str) -> Result<Self> {
+        match name {
+            "linear" => Ok(Interpolation::Linear),
+            "gradient" => Ok(Interpolation::Gradient),
+            _ => Err(Error::Option {
+                option: "interpolation".into(),
+                message: format!(
+                    "unknown interpolation '{name}', expected one of: linear, gradient"
+                ),
+            }),
+        }
+    }
+}
+
+/// The reconstructed image and the sample-density plane, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reconstruction {
+    pub width: usize,
+    pub height: usize,
+    pub image: Vec<Vec3>,
+    /// Samples per pixel (`SampleSet::density`): the `samples.density` EXR plane.
+    pub density: Vec<f32>,
+}
+
+impl Reconstruction {
+    /// The planes as output channels: `R`, `G`, `B` and `samples.density`.
+    pub fn to_output_image(&self) -> OutputImage {
+        let plane = |f: fn(&Vec3) -> f32| self.image.iter().map(f).collect::<Vec<f32>>();
+        OutputImage {
+            width: self.width,
+            height: self.height,
+            channels: vec![
+                Channel {
+                    name: "R".into(),
+                    data: plane(|c| c.x),
+                },
+                Channel {
+                    name: "G".into(),
+                    data: plane(|c| c.y),
+                },
+                Channel {
+                    name: "B".into(),
+                    data: plane(|c| c.z),
+                },
+                Channel {
+                    name: "samples.density".into(),
+                    data: self.density.clone(),
+                },
+            ],
+        }
+    }
+}
+
+/// A triangulation vertex: a sample position and the sample's index.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    pos: Point2<f64>,
+    idx: u32,
+}
+
+impl HasPosition for Node {
+    type Scalar = f64;
+    fn position(&self) -> Point2<f64> {
+        self.pos
+    }
+}
+
+type Dt = DelaunayTriangulation<Node, (), (), (), ScanlineHint>;
+type VHandle<'a> = VertexHandle<'a, Node, (), (), ()>;
+
+/// Per-sample data the interpolation reads, in f64.
+struct Data {
+    pos: Vec<DVec2>,
+    value: Vec<DVec3>,
+    grad_u: Vec<DVec3>,
+    grad_v: Vec<DVec3>,
+    object: Vec<u32>,
+    depth: Vec<f32>,
+    /// Relative depth jump that separates two surfaces of one object.
+    tolerance: f32,
+}
+
+/// Interpolates the samples to every pixel centre `(x + 0.5, y + 0.5)`.
+///
+/// Errors: an empty image or sample set, a non-finite sample position, or positions
+/// spade rejects (magnitudes beyond ~1e20 or below ~1e-20 other than zero).
+pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstruction> {
+    let (w, h) = (set.width as usize, set.height as usize);
+    let bad = |message: String| Error::Option {
+        option: "samples".into(),
+        message,
+    };
+    if w == 0 || h == 0 || set.samples.is_empty() {
+        return Err(bad(format!(
+            "cannot reconstruct a {w}x{h} image from {} samples",
+            set.samples.len()
+        )));
+    }
+    if let Some(s) = set.samples.iter().find(|s| !s.pos.is_finite()) {
+        return Err(bad(format!("sample position {} is not finite", s.pos)));
+    }
+    let d = |v: Vec3| v.as_dvec3();
+    let data = Data {
+        pos: set.samples.iter().map(|s| s.pos.as_dvec2()).collect(),
+        value: set.samples.iter().map(|s| d(s.value.radiance)).collect(),
+        grad_u: set.samples.iter().map(|s| d(s.value.grad_u)).collect(),
+        grad_v: set.samples.iter().map(|s| d(s.value.grad_v)).collect(),
+        object: set.samples.iter().map(|s| s.value.object_id).collect(),
+        depth: set.samples.iter().map(|s| s.value.depth).collect(),
+        tolerance: set.depth_tolerance,
+    };
+    let nodes: Vec<Node> = data
+        .pos
+        .iter()
+        .enumerate()
+        .map(|(i, p)| Node {
+            pos: Point2::new(p.x, p.y),
+            idx: i as u32,
+        })
+        .collect();
+    // `bulk_load_stable` keeps the first of duplicate positions, so a duplicated
+    // sample simply does not take part.
+    let dt =
+        Dt::bulk_load_stable(nodes).map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
+
+    let centre = |x: usize, y: usize| Point2::new(x as f64 + 0.5, y as f64 + 0.5);
+    let mut row_start = Vec::with_capacity(h);
+    let mut hint = FixedVertexHandle::from_index(0);
+    for y in 0..h {
+        hint = vertex_of(&dt, dt.locate_with_hint(centre(0, y), hint)).unwrap_or(hint);
+        row_start.push(hint);
+    }
+
+    let mut image = vec![Vec3::ZERO; w * h];
+    image.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut ctx = Ctx::new(&dt, &data);
+        let mut hint = row_start[y];
+        for (x, out) in row.iter_mut().enumerate() {
+            let (value, next) = ctx.pixel(centre(x, y), hint, mode);
+            hint = next.unwrap_or(hint);
+            *out = value.as_vec3();
+        }
+    });
+    Ok(Reconstruction {
+        width: w,
+        height: h,
+        image,
+        density: set.density(),
+    })
+}
+
+/// A vertex of a locate answer, used as the next walk's start.
+fn vertex_of(dt: &Dt, loc: PositionInTriangulation) -> Option<FixedVertexHandle> {
+    match loc {
+        PositionInTriangulation::OnVertex(v) => Some(v),
+        PositionInTriangulation::OnEdge(e) | PositionInTriangulation::OutsideOfConvexHull(e) => {
+            Some(dt.directed_edge(e).from().fix())
+        }
+        PositionInTriangulation::OnFace(f) => Some(dt.face(f).vertices()[0].fix()),
+        PositionInTriangulation::NoTriangulation => None,
+    }
+}
+
+/// Per-row scratch state (spade's natural-neighbour helper is not `Sync`).
+struct Ctx<'a> {
+    dt: &'a Dt,
+    data: &'a Data,
+    nn: spade::NaturalNeighbor<'a, Dt>,
+    weights: Vec<(FixedVertexHandle, f64)>,
+    kept: Vec<(usize, f64)>,
+    /// The triangle of the previous pixel (linear mode), tried before walking.
+    last_face: Option<FixedFaceHandle<InnerTag>>,
+}
+
+impl<'a> Ctx<'a> {
+    fn new(dt: &'a Dt, data: &'a Data) -> Self {
+        Self {
+            dt,
+            data,
+            nn: dt.natural_neighbor(),
+            weights: Vec::with_capacity(16),
+            kept: Vec::with_capacity(16),
+            last_face: None,
+        }
+    }
+
+    /// Whether samples `a` and `b` lie on different surfaces.
+    fn differ(&self, a: usize, b: usize) -> bool {
+        let d = self.data;
+        surfaces_differ(
+            d.object[a],
+            d.depth[a],
+            d.object[b],
+            d.depth[b],
+            d.tolerance,
+        )
+    }
+
+    fn sample(&self, v: FixedVertexHandle) -> usize {
+        self.dt.vertex(v).data().idx as usize
+    }
+
+    /// The value at `p` and the vertex to start the next walk from.
+    fn pixel(
+        &mut self,
+        p: Point2<f64>,
+        hint: FixedVertexHandle,
+        mode: Interpolation,
+    ) -> (DVec3, Option<FixedVertexHandle>) {
+        self.weights.clear();
+        let mut next = None;
+        match mode {
+            Interpolation::Linear => {
+                // Neighbouring pixels mostly fall in the same triangle: test it first
+                // (strictly inside, so the answer is the one `locate` would give).
+                if !self.in_last_face(p) {
+                    let loc = self.dt.locate_with_hint(p, hint);
+                    next = vertex_of(self.dt, loc);
+                    self.last_face = match loc {
+                        PositionInTriangulation::OnFace(f) => Some(f),
+                        _ => None,
+                    };
+                    self.barycentric(p, loc);
+                }
+            }
+            Interpolation::Gradient => {
+                // spade's natural-neighbour query locates `p` through the hint
+                // generator; point it at the previous pixel's neighbourhood so the
+                // walk is short and depends only on the row, not on the thread.
+                ScanlineHint::set(hint);
+                let mut weights = std::mem::take(&mut self.weights);
+                self.nn.get_weights(p, &mut weights);
+                self.weights = weights;
+                next = self.weights.first().map(|w| w.0);
+            }
+        }
+        if self.weights.is_empty() {
+            let (value, nearest) = self.outside(p, hint, mode);
+            return (value, nearest.or(next));
+        }
+        self.keep_majority_surface();
+        let value = match mode {
+            Interpolation::Linear => self
+                .kept
+                .iter()
+                .fold(DVec3::ZERO, |acc, &(i, w)| acc + self.data.value[i] * w),
+            Interpolation::Gradient => self.sibson_c1(p),
+        };
+        (value, next)
+    }
+
+    /// Fills the barycentric weights when `p` lies strictly inside the previous
+    /// pixel's triangle.
+    fn in_last_face(&mut self, p: Point2<f64>) -> bool {
+        let Some(f) = self.last_face else {
+            return false;
+        };
+        let face = self.dt.face(f);
+        let c = face.barycentric_interpolation(p);
+        if c.iter().all(|&w| w > 1e-9) {
+            let v = face.vertices();
+            self.weights
+                .extend([(v[0].fix(), c[0]), (v[1].fix(), c[1]), (v[2].fix(), c[2])]);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Barycentric weights of `p` in the located element.
+    fn barycentric(&mut self, p: Point2<f64>, loc: PositionInTriangulation) {
+        match loc {
+            PositionInTriangulation::OnVertex(v) => self.weights.push((v, 1.0)),
+            PositionInTriangulation::OnEdge(e) => {
+                let [a, b] = self.dt.directed_edge(e).vertices();
+                let (pa, pb) = (a.position(), b.position());
+                let ab = DVec2::new(pb.x - pa.x, pb.y - pa.y);
+                let ap = DVec2::new(p.x - pa.x, p.y - pa.y);
+                let t = (ap.dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                self.weights.extend([(a.fix(), 1.0 - t), (b.fix(), t)]);
+            }
+            PositionInTriangulation::OnFace(f) => {
+                let face = self.dt.face(f);
+                let c = face.barycentric_interpolation(p);
+                let v = face.vertices();
+                self.weights
+                    .extend([(v[0].fix(), c[0]), (v[1].fix(), c[1]), (v[2].fix(), c[2])]);
+            }
+            _ => {}
+        }
+    }
+
+    /// Keeps the samples of the surface with the largest total weight and
+    /// renormalises their weights into `kept`. A surface is the set of samples
+    /// compatible with an anchor sample (same object id, relative depth difference within
+    /// the set's tolerance); every contributing sample is tried as the anchor and the
+    /// heaviest group wins (ties: the heavier anchor, then the earlier one).
+    fn keep_majority_surface(&mut self) {
+        self.kept.clear();
+        for k in 0..self.weights.len() {
+            let (v, w) = self.weights[k];
+            self.kept.push((self.sample(v), w));
+        }
+        let (obj, depth, tol) = (&self.data.object, &self.data.depth, self.data.tolerance);
+        let differ = |a: usize, b: usize| surfaces_differ(obj[a], depth[a], obj[b], depth[b], tol);
+        // Common case first: one object, depths within the tolerance of each other.
+        let first = self.kept[0].0;
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        let mut one_object = true;
+        for &(i, _) in &self.kept {
+            one_object &= obj[i] == obj[first];
+            lo = lo.min(depth[i].abs());
+            hi = hi.max(depth[i].abs());
+        }
+        let one_surface = one_object
+            && ((lo.is_finite() && hi - lo <= tol * lo) || (lo.is_infinite() && hi.is_infinite()));
+        if one_surface {
+            return;
+        }
+        let mut best = (f64::NEG_INFINITY, f64::NEG_INFINITY, 0usize);
+        for &(a, wa) in &self.kept {
+            let group: f64 = self
+                .kept
+                .iter()
+                .filter(|&&(b, _)| !differ(a, b))
+                .map(|&(_, wb)| wb)
+                .sum();
+            if group > best.0 || (group == best.0 && wa > best.1) {
+                best = (group, wa, a);
+            }
+        }
+        let anchor = best.2;
+        self.kept.retain(|&(b, _)| !differ(anchor, b));
+        let sum: f64 = self.kept.iter().map(|k| k.1).sum();
+        if sum > 0.0 {
+            for k in &mut self.kept {
+                k.1 /= sum;
+            }
+        }
+    }
+
+    /// Sibson's C1 interpolant with flatness 0.5 on the kept natural neighbours, per
+    /// colour channel — the formula of spade's `interpolate_gradient` (Sibson 1981;
+    /// Flötotto's thesis §4.1), written out so that it runs on a filtered neighbour set
+    /// and on three channels at once:
+    /// `ζ_i = I_i + ∇I_i·(p − p_i)`, `c_i = λ_i / r_i`, `α = Σ c_i r_i² / Σ c_i`,
+    /// `β = Σ λ_i r_i²`, `I = (α Σ λ_i I_i + β Σ c_i ζ_i / Σ c_i) / (α + β)`.
+    fn sibson_c1(&self, p: Point2<f64>) -> DVec3 {
+        let p = DVec2::new(p.x, p.y);
+        let (mut sum_c0, mut sum_c1) = (DVec3::ZERO, DVec3::ZERO);
+        let (mut sum_c1_w, mut alpha, mut beta) = (0.0, 0.0, 0.0);
+        for &(i, w) in &self.kept {
+            let diff = p - self.data.pos[i];
+            let r2 = diff.length_squared();
+            if r2 == 0.0 {
+                return self.data.value[i];
+            }
+            let c1_w = w / r2.sqrt();
+            let zeta =
+                self.data.value[i] + self.data.grad_u[i] * diff.x + self.data.grad_v[i] * diff.y;
+            alpha += c1_w * r2;
+            beta += w * r2;
+            sum_c1_w += c1_w;
+            sum_c1 += zeta * c1_w;
+            sum_c0 += self.data.value[i] * w;
+        }
+        if sum_c1_w.is_nan() || sum_c1_w <= 0.0 {
+            return sum_c0;
+        }
+        alpha /= sum_c1_w;
+        sum_c1 /= sum_c1_w;
+        let denom = alpha + beta;
+        if denom.is_nan() || denom <= 0.0 {
+            return sum_c0;
+        }
+        (sum_c0 * alpha + sum_c1 * beta) / denom
+    }
+
+    /// Extrapolation outside the convex hull (see the module documentation).
+    fn outside(
+        &mut self,
+        p: Point2<f64>,
+        hint: FixedVertexHandle,
+        mode: Interpolation,
+    ) -> (DVec3, Option<FixedVertexHandle>) {
+        ScanlineHint::set(hint);
+        let Some(s) = self.dt.nearest_neighbor(p) else {
+            return (DVec3::ZERO, None);
+        };
+        (self.extrapolate(s, p, mode), Some(s.fix()))
+    }
+
+    fn extrapolate(&self, s: VHandle<'_>, p: Point2<f64>, mode: Interpolation) -> DVec3 {
+        let si = s.data().idx as usize;
+        let pd = DVec2::new(p.x, p.y);
+        match mode {
+            Interpolation::Linear => self.extend_plane(s, pd).unwrap_or(self.data.value[si]),
+            Interpolation::Gradient => {
+                let mut acc = DVec3::ZERO;
+                let mut wsum = 0.0;
+                let neighbours = s.out_edges().map(|e| e.to().data().idx as usize);
+                for k in std::iter::once(si).chain(neighbours) {
+                    if self.differ(si, k) {
+                        continue;
+                    }
+                    let diff = pd - self.data.pos[k];
+                    let r2 = diff.length_squared();
+                    let taylor = self.data.value[k]
+                        + self.data.grad_u[k] * diff.x
+                        + self.data.grad_v[k] * diff.y;
+                    if r2 == 0.0 {
+                        return taylor;
+                    }
+                    acc += taylor / r2;
+                    wsum += 1.0 / r2;
+                }
+                acc / wsum
+            }
+        }
+    }
+
+    /// Linear extrapolation with the plane of the best-shaped same-object triangle
+    /// around `s` (largest smallest barycentric weight of `p`).
+    fn extend_plane(&self, s: VHandle<'_>, p: DVec2) -> Option<DVec3> {
+        let si = s.data().idx as usize;
+        let mut best: Option<(f64, [usize; 3], [f64; 3])> = None;
+        for e in s.out_edges() {
+            let Some(face) = e.face().as_inner() else {
+                continue;
+            };
+            let idx = face.vertices().map(|v| v.data().idx as usize);
+            if idx.iter().any(|&i| self.differ(si, i)) {
+                continue;
+            }
+            let [a, b, c] = idx.map(|i| self.data.pos[i]);
+            let det = (b - a).perp_dot(c - a);
+            if det == 0.0 {
+                continue;
+            }
+            let l1 = (p - a).perp_dot(c - a) / det;
+            let l2 = (b - a).perp_dot(p - a) / det;
+            let l = [1.0 - l1 - l2, l1, l2];
+            let score = l[0].min(l[1]).min(l[2]);
+            if best.is_none_or(|b| score > b.0) {
+                best = Some((score, idx, l));
+            }
+        }
+        best.map(|(_, idx, l)| {
+            (0..3).fold(DVec3::ZERO, |acc, k| acc + self.data.value[idx[k]] * l[k])
+        })
+    }
+}
