@@ -11,11 +11,16 @@ use super::Vec2;
 const SOBOL_DIMS: u32 = sobol_burley::NUM_DIMENSIONS;
 
 /// The sampler of one (pixel, sample) pair: hands out dimensions in order.
+/// Sobol values are computed four dimensions at a time (`sample_4d`, SIMD) and
+/// cached, since consecutive dimensions are almost always consumed together.
 #[derive(Clone, Debug)]
 pub struct PixelSampler {
     index: u32,
     seed: u32,
     dim: u32,
+    /// The dimension set (dim / 4) held in `cache`, or u32::MAX.
+    cached_set: u32,
+    cache: [f32; 4],
 }
 
 impl PixelSampler {
@@ -25,6 +30,8 @@ impl PixelSampler {
             index: sample,
             seed: hash2(pixel, seed),
             dim: 0,
+            cached_set: u32::MAX,
+            cache: [0.0; 4],
         }
     }
 
@@ -33,7 +40,12 @@ impl PixelSampler {
         let d = self.dim;
         self.dim += 1;
         if d < SOBOL_DIMS && self.index < (1 << 16) {
-            sobol_burley::sample(self.index, d, self.seed)
+            let set = d / 4;
+            if set != self.cached_set {
+                self.cache = sobol_burley::sample_4d(self.index, set, self.seed);
+                self.cached_set = set;
+            }
+            self.cache[(d % 4) as usize]
         } else {
             let h = hash2(hash2(self.index, d), self.seed);
             (h >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
@@ -79,6 +91,17 @@ mod tests {
             assert_eq!(x, b.next_1d());
             assert!((0.0..1.0).contains(&x));
         }
+    }
+
+    #[test]
+    fn cached_4d_values_equal_single_dimension_values() {
+        let mut p = PixelSampler::new(5, 9, 3);
+        let seed = hash2(5, 3);
+        for d in 0..40 {
+            assert_eq!(p.next_1d(), sobol_burley::sample(9, d, seed), "dim {d}");
+        }
+        p.set_dimension(13);
+        assert_eq!(p.next_1d(), sobol_burley::sample(9, 13, seed));
     }
 
     #[test]

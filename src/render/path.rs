@@ -16,8 +16,9 @@ use crate::scene::Scene;
 /// Sampler dimensions used per path vertex; fixed so that vertex k always reads
 /// the same dimensions whatever happened at earlier vertices.
 const DIMS_PER_BOUNCE: u32 = 8;
-/// The first two dimensions jitter the position in the pixel.
-const FIRST_BOUNCE_DIM: u32 = 2;
+/// The first two dimensions jitter the position in the pixel; bounces start at a
+/// multiple of four so that each reads whole 4D Sobol sets.
+const FIRST_BOUNCE_DIM: u32 = 4;
 
 /// Configuration shared by all samples of a render.
 pub struct PathTracer<'a> {
