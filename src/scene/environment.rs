@@ -123,17 +123,16 @@ pub fn load_latlong(path: &Path, scale: f32) -> crate::Result<Environment> {
         .unwrap_or_default();
     let (width, height, texels) = match ext.as_str() {
         "hdr" => {
-            let img = image::ImageReader::open(path)
-                .map_err(|source| crate::Error::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })?
-                .with_guessed_format()
-                .map_err(|source| crate::Error::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })?
-                .decode()
+            let mut bytes = std::fs::read(path).map_err(|source| crate::Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+            // Radiance files may start with "#?RGBE" (Mitsuba and others write it)
+            // as well as "#?RADIANCE"; the `image` decoder accepts only the latter.
+            if bytes.starts_with(b"#?RGBE\n") {
+                bytes.splice(0..6, b"#?RADIANCE".iter().copied());
+            }
+            let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Hdr)
                 .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
                 .into_rgb32f();
             let (w, h) = (img.width() as usize, img.height() as usize);
@@ -219,6 +218,38 @@ mod tests {
             / (2.0 * e);
         assert!((fd_u - du).length() < 1e-2 * du.length(), "{fd_u} vs {du}");
         assert!((fd_v - dv).length() < 1e-2 * dv.length(), "{fd_v} vs {dv}");
+    }
+
+    #[test]
+    fn rgbe_signature_hdr_files_load() {
+        let dir = std::env::temp_dir().join(format!("gradtrace-rgbe-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("tiny.hdr");
+        let mut bytes = b"#?RGBE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n".to_vec();
+        bytes.extend_from_slice(&[128, 128, 128, 129, 128, 64, 32, 130]);
+        std::fs::write(&path, bytes).unwrap();
+        let env = load_latlong(&path, 1.0).unwrap();
+        let Environment::Image {
+            width,
+            height,
+            texels,
+            ..
+        } = env
+        else {
+            panic!("not an image")
+        };
+        assert_eq!((width, height), (2, 1));
+        assert!(
+            (texels[0] - Vec3::ONE).abs().max_element() < 0.01,
+            "{:?}",
+            texels[0]
+        );
+        assert!(
+            (texels[1] - Vec3::new(2.0, 1.0, 0.5)).abs().max_element() < 0.02,
+            "{:?}",
+            texels[1]
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
