@@ -10,6 +10,12 @@ use super::Vec2;
 /// stratification hardly matters).
 const SOBOL_DIMS: u32 = sobol_burley::NUM_DIMENSIONS;
 
+/// Dimensions served by Sobol; later ones use the hashed stream. Stratification
+/// pays off for the camera jitter and the first two path vertices (direct light
+/// and its first bounce); deeper vertices contribute little variance and the
+/// hash is several times cheaper than a scrambled Sobol point.
+const SOBOL_DIMS_USED: u32 = 20;
+
 /// The sampler of one (pixel, sample) pair: hands out dimensions in order.
 /// Sobol values are computed four dimensions at a time (`sample_4d`, SIMD) and
 /// cached, since consecutive dimensions are almost always consumed together.
@@ -39,7 +45,7 @@ impl PixelSampler {
     pub fn next_1d(&mut self) -> f32 {
         let d = self.dim;
         self.dim += 1;
-        if d < SOBOL_DIMS && self.index < (1 << 16) {
+        if d < SOBOL_DIMS.min(SOBOL_DIMS_USED) && self.index < (1 << 16) {
             let set = d / 4;
             if set != self.cached_set {
                 self.cache = sobol_burley::sample_4d(self.index, set, self.seed);
