@@ -347,3 +347,40 @@ fn adaptive_phi_integration_handles_tangent_singularity() {
     );
     assert!(err <= err_uni, "adaptive {err} vs uniform {err_uni}");
 }
+
+/// The "no occluders" case of the paper's Fig. 4 table is recognised, and only it.
+#[test]
+fn scenes_without_occluders_skip_the_visibility_term() {
+    use gradtrace::render::gradients::visibility::scene_can_cast_shadows;
+    use gradtrace::scene::Environment;
+    let mut s = empty_scene(
+        Camera::new(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap(),
+    );
+    let m = add_material(
+        &mut s,
+        Material::Lambert {
+            albedo: Vec3::splat(0.5),
+        },
+    );
+    add_sphere(&mut s, Vec3::ZERO, 1.0, m, Vec3::ZERO);
+    s.environment = Some(Environment::Constant {
+        radiance: Vec3::ONE,
+    });
+    assert!(!scene_can_cast_shadows(&s), "one sphere under the sky");
+    let mut two = s.clone();
+    add_sphere(&mut two, Vec3::new(2.5, 0.0, 0.0), 1.0, m, Vec3::ZERO);
+    assert!(scene_can_cast_shadows(&two), "two spheres");
+    let mut lit = s.clone();
+    add_sphere(&mut lit, Vec3::new(0.0, 4.0, 0.0), 0.3, m, Vec3::ONE);
+    assert!(
+        scene_can_cast_shadows(&lit),
+        "a sphere light can block the sky"
+    );
+    assert!(scene_can_cast_shadows(&scene_with(|s, m| add_sphere(
+        s,
+        Vec3::Y,
+        0.5,
+        m,
+        Vec3::ZERO
+    ))));
+}

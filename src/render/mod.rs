@@ -143,8 +143,13 @@ pub fn describe(scene: &Scene) -> String {
     };
     let bumped = scene.meshes.iter().filter(|m| m.bump.is_some()).count()
         + scene.spheres.iter().filter(|s| s.bump.is_some()).count();
+    let shadows = if gradients::visibility::scene_can_cast_shadows(scene) {
+        "line sampling with visibility jumps"
+    } else {
+        "skipped (nothing can cast a shadow)"
+    };
     format!(
-        "light sampling: {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}",
+        "light sampling: {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}; with --gradients, visibility term: {shadows}",
         if env { ", environment" } else { "" }
     )
 }
@@ -193,10 +198,13 @@ pub fn render(
         lights: &lights,
         max_depth,
         rr_depth: settings.rr_depth,
-        lines: opts.gradients.then(|| path::LineConfig {
-            n_theta: opts.vis_samples.unwrap_or(32).max(1),
-            refine: opts.vis_refine.unwrap_or(0),
-        }),
+        // Lines exist to find visibility jumps: none where nothing casts shadows.
+        lines: (opts.gradients && gradients::visibility::scene_can_cast_shadows(scene)).then(
+            || path::LineConfig {
+                n_theta: opts.vis_samples.unwrap_or(32).max(1),
+                refine: opts.vis_refine.unwrap_or(0),
+            },
+        ),
         far_light: opts.far_light,
     };
 

@@ -172,11 +172,22 @@ pub fn trace_line(
                     let w = dir(alpha);
                     let (sa, ca) = alpha.sin_cos();
                     let c = frame.n * (-sa) + dphi * ca;
-                    if let Some(dalpha) = jump_derivatives(scene, x, w, c, t, prim, dx) {
+                    if let Some((dalpha, d)) = jump_derivatives(scene, x, w, c, t, prim, dx) {
+                        // Parallax of a local light: the points of the light seen along
+                        // the jump also move (by the same formula at their distance R),
+                        // and the shading terms already hold them fixed, so only the
+                        // relative motion counts: dα (1 − D/R). R = ∞ for the
+                        // environment (Eq. 49 as printed).
+                        let r = light_extent(domain, x, w).0;
+                        let parallax = if r.is_finite() && r > 0.0 {
+                            (1.0 - d / r).max(0.0)
+                        } else {
+                            1.0
+                        };
                         let tr = transport(w);
                         // Integrated over φ with density 1/2π: weight 2π.
                         for (v, da) in out.vis.iter_mut().zip(dalpha) {
-                            *v += tr * (sgn * sa * da * TAU);
+                            *v += tr * (sgn * sa * da * parallax * TAU);
                         }
                         out.jumps += 1;
                     }
@@ -189,7 +200,8 @@ pub fn trace_line(
 }
 
 /// dα/dδ for the two displacements δ = dx[k] of the shading point, for a jump
-/// along the tangent ray `w` whose transverse direction (∂ω/∂θ) is `c`.
+/// along the tangent ray `w` whose transverse direction (∂ω/∂θ) is `c`, and the
+/// distance D to the grazing point.
 ///
 /// The grazing point p = x + D w stays on the blocker: for a curved blocker on its
 /// tangent plane (Eq. 43–46), for a polygon on its silhouette edge k (Eq. 72).
@@ -205,7 +217,7 @@ fn jump_derivatives(
     t_hit: f32,
     prim: PrimRef,
     dx: [Vec3; 2],
-) -> Option<[f32; 2]> {
+) -> Option<([f32; 2], f32)> {
     let (d, k) = match prim {
         PrimRef::Sphere(i) => {
             let s = &scene.spheres[i as usize];
@@ -247,7 +259,7 @@ fn jump_derivatives(
         let s = delta.dot(v) / kv;
         (s * kc - delta.dot(c)) / d
     });
-    (r[0].is_finite() && r[1].is_finite()).then_some(r)
+    (r[0].is_finite() && r[1].is_finite()).then_some((r, d))
 }
 
 /// Distance between the ray x + t w and the line a + s k, and the ray parameter
@@ -650,4 +662,28 @@ pub fn integrate_phi_adaptive(
         f0 = fb;
     }
     (total.map(|v| v / TAU), evals)
+}
+
+/// Whether anything in the scene can shadow a point of the scene. A single convex
+/// object (sphere or flat quad) lit by a single light source cannot: its own
+/// far side is below every point's horizon. Then the visibility term is zero
+/// everywhere (the paper's Fig. 4 case "no occluders") and line sampling, which
+/// exists to find visibility jumps, is skipped.
+pub fn scene_can_cast_shadows(scene: &Scene) -> bool {
+    use glam::Vec3 as V;
+    let objects: Vec<bool> = scene
+        .meshes
+        .iter()
+        .filter(|m| m.emission == V::ZERO)
+        .map(|m| m.rect.is_some())
+        .chain(
+            scene
+                .spheres
+                .iter()
+                .filter(|s| s.emission == V::ZERO)
+                .map(|_| true),
+        )
+        .collect();
+    let sources = scene.emitter_count() + scene.environment.is_some() as usize;
+    !(objects.len() <= 1 && objects.iter().all(|&convex| convex) && sources <= 1)
 }
