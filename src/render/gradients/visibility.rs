@@ -47,8 +47,6 @@ pub enum Domain {
 
 /// A blocker's hit distance and primitive, when a probe ray is blocked.
 type BlockerHit = Option<(f32, PrimRef)>;
-/// (visible, blocker hit, point on the light) of one probe ray.
-type Probe = (bool, BlockerHit, Option<(Vec3, Vec3)>);
 
 /// Result of one φ-line.
 #[derive(Clone, Copy, Debug, Default)]
@@ -114,29 +112,33 @@ pub fn trace_line(
         return out;
     }
     let step = theta_max / n_theta as f32;
-    // Probe one direction: visible?, blocker hit (t, prim), light point.
-    let probe = |theta: f32| -> Probe {
+    // Probe one direction: visible?, and the point on the light. An any-hit
+    // query suffices; the blocker itself is only looked up at jumps.
+    let shadow_ray = |theta: f32| -> Option<(Ray, Option<(Vec3, Vec3)>)> {
         let w = dir(theta);
         let (t_max, lp) = light_extent(domain, x, w);
-        if t_max <= 0.0 {
-            return (false, None, None);
-        }
-        if w.dot(ng) <= 0.0 {
-            // Below the geometric horizon: the receiver itself blocks.
-            return (false, None, lp);
+        // Below the geometric horizon the receiver itself blocks.
+        if t_max <= 0.0 || w.dot(ng) <= 0.0 {
+            return None;
         }
         let o = offset_origin(x, ng, w);
-        let ray = Ray::segment(o, w, t_max * (1.0 - 1e-4));
-        match accel.intersect(&ray) {
-            Some(hit) => (false, Some((hit.t, hit.prim)), lp),
-            None => (true, None, lp),
+        Some((Ray::segment(o, w, t_max * (1.0 - 1e-4)), lp))
+    };
+    let probe = |theta: f32| -> (bool, Option<(Vec3, Vec3)>) {
+        match shadow_ray(theta) {
+            Some((ray, lp)) => (!accel.occluded(&ray), lp),
+            None => (false, None),
         }
     };
-    // (θ, visible, blocker hit) of the previous sample on the line.
-    let mut prev: Option<(f32, bool, BlockerHit)> = None;
+    let blocker = |theta: f32| -> BlockerHit {
+        let (ray, _) = shadow_ray(theta)?;
+        accel.intersect(&ray).map(|h| (h.t, h.prim))
+    };
+    // (θ, visible) of the previous sample on the line.
+    let mut prev: Option<(f32, bool)> = None;
     for i in 0..n_theta {
         let theta = (i as f32 + theta_jitter) * step;
-        let (visible, hit, lp) = probe(theta);
+        let (visible, lp) = probe(theta);
         out.rays += 1;
         let (st, _) = theta.sin_cos();
         let pdf = 1.0 / (TAU * st.max(1e-12) * step);
@@ -146,29 +148,27 @@ pub fn trace_line(
             light_point: lp,
             visible,
         });
-        if let Some((theta0, vis0, hit0)) = prev {
+        if let Some((theta0, vis0)) = prev {
             if vis0 != visible {
                 // Locate the jump: midpoint, refined by bisection if asked.
                 let (mut lo, mut hi) = (theta0, theta);
-                let mut blocked_hit = if visible { hit0 } else { hit };
                 for _ in 0..refine_steps {
                     let mid = 0.5 * (lo + hi);
-                    let (v, h, _) = probe(mid);
+                    let (v, _) = probe(mid);
                     out.rays += 1;
                     if v == vis0 {
                         lo = mid;
                     } else {
                         hi = mid;
                     }
-                    if !v {
-                        blocked_hit = h.or(blocked_hit);
-                    }
                 }
                 let alpha = 0.5 * (lo + hi);
                 // Visible below the jump and blocked above: the visible region grows
                 // with α (sgn = +1); the opposite transition has sgn = −1 (Fig. 8).
                 let sgn = if vis0 { 1.0 } else { -1.0 };
-                if let Some((t, prim)) = blocked_hit {
+                // The blocker: closest hit on the blocked side, next to the jump.
+                out.rays += 1;
+                if let Some((t, prim)) = blocker(if vis0 { hi } else { lo }) {
                     let w = dir(alpha);
                     let (sa, ca) = alpha.sin_cos();
                     let c = frame.n * (-sa) + dphi * ca;
@@ -194,7 +194,7 @@ pub fn trace_line(
                 }
             }
         }
-        prev = Some((theta, visible, hit));
+        prev = Some((theta, visible));
     }
     out
 }
