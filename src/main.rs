@@ -96,6 +96,19 @@ struct RenderArgs {
     /// 2|n_x|·d exceeds F, the far-light criterion of the first-order paper, Sec. 5.2.
     #[arg(long, value_name = "F")]
     far_light: Option<f32>,
+    /// Adaptive sampling: place samples with this strategy (uniform, gradient,
+    /// durand, variance, gradient+vis, second-order) and reconstruct every pixel
+    /// from them; each sample is a --spp estimate with analytic gradients.
+    #[arg(long, value_name = "NAME")]
+    strategy: Option<String>,
+    /// With --strategy: samples per pixel, e.g. 0.17 evaluates 17% as many points
+    /// as there are pixels [default: 0.17].
+    #[arg(long, value_name = "F", requires = "strategy")]
+    budget: Option<f32>,
+    /// With --strategy: `linear` (barycentric) or `gradient` (Sibson C1 with the
+    /// analytic gradients) reconstruction [default: gradient].
+    #[arg(long, value_name = "KIND", requires = "strategy")]
+    interpolation: Option<String>,
     /// No progress bar and no summary line.
     #[arg(long, short)]
     quiet: bool,
@@ -263,6 +276,10 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
         far_light: args.far_light,
     };
 
+    if let Some(name) = &args.strategy {
+        return adaptive_cmd(&args, name, &scene, &accel, &opts, &exr_path, &png_path);
+    }
+
     let bar = progress_bar(args.quiet);
     // Tiles finish out of order on worker threads; show the furthest count seen.
     let done_max = AtomicUsize::new(0);
@@ -282,7 +299,13 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let out = result?;
 
-    write_outputs(&out, &exr_path, &png_path)?;
+    write_outputs(
+        &output::image_from_render(&out),
+        &out.beauty,
+        (out.width, out.height),
+        &exr_path,
+        &png_path,
+    )?;
 
     if !args.quiet {
         println!(
@@ -292,6 +315,78 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
             out.spp,
             out.stats.wall_time.as_secs_f64(),
             rays_per_second(&out),
+            exr_path.display(),
+            png_path.display()
+        );
+    }
+    Ok(())
+}
+
+/// `render --strategy`: quadtree sampling with the renderer as estimator, then
+/// reconstruction; the EXR holds R,G,B, `samples.density` and `samples.Y`.
+fn adaptive_cmd(
+    args: &RenderArgs,
+    name: &str,
+    scene: &gradtrace::scene::Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    exr_path: &Path,
+    png_path: &Path,
+) -> anyhow::Result<()> {
+    use gradtrace::adaptive::{Settings, Strategy};
+    use gradtrace::reconstruct::Interpolation;
+    let strategy = Strategy::from_name(name)?;
+    let interpolation =
+        Interpolation::from_name(args.interpolation.as_deref().unwrap_or("gradient"))?;
+    let settings = Settings::new(strategy, args.budget.unwrap_or(0.17));
+    let bar = progress_bar(args.quiet);
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let run = || {
+        render::adaptive::render_adaptive(scene, accel, opts, &settings, interpolation, &progress)
+    };
+    let result = match args.threads {
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t as usize)
+            .build()
+            .context("cannot start the worker threads")?
+            .install(run),
+        None => run(),
+    };
+    bar.finish_and_clear();
+    let out = result?;
+    let rec = &out.reconstruction;
+    let mut image = rec.to_output_image();
+    // Marks the pixels that hold at least one sample (Fig. 14/15's dots).
+    image.channels.push(output::Channel {
+        name: "samples.Y".into(),
+        data: rec
+            .density
+            .iter()
+            .map(|&d| if d > 0.0 { 1.0 } else { 0.0 })
+            .collect(),
+    });
+    write_outputs(
+        &image,
+        &rec.image,
+        (rec.width, rec.height),
+        exr_path,
+        png_path,
+    )?;
+    if !args.quiet {
+        let st = &out.stats;
+        println!(
+            "{}x{}, {} at budget {}: {} samples, {:.3} s (quadtree {:.3} s, reconstruction {:.3} s), wrote {} and {}",
+            rec.width,
+            rec.height,
+            strategy.name(),
+            settings.budget,
+            out.samples.samples.len(),
+            st.wall_s,
+            st.quadtree_s,
+            st.reconstruct_s,
             exr_path.display(),
             png_path.display()
         );
@@ -326,15 +421,20 @@ fn rays_per_second(out: &RenderOutput) -> String {
 /// Encodes both files to temporary files, then renames both into place: an
 /// encoding failure of either leaves every previous output untouched. Creates the
 /// output directory when missing and removes it again if the run then fails.
-fn write_outputs(out: &RenderOutput, exr: &Path, png: &Path) -> anyhow::Result<()> {
+fn write_outputs(
+    image: &output::OutputImage,
+    beauty: &[glam::Vec3],
+    (width, height): (usize, usize),
+    exr: &Path,
+    png: &Path,
+) -> anyhow::Result<()> {
     let dir = exr.parent().filter(|d| !d.as_os_str().is_empty());
     let created = match dir {
         Some(d) => create_dirs(d)?,
         None => Vec::new(),
     };
-    let staged = output::stage_exr(exr, &output::image_from_render(out)).and_then(|e| {
-        output::stage_png(png, &out.beauty, out.width, out.height, 0.0).map(|p| (e, p))
-    });
+    let staged = output::stage_exr(exr, image)
+        .and_then(|e| output::stage_png(png, beauty, width, height, 0.0).map(|p| (e, p)));
     let result = staged.and_then(|(e, p)| {
         e.commit()?;
         p.commit()

@@ -1,6 +1,7 @@
 //! scene + BVH → per-pixel estimates (radiance and AOVs) by path tracing.
 //!
 
+pub mod adaptive;
 pub mod gradients;
 pub mod interaction;
 pub mod lights;
@@ -154,6 +155,78 @@ pub fn describe(scene: &Scene) -> String {
     )
 }
 
+/// The options resolved against the scene's `[render]` table, and the lights: what
+/// every render path (full image or adaptive samples) starts from.
+pub(crate) struct Setup {
+    pub spp: u32,
+    pub seed: u32,
+    pub camera: crate::scene::Camera,
+    max_depth: u32,
+    rr_depth: u32,
+    lights: LightSet,
+    lines: Option<path::LineConfig>,
+    far_light: Option<f32>,
+}
+
+impl Setup {
+    pub fn new(scene: &Scene, opts: &RenderOptions) -> crate::Result<Self> {
+        let settings = &scene.settings;
+        let spp = opts.spp.unwrap_or(settings.spp);
+        if spp == 0 {
+            return Err(crate::Error::Option {
+                option: "--spp".into(),
+                message: "must be at least 1".into(),
+            });
+        }
+        let integrator = opts.integrator.unwrap_or(settings.integrator);
+        let max_depth = match integrator {
+            Integrator::Path => opts.max_depth.unwrap_or(settings.max_depth),
+            // Emitters seen directly plus one bounce of emitted light.
+            Integrator::Direct => opts.max_depth.unwrap_or(2).min(2),
+        };
+        let camera = match opts.resolution {
+            Some((w, h)) => {
+                scene
+                    .camera
+                    .with_resolution(w, h)
+                    .map_err(|message| crate::Error::Option {
+                        option: "--width/--height".into(),
+                        message,
+                    })?
+            }
+            None => scene.camera.clone(),
+        };
+        Ok(Self {
+            spp,
+            seed: opts.seed.unwrap_or(settings.seed),
+            camera,
+            max_depth,
+            rr_depth: settings.rr_depth,
+            lights: LightSet::build(scene),
+            // Lines exist to find visibility jumps: none where nothing casts shadows.
+            lines: (opts.gradients && gradients::visibility::scene_can_cast_shadows(scene)).then(
+                || path::LineConfig {
+                    n_theta: opts.vis_samples.unwrap_or(32).max(1),
+                    refine: opts.vis_refine.unwrap_or(0),
+                },
+            ),
+            far_light: opts.far_light,
+        })
+    }
+
+    pub fn tracer<'a>(&'a self, scene: &'a Scene, accel: &'a Accel) -> PathTracer<'a> {
+        PathTracer {
+            scene,
+            accel,
+            lights: &self.lights,
+            max_depth: self.max_depth,
+            rr_depth: self.rr_depth,
+            lines: self.lines,
+            far_light: self.far_light,
+        }
+    }
+}
+
 /// Renders the scene. Deterministic for a fixed seed, whatever the thread count:
 /// every random number is addressed by (pixel, sample, dimension, seed).
 pub fn render(
@@ -163,50 +236,10 @@ pub fn render(
     progress: Progress,
 ) -> crate::Result<RenderOutput> {
     let start = Instant::now();
-    let settings = &scene.settings;
-    let spp = opts.spp.unwrap_or(settings.spp);
-    if spp == 0 {
-        return Err(crate::Error::Option {
-            option: "--spp".into(),
-            message: "must be at least 1".into(),
-        });
-    }
-    let integrator = opts.integrator.unwrap_or(settings.integrator);
-    let max_depth = match integrator {
-        Integrator::Path => opts.max_depth.unwrap_or(settings.max_depth),
-        // Emitters seen directly plus one bounce of emitted light.
-        Integrator::Direct => opts.max_depth.unwrap_or(2).min(2),
-    };
-    let seed = opts.seed.unwrap_or(settings.seed);
-    let camera = match opts.resolution {
-        Some((w, h)) => {
-            scene
-                .camera
-                .with_resolution(w, h)
-                .map_err(|message| crate::Error::Option {
-                    option: "--width/--height".into(),
-                    message,
-                })?
-        }
-        None => scene.camera.clone(),
-    };
+    let setup = Setup::new(scene, opts)?;
+    let (spp, seed, camera) = (setup.spp, setup.seed, setup.camera.clone());
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let lights = LightSet::build(scene);
-    let tracer = PathTracer {
-        scene,
-        accel,
-        lights: &lights,
-        max_depth,
-        rr_depth: settings.rr_depth,
-        // Lines exist to find visibility jumps: none where nothing casts shadows.
-        lines: (opts.gradients && gradients::visibility::scene_can_cast_shadows(scene)).then(
-            || path::LineConfig {
-                n_theta: opts.vis_samples.unwrap_or(32).max(1),
-                refine: opts.vis_refine.unwrap_or(0),
-            },
-        ),
-        far_light: opts.far_light,
-    };
+    let tracer = setup.tracer(scene, accel);
 
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
@@ -275,9 +308,25 @@ pub fn camera_sample(
     shift: Vec2,
 ) -> SampleResult {
     let w = camera.width;
-    let mut sampler = PixelSampler::new(pixel, sample, seed);
+    let corner = Vec2::new((pixel % w) as f32, (pixel / w) as f32) + shift;
+    camera_sample_at(tracer, camera, corner, pixel, sample, seed, gradients)
+}
+
+/// One camera sample jittered over the unit square at `corner` (image
+/// coordinates); `key` addresses the random numbers (the pixel index for full
+/// renders, a hash of the position for adaptive samples).
+pub fn camera_sample_at(
+    tracer: &PathTracer,
+    camera: &crate::scene::Camera,
+    corner: Vec2,
+    key: u32,
+    sample: u32,
+    seed: u32,
+    gradients: bool,
+) -> SampleResult {
+    let mut sampler = PixelSampler::new(key, sample, seed);
     let jitter = sampler.next_2d();
-    let p = Vec2::new((pixel % w) as f32, (pixel / w) as f32) + jitter + shift;
+    let p = corner + jitter;
     let ray = camera.generate_ray(p);
     let dd = gradients.then(|| {
         let d_len = 1.0 / ray.dir.dot(camera.forward());

@@ -48,7 +48,7 @@ pub fn hit_duals(scene: &Scene, si: &Interaction, ray: &Ray, dd: [Vec3; 2]) -> H
     });
     let tangents = Frame::from_normal(ng);
     let xn = N4::with_lanes(si.p, [dx[0], dx[1], tangents.s, tangents.t]);
-    let n4 = shading_normal(scene, si, xn);
+    let n4 = shading_normal(scene, si, xn, true);
     let n_lanes = [n4.lane(0), n4.lane(1)];
     let cv = 2.0 * (n4.lane(2).length_squared() + n4.lane(3).length_squared()).sqrt();
 
@@ -77,7 +77,7 @@ pub fn hit_duals(scene: &Scene, si: &Interaction, ray: &Ray, dd: [Vec3; 2]) -> H
 /// lanes move it in the tangent plane): the same computation as
 /// `interaction::interaction`, differentiated. Bump maps use the analytic second
 /// derivatives of the height (Sec. 4.2: n_x of a bump-mapped surface).
-pub fn shading_normal(scene: &Scene, si: &Interaction, x: N4) -> N4 {
+pub fn shading_normal(scene: &Scene, si: &Interaction, x: N4, with_bump: bool) -> N4 {
     let (base, ng_orig, uv, dpdu, dpdv, bump) = match si.prim {
         PrimRef::Triangle { mesh, tri } => {
             let m = &scene.meshes[mesh as usize];
@@ -144,7 +144,7 @@ pub fn shading_normal(scene: &Scene, si: &Interaction, x: N4) -> N4 {
         }
     };
     let mut n = base;
-    if let Some(b) = bump {
+    if let (Some(b), true) = (bump, with_bump) {
         let j = scene.bumps[b as usize].eval(crate::math::Vec2::new(uv[0].v, uv[1].v));
         // h_u and h_v along the lanes: dh_u = h_uu du + h_uv dv, dh_v = h_uv du + h_vv dv.
         let mut h_u = Dual::constant(j.h_u);
@@ -173,4 +173,20 @@ pub fn shading_normal(scene: &Scene, si: &Interaction, x: N4) -> N4 {
         return N4::constant(ng_orig * sign);
     }
     n
+}
+
+/// Curvature of the base surface at the hit, without bump maps: the "global
+/// curvature k" of the Durand et al. metric (first-order paper Sec. 9.1), as
+/// the norm of the normal's derivative per unit length (1/r on a sphere, 0 on a
+/// flat quad, from the interpolated normals on a smooth mesh).
+pub fn base_curvature(scene: &Scene, si: &Interaction) -> f32 {
+    let t = Frame::from_normal(si.ng);
+    let xn = N4::with_lanes(si.p, [t.s, t.t, Vec3::ZERO, Vec3::ZERO]);
+    let n = shading_normal(scene, si, xn, false);
+    let k = (0.5 * (n.lane(0).length_squared() + n.lane(1).length_squared())).sqrt();
+    if k.is_finite() {
+        k
+    } else {
+        0.0
+    }
 }

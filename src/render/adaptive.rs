@@ -1,0 +1,176 @@
+//! scene + BVH + strategy + budget → adaptively sampled, reconstructed image.
+//!
+//! The renderer as an [`adaptive::Estimator`]: each quadtree sample is a converged
+//! estimate at one image point (radiance, analytic gradient, object id, depth and
+//! the extra scalars the Durand and gradient+visibility strategies need), and the
+//! reconstruction fills the pixels in between.
+
+use super::gradients::geometry::base_curvature;
+use super::gradients::magnitude;
+use super::interaction::interaction;
+use super::path::PathTracer;
+use super::{camera_sample_at, RenderOptions, Setup};
+use crate::accel::Accel;
+use crate::adaptive::{self, Estimator, SampleSet, SampleValue, Settings, NO_OBJECT};
+use crate::brdf::Material;
+use crate::math::sampler::hash2;
+use crate::math::{Vec2, Vec3};
+use crate::reconstruct::{self, Interpolation, Reconstruction};
+use crate::scene::{Camera, Scene};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// The path tracer evaluated at arbitrary image points.
+pub struct RenderEstimator<'a> {
+    pub tracer: PathTracer<'a>,
+    pub camera: &'a Camera,
+    /// Camera samples averaged per estimate.
+    pub spp: u32,
+    pub seed: u32,
+    /// Nanoseconds spent inside `estimate`, summed over threads (to tell the cost
+    /// of rendering from the cost of the quadtree).
+    pub busy_ns: AtomicU64,
+}
+
+impl Estimator for RenderEstimator<'_> {
+    fn estimate(&self, p: Vec2) -> SampleValue {
+        let t0 = Instant::now();
+        // Random numbers are addressed by the sample position, so the estimate is
+        // the same whatever order or thread evaluates it.
+        let key = hash2(p.x.to_bits(), p.y.to_bits());
+        let (mut radiance, mut gu, mut gv, mut vis) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0f32);
+        let mut first = None;
+        for s in 0..self.spp {
+            // A pixel-sized box footprint around p, as the full render's pixels have.
+            let r = camera_sample_at(
+                &self.tracer,
+                self.camera,
+                p - Vec2::splat(0.5),
+                key,
+                s,
+                self.seed,
+                true,
+            );
+            radiance += r.radiance;
+            if let Some(g) = r.gradient {
+                let t = g.total();
+                gu += t[0];
+                gv += t[1];
+                vis += magnitude(&g.vis);
+            }
+            if s == 0 {
+                first = Some(r);
+            }
+        }
+        let n = self.spp as f32;
+        let mut v = SampleValue::new(radiance / n, gu / n, gv / n);
+        v.vis_gradient = Some(vis / n);
+        v.object_id = NO_OBJECT;
+        v.depth = f32::INFINITY;
+        v.durand = Some(0.0);
+        if let Some(fh) = first.and_then(|r| r.first_hit) {
+            v.object_id = fh.object_id;
+            v.depth = fh.depth;
+            v.durand = Some(self.durand(p));
+        }
+        self.busy_ns
+            .fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        v
+    }
+}
+
+impl RenderEstimator<'_> {
+    /// The Durand et al. 2005 metric as written in Sec. 9.1 of the first-order
+    /// paper: I ∼ (1/γ) · 2kz / (n₀·v) · Ω_ρ, Ω_ρ = √(6s), with γ the focal length
+    /// in pixels, k the base curvature (no bump maps), z the distance, n₀·v the
+    /// cosine between the geometric normal and the view ray and s the Phong
+    /// exponent (1 for Lambert, a large value for mirrors).
+    fn durand(&self, p: Vec2) -> f32 {
+        let scene = self.tracer.scene;
+        let ray = self.camera.generate_ray(p);
+        let Some(hit) = self.tracer.accel.intersect(&ray) else {
+            return 0.0;
+        };
+        let si = interaction(scene, &ray, &hit);
+        let k = base_curvature(scene, &si);
+        let gamma =
+            self.camera.height as f32 / (2.0 * (self.camera.fov_y.to_radians() * 0.5).tan());
+        let cos = si.ng.dot(-ray.dir).abs().max(1e-3);
+        let s = match &scene.materials[si.material as usize] {
+            Material::Lambert { .. } => 1.0,
+            Material::BlinnPhong { exponent, .. } | Material::CookTorrance { exponent, .. } => {
+                exponent.max(1.0)
+            }
+            Material::Mirror { .. } => 1e4,
+        };
+        let m = (1.0 / gamma) * 2.0 * k * hit.t / cos * (6.0 * s).sqrt();
+        if m.is_finite() {
+            m
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Timings of one adaptive render, in seconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AdaptiveStats {
+    pub wall_s: f64,
+    /// Quadtree refinement, excluding the estimates it asked for.
+    pub quadtree_s: f64,
+    pub reconstruct_s: f64,
+    /// Time inside the estimator, summed over threads.
+    pub estimate_cpu_s: f64,
+}
+
+/// What an adaptive render produced.
+pub struct AdaptiveRender {
+    pub reconstruction: Reconstruction,
+    pub samples: SampleSet,
+    pub stats: AdaptiveStats,
+}
+
+/// Renders with `settings.strategy` at `settings.budget` samples per pixel, each a
+/// `spp`-sample estimate with analytic gradients, then reconstructs every pixel.
+pub fn render_adaptive(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    settings: &Settings,
+    interpolation: Interpolation,
+    progress: super::Progress,
+) -> crate::Result<AdaptiveRender> {
+    let start = Instant::now();
+    // Gradients are what the strategies and the C1 reconstruction feed on.
+    let opts = RenderOptions {
+        gradients: true,
+        ..opts.clone()
+    };
+    let setup = Setup::new(scene, &opts)?;
+    let est = RenderEstimator {
+        tracer: setup.tracer(scene, accel),
+        camera: &setup.camera,
+        spp: setup.spp,
+        seed: setup.seed,
+        busy_ns: AtomicU64::new(0),
+    };
+    let (w, h) = (setup.camera.width, setup.camera.height);
+    let t = Instant::now();
+    let samples = adaptive::refine_with_progress(&est, w, h, settings, progress)?;
+    let refine_s = t.elapsed().as_secs_f64();
+    let estimate_cpu_s = est.busy_ns.load(Ordering::Relaxed) as f64 * 1e-9;
+    let threads = rayon::current_num_threads().max(1) as f64;
+    let t = Instant::now();
+    let reconstruction = reconstruct::reconstruct(&samples, interpolation)?;
+    let reconstruct_s = t.elapsed().as_secs_f64();
+    Ok(AdaptiveRender {
+        reconstruction,
+        samples,
+        stats: AdaptiveStats {
+            wall_s: start.elapsed().as_secs_f64(),
+            quadtree_s: (refine_s - estimate_cpu_s / threads).max(0.0),
+            reconstruct_s,
+            estimate_cpu_s,
+        },
+    })
+}
