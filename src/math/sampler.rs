@@ -103,9 +103,12 @@ mod tests {
     fn cached_4d_values_equal_single_dimension_values() {
         let mut p = PixelSampler::new(5, 9, 3);
         let seed = hash2(5, 3);
-        for d in 0..40 {
+        for d in 0..SOBOL_DIMS_USED {
             assert_eq!(p.next_1d(), sobol_burley::sample(9, d, seed), "dim {d}");
         }
+        // Past the Sobol dimensions: the hashed stream, still in [0, 1).
+        let x = p.next_1d();
+        assert!((0.0..1.0).contains(&x) && x != sobol_burley::sample(9, SOBOL_DIMS_USED, seed));
         p.set_dimension(13);
         assert_eq!(p.next_1d(), sobol_burley::sample(9, 13, seed));
     }
