@@ -105,7 +105,7 @@ pub fn trace_line(
             edge_u,
             edge_v,
             ..
-        } => rect_exit_angle(x, corner, edge_u, edge_v, &dir),
+        } => rect_exit_angle(x, frame.n, dphi, corner, edge_u, edge_v),
     };
     let mut out = LineEstimate::default();
     if theta_max.is_nan() || theta_max <= 0.0 {
@@ -316,52 +316,45 @@ fn light_extent(domain: &Domain, x: Vec3, w: Vec3) -> (f32, Option<(Vec3, Vec3)>
     }
 }
 
-/// θ at which the ray `dir(θ)` leaves the rectangle, by bisection on [0, π/2]
-/// (the set of θ hitting a convex polygon around the axis is an interval [0, θmax)).
-fn rect_exit_angle(
-    x: Vec3,
-    corner: Vec3,
-    edge_u: Vec3,
-    edge_v: Vec3,
-    dir: &dyn Fn(f32) -> Vec3,
-) -> f32 {
+/// θ at which the line's ray leaves the rectangle. The line's directions
+/// cos θ a + sin θ d (a = `axis`, aimed at the rectangle's centre) sweep a plane,
+/// which cuts the rectangle's plane along a straight line through the centre; the
+/// exit is where that line leaves the (convex) rectangle, found in its edge
+/// coordinates, and θmax is the angle between the axis and the exit point.
+fn rect_exit_angle(x: Vec3, axis: Vec3, d: Vec3, corner: Vec3, edge_u: Vec3, edge_v: Vec3) -> f32 {
     let n = edge_u.cross(edge_v);
-    let inside = |theta: f32| {
-        let w = dir(theta);
-        let denom = w.dot(n);
-        if denom.abs() < 1e-20 {
-            return false;
-        }
-        let t = (corner - x).dot(n) / denom;
-        if t <= 0.0 {
-            return false;
-        }
-        // Coordinates of the hit in the (possibly skewed) edge basis.
-        let q = x + w * t - corner;
-        let (uu, uv, vv) = (
-            edge_u.length_squared(),
-            edge_u.dot(edge_v),
-            edge_v.length_squared(),
-        );
-        let det = uu * vv - uv * uv;
-        let (qu, qv) = (q.dot(edge_u), q.dot(edge_v));
-        let a = (vv * qu - uv * qv) / det;
-        let b = (uu * qv - uv * qu) / det;
-        (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)
-    };
-    if !inside(0.0) {
+    let centre = corner + 0.5 * (edge_u + edge_v);
+    // Direction of the cut, oriented the way growing θ moves the hit point.
+    let mut m = n.cross(axis.cross(d));
+    if m.dot(d) < 0.0 {
+        m = -m;
+    }
+    // Coordinates of m in the (possibly skewed) edge basis.
+    let (uu, uv, vv) = (
+        edge_u.length_squared(),
+        edge_u.dot(edge_v),
+        edge_v.length_squared(),
+    );
+    let det = uu * vv - uv * uv;
+    if det.abs() < 1e-20 || m == Vec3::ZERO {
         return 0.0;
     }
-    let (mut lo, mut hi) = (0.0f32, std::f32::consts::FRAC_PI_2);
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        if inside(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
+    let (mu, mv) = (m.dot(edge_u), m.dot(edge_v));
+    let coords = [(vv * mu - uv * mv) / det, (uu * mv - uv * mu) / det];
+    // The centre is at (½, ½): leave through the nearer side along m.
+    let mut s_exit = f32::INFINITY;
+    for c in coords {
+        if c.abs() > 1e-12 {
+            s_exit = s_exit.min(0.5 / c.abs());
         }
     }
-    lo
+    if !s_exit.is_finite() {
+        return 0.0;
+    }
+    let to_exit = centre + m * s_exit - x;
+    let cos = to_exit.dot(axis);
+    let sin = to_exit.cross(axis).length();
+    sin.atan2(cos)
 }
 
 /// The object-space analytic method for sphere blockers (Sec. 8.1): on the
@@ -686,4 +679,47 @@ pub fn scene_can_cast_shadows(scene: &Scene) -> bool {
         .collect();
     let sources = scene.emitter_count() + scene.environment.is_some() as usize;
     !(objects.len() <= 1 && objects.iter().all(|&convex| convex) && sources <= 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The analytic exit angle agrees with a bisection on ray/rectangle hits.
+    #[test]
+    fn rect_exit_angle_matches_bisection() {
+        let (corner, eu, ev) = (
+            Vec3::new(-0.7, 2.0, -0.4),
+            Vec3::new(1.3, 0.1, 0.0),
+            Vec3::new(0.2, 0.0, 0.9),
+        );
+        let x = Vec3::new(0.3, 0.0, 0.2);
+        let centre = corner + 0.5 * (eu + ev);
+        let frame = Frame::from_normal((centre - x).normalize());
+        let inside = |w: Vec3| {
+            let n = eu.cross(ev);
+            let t = (corner - x).dot(n) / w.dot(n);
+            let q = x + w * t - corner;
+            let (uu, uv, vv) = (eu.length_squared(), eu.dot(ev), ev.length_squared());
+            let det = uu * vv - uv * uv;
+            let a = (vv * q.dot(eu) - uv * q.dot(ev)) / det;
+            let b = (uu * q.dot(ev) - uv * q.dot(eu)) / det;
+            t > 0.0 && (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)
+        };
+        for k in 0..32 {
+            let phi = k as f32 / 32.0 * TAU;
+            let d = frame.s * phi.cos() + frame.t * phi.sin();
+            let (mut lo, mut hi) = (0.0f32, 1.5f32);
+            for _ in 0..50 {
+                let mid = 0.5 * (lo + hi);
+                if inside(frame.n * mid.cos() + d * mid.sin()) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let analytic = rect_exit_angle(x, frame.n, d, corner, eu, ev);
+            assert!((analytic - lo).abs() < 1e-4, "φ {phi}: {analytic} vs {lo}");
+        }
+    }
 }
