@@ -218,6 +218,28 @@ fn aliasing_hides_bumps_from_numerical_but_not_analytic_gradients() {
     assert!(ca.iter().all(|&c| c == ca[0]), "{ca:?}");
 }
 
+/// The analytic metric's own blind spot (the paper's "usually accurate"): samples
+/// one period apart at a crest of the bumps, where the normal is vertical and the
+/// symmetric lighting makes `∂B/∂ν = 0`, see a zero gradient *and* zero differences.
+#[test]
+fn analytic_metric_is_blind_where_samples_sit_at_gradient_zeros() {
+    let f = 8.0;
+    let r = BumpyReceiver::new(LIGHT, 0.8, f, f, (0.0, 1.0)).unwrap();
+    let period = 1.0 / f;
+    let crest = 0.25 * period;
+    assert!(r.normal_angle(crest).abs() < 1e-12);
+    let steepest = (0..2000)
+        .map(|i| r.grad_analytic(i as f64 * period / 2000.0).abs())
+        .fold(0.0, f64::max);
+    for j in 0..7 {
+        let (a, b) = (crest + j as f64 * period, crest + (j + 1) as f64 * period);
+        assert!(r.grad_analytic(a).abs() < 1e-9 * steepest);
+        assert!((r.shading(b) - r.shading(a)).abs() / period < 1e-9 * steepest);
+    }
+    // Half-way (the trough) is a zero of B_x too, so one split does not reveal it.
+    assert!(r.grad_analytic(crest + 0.5 * period).abs() < 1e-9 * steepest);
+}
+
 #[test]
 fn figure_writer_produces_finite_csv_and_svg() {
     let dir = std::env::temp_dir().join(format!("gradtrace-fsample-{}", std::process::id()));
