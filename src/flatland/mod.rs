@@ -26,6 +26,7 @@
 mod figures;
 pub mod geometry;
 pub mod quadrature;
+pub mod sampling;
 
 pub use figures::{write_figures, FigureSummary};
 pub use geometry::{Blocker, Circle, Endpoint, Feature, Interval, Rect2};
