@@ -449,9 +449,12 @@ fn sample_map_marks_sample_pixels_over_dimmed_reference() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A way to make a valid input invalid.
+type Spoil = Box<dyn Fn(&mut ReportInput)>;
+
 #[test]
 fn bad_input_writes_nothing() {
-    let cases: Vec<(&str, Box<dyn Fn(&mut ReportInput)>)> = vec![
+    let cases: Vec<(&str, Spoil)> = vec![
         (
             "run size",
             Box::new(|i| i.runs[2].image.pop().map(|_| ()).unwrap()),

@@ -6,6 +6,7 @@
 //! file is needed at build or run time.
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// One line of a plot: a strategy's points `(x, y, point label)`.
 #[derive(Clone, Debug)]
@@ -72,26 +73,60 @@ pub fn loglog_svg(
             .map_err(|e| e.to_string())?;
             root.present().map_err(|e| e.to_string())?;
         } else {
+            // plotters' own log axis labels only powers of ten, which leaves a plot
+            // spanning less than a decade without any number; so the chart is linear
+            // in log10 space and the 1-2-5 ticks are drawn here.
             let (x0, x1) = padded_log_range(all().map(|p| p.0));
             let (y0, y1) = padded_log_range(all().map(|p| p.1));
             let mut chart = ChartBuilder::on(&root)
-                .caption(title, ("sans-serif", 18))
+                .caption(title, ("sans-serif", 20))
                 .margin(12)
                 .x_label_area_size(40)
                 .y_label_area_size(70)
-                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+                .build_cartesian_2d(x0.log10()..x1.log10(), y0.log10()..y1.log10())
                 .map_err(|e| e.to_string())?;
             chart
                 .configure_mesh()
+                .disable_mesh()
+                .x_labels(0)
+                .y_labels(0)
                 .x_desc(x_desc)
                 .y_desc(y_desc)
-                .x_label_formatter(&|v| format_tick(*v))
-                .y_label_formatter(&|v| format_tick(*v))
                 .draw()
                 .map_err(|e| e.to_string())?;
+            let grid = BLACK.mix(0.12);
+            let label_font = ("sans-serif", 14).into_font();
+            for t in nice_ticks(x0, x1) {
+                let lx = t.log10();
+                let (ly0, ly1) = (y0.log10(), y1.log10());
+                chart
+                    .draw_series(LineSeries::new([(lx, ly0), (lx, ly1)], grid))
+                    .map_err(|e| e.to_string())?;
+                let (px, py) = chart.backend_coord(&(lx, ly0));
+                let style =
+                    TextStyle::from(label_font.clone()).pos(Pos::new(HPos::Center, VPos::Top));
+                root.draw(&Text::new(format_tick(t), (px, py + 6), style))
+                    .map_err(|e| e.to_string())?;
+            }
+            for t in nice_ticks(y0, y1) {
+                let ly = t.log10();
+                let (lx0, lx1) = (x0.log10(), x1.log10());
+                chart
+                    .draw_series(LineSeries::new([(lx0, ly), (lx1, ly)], grid))
+                    .map_err(|e| e.to_string())?;
+                let (px, py) = chart.backend_coord(&(lx0, ly));
+                let style =
+                    TextStyle::from(label_font.clone()).pos(Pos::new(HPos::Right, VPos::Center));
+                root.draw(&Text::new(format_tick(t), (px - 6, py), style))
+                    .map_err(|e| e.to_string())?;
+            }
             for (i, s) in series.iter().enumerate() {
                 let color = PALETTE[i % PALETTE.len()];
-                let xy: Vec<(f64, f64)> = s.points.iter().map(|p| (p.0, p.1)).collect();
+                let xy: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .map(|p| (p.0.log10(), p.1.log10()))
+                    .collect();
                 chart
                     .draw_series(LineSeries::new(xy.clone(), color.stroke_width(2)))
                     .map_err(|e| e.to_string())?
@@ -101,9 +136,9 @@ pub fn loglog_svg(
                     });
                 chart
                     .draw_series(s.points.iter().map(|p| {
-                        EmptyElement::at((p.0, p.1))
+                        EmptyElement::at((p.0.log10(), p.1.log10()))
                             + Circle::new((0, 0), 4, color.filled())
-                            + Text::new(p.2.clone(), (6, -14), ("sans-serif", 11).into_font())
+                            + Text::new(p.2.clone(), (6, -14), ("sans-serif", 13).into_font())
                     }))
                     .map_err(|e| e.to_string())?;
             }
@@ -133,6 +168,26 @@ fn padded_log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
     let pad = (hi / lo).powf(0.08);
     (lo / pad, hi * pad)
+}
+
+/// Tick values in [lo, hi] on a 1-2-5 sequence per decade; every integer mantissa
+/// when that gives fewer than three, powers of ten only when it gives more than ten.
+fn nice_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let ticks = |mantissas: &[f64]| -> Vec<f64> {
+        let (d0, d1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        (d0..=d1)
+            .flat_map(|d| mantissas.iter().map(move |m| m * 10f64.powi(d)))
+            .filter(|v| *v >= lo && *v <= hi)
+            .collect()
+    };
+    let t = ticks(&[1.0, 2.0, 5.0]);
+    if t.len() < 3 {
+        ticks(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+    } else if t.len() > 10 {
+        ticks(&[1.0])
+    } else {
+        t
+    }
 }
 
 /// Short tick text: 3 significant digits, scientific outside [1e-3, 1e4).

@@ -612,22 +612,23 @@ fn html(
         legend_svg(error_scale)
     );
 
-    let sections: [(&str, &str, fn(&RunKind) -> bool); 3] = [
-        ("Adaptive sampling (equal sample count)", "", |k| matches!(k, RunKind::Adaptive { .. })),
+    // (kind name, heading, explanation)
+    let sections = [
+        ("adaptive", "Adaptive sampling (equal sample count)", ""),
         (
+            "equal-time",
             "Equal-time baselines",
             "Uniform rendering of every pixel with fewer samples per pixel, at about the wall time of an adaptive run.",
-            |k| matches!(k, RunKind::EqualTime { .. }),
         ),
         (
+            "interpolation",
             "Gradient vs linear interpolation (Sec. 8)",
             "The same sparse samples reconstructed with and without the analytic gradients.",
-            |k| matches!(k, RunKind::Interpolation { .. }),
         ),
     ];
-    for (title, blurb, belongs) in sections {
+    for (kind, title, blurb) in sections {
         let members: Vec<usize> = (0..input.runs.len())
-            .filter(|&i| belongs(&input.runs[i].kind))
+            .filter(|&i| input.runs[i].kind.name() == kind)
             .collect();
         if members.is_empty() {
             continue;
