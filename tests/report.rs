@@ -6,7 +6,8 @@ use gradtrace::math::{Vec2, Vec3};
 use gradtrace::output::colormap::viridis;
 use gradtrace::output::metrics::{flip, flip_exposure, relmse, rmse, tone_map_srgb8, RELMSE_EPS};
 use gradtrace::output::report::{
-    base64, compute_rows, write_report, ReportInput, Run, RunKind, ASSET_DIR,
+    base64, compute_rows, equal_time_spp, markdown_table, write_report, ReportInput, Run, RunKind,
+    ASSET_DIR,
 };
 use std::path::PathBuf;
 
@@ -510,4 +511,28 @@ fn report_with_no_runs_or_zero_error_still_writes() {
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     assert!(html.contains("no positive data to plot"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn equal_time_spp_scales_with_time() {
+    assert_eq!(equal_time_spp(1.0, 10.0, 1024), 102);
+    assert_eq!(
+        equal_time_spp(0.001, 10.0, 1024),
+        1,
+        "never below one sample"
+    );
+    assert_eq!(equal_time_spp(0.0, 10.0, 1024), 1);
+    assert_eq!(
+        equal_time_spp(5.0, 0.0, 1024),
+        1,
+        "no reference time: no basis"
+    );
+    assert_eq!(equal_time_spp(20.0, 10.0, 64), 128);
+    let rows = compute_rows(&sample_input()).unwrap();
+    let table = markdown_table(&rows);
+    assert_eq!(table.lines().count(), rows.len() + 2);
+    assert!(
+        table.contains("| linear-interp | interpolation | 1% | 8 |"),
+        "{table}"
+    );
 }

@@ -10,8 +10,9 @@ use crate::{Error, Result};
 
 /// The ε in relMSE's denominator. Why 1e-2: it keeps near-black reference pixels
 /// (where any noise would give an unbounded ratio) from dominating the mean, while
-/// leaving pixels brighter than ~0.1 essentially unregularised. It is the value
-/// used by the adaptive-sampling / denoising literature (e.g. Rousselle et al. 2011).
+/// leaving pixels brighter than ~0.1 essentially unregularised. A common choice
+/// in the adaptive-sampling and denoising literature; report it with the numbers,
+/// since relMSE values computed with different ε do not compare.
 pub const RELMSE_EPS: f32 = 1e-2;
 
 /// Viewing condition for FLIP: the FLIP tool's default of about 67 pixels per

@@ -129,6 +129,19 @@ pub struct ReportRow {
     pub speedup_vs_reference: Option<f64>,
 }
 
+/// Samples per pixel for a uniform render that takes about `target_time_s`, given
+/// that the reference took `reference_time_s` for `reference_spp` (render time is
+/// close to linear in spp): `floor(target / reference · spp)`, at least 1. The
+/// caller should still report the *measured* time of the baseline.
+pub fn equal_time_spp(target_time_s: f64, reference_time_s: f64, reference_spp: u32) -> u32 {
+    if !(target_time_s > 0.0 && reference_time_s > 0.0) {
+        return 1;
+    }
+    let spp = (target_time_s / reference_time_s * f64::from(reference_spp)).floor();
+    // `as` saturates: a huge ratio gives u32::MAX, NaN cannot occur here.
+    (spp as u32).max(1)
+}
+
 /// Checks the input and measures every run; nothing is written.
 pub fn compute_rows(input: &ReportInput) -> Result<Vec<ReportRow>> {
     validate(input, Path::new("report"))?;
@@ -447,8 +460,9 @@ fn json(
     serde_json::to_string_pretty(&value).map_err(|e| e.to_string())
 }
 
-/// The summary table as Markdown (also what goes into closing notes).
-fn markdown_table(rows: &[ReportRow]) -> String {
+/// The summary table as Markdown (also what goes into closing notes; the CLI can
+/// print it).
+pub fn markdown_table(rows: &[ReportRow]) -> String {
     let mut s = String::from(
         "| strategy | kind | budget | samples | wall time (s) | overhead (s) | RMSE | relMSE | FLIP | speed-up vs ref. |\n\
          |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
