@@ -1,7 +1,7 @@
 //! reference + test image → error figures (RMSE, relMSE, FLIP) for the comparison report.
 //!
 //! All three are computed against the same reference and, for FLIP, on the same
-//! display tone mapping (the PNG path of [`super::png`]: linear × 2^exposure, clamp,
+//! display tone mapping (the PNG writer's path, `output::png`: linear × 2^exposure, clamp,
 //! sRGB OETF, 8 bits), so every strategy is judged on exactly what the viewer sees.
 
 use super::png::to_srgb8;

@@ -549,9 +549,9 @@ fn meta_line(input: &ReportInput) -> String {
 const CSS: &str = "body{font-family:sans-serif;margin:1.5em;color:#222;max-width:110em}\
 table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:.25em .6em;text-align:right}\
 td:first-child,th:first-child,td:nth-child(2){text-align:left}th{background:#eee}\
-.grid{display:flex;flex-wrap:wrap;gap:1.2em}.card{border:1px solid #ccc;padding:.6em;border-radius:4px}\
-.imgs{display:flex;gap:.4em;flex-wrap:wrap}figure{margin:0}figcaption{font-size:.8em;color:#555}\
-img{image-rendering:pixelated;max-width:100%}.plots{display:flex;flex-wrap:wrap;gap:1em}";
+.grid{display:flex;flex-wrap:wrap;gap:1.2em}.card{flex:1 1 40em;border:1px solid #ccc;padding:.6em;border-radius:4px}\
+.imgs{display:flex;gap:.4em;flex-wrap:wrap}figure{margin:0;flex:1 1 0;min-width:10em}figcaption{font-size:.8em;color:#555}\
+img{image-rendering:pixelated;max-width:100%;height:auto}.plots{display:flex;flex-wrap:wrap;gap:1em}";
 
 fn html(
     input: &ReportInput,
@@ -571,7 +571,7 @@ fn html(
     let (w, h) = (input.width, input.height);
     let img = |name: &str, alt: &str| {
         format!(
-            "<figure><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{}\"><figcaption>{a}</figcaption></figure>",
+            "<figure style=\"max-width:{w}px\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{}\"><figcaption>{a}</figcaption></figure>",
             data(name),
             a = esc(alt)
         )
