@@ -3,8 +3,12 @@
 //! renamed so that a failed run never leaves a broken or half-overwritten output.
 
 pub mod atomic;
+pub mod colormap;
 mod exr;
+pub mod metrics;
+pub mod plot;
 mod png;
+pub mod report;
 
 use crate::math::Vec3;
 use crate::render::RenderOutput;
