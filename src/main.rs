@@ -39,6 +39,45 @@ enum Command {
     /// Print what a scene holds (geometry, materials, lights, camera, settings) and
     /// the BVH build time.
     Info(InfoArgs),
+    /// Render a cached high-quality reference, every adaptive-sampling strategy at
+    /// several budgets and equal-time baselines, and write `out/<scene>/report.html`
+    /// (self-contained), `report.json` and `report.md`.
+    Compare(CompareArgs),
+}
+
+#[derive(Args, Debug)]
+struct CompareArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Comma-separated strategies [default: all: uniform, gradient, durand,
+    /// variance, gradient+vis, second-order].
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    strategies: Vec<String>,
+    /// Comma-separated budgets in samples per pixel [default: 0.05,0.1,0.17,0.25,0.5].
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    budgets: Vec<f32>,
+    /// Samples per evaluated point (adaptive samples and full-render pixels)
+    /// [default: the scene's `[render] spp`].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    spp: Option<u32>,
+    /// Samples per pixel of the reference (cached in the output folder) [default: 8 × spp].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    reference_spp: Option<u32>,
+    /// Image width in pixels [default: the scene's].
+    #[arg(long, value_name = "W", requires = "height", value_parser = clap::value_parser!(u32).range(1..))]
+    width: Option<u32>,
+    /// Image height in pixels [default: the scene's].
+    #[arg(long, value_name = "H", requires = "width", value_parser = clap::value_parser!(u32).range(1..))]
+    height: Option<u32>,
+    /// Shadow rays per line for the samples' visibility gradients [default: 8].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    vis_samples: Option<u32>,
+    /// Output folder [default: out/<scene-stem>].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// No progress output and no summary table.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -222,6 +261,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Render(args) => render_cmd(args),
         Command::Info(args) => info_cmd(args),
+        Command::Compare(args) => compare_cmd(args),
     }
 }
 
@@ -390,6 +430,53 @@ fn adaptive_cmd(
             exr_path.display(),
             png_path.display()
         );
+    }
+    Ok(())
+}
+
+fn compare_cmd(args: CompareArgs) -> anyhow::Result<()> {
+    use gradtrace::adaptive::Strategy;
+    use gradtrace::compare::{compare, CompareOptions};
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&stem));
+    let mut opts = CompareOptions::new(dir.clone());
+    if !args.strategies.is_empty() {
+        opts.strategies = args
+            .strategies
+            .iter()
+            .map(|s| Strategy::from_name(s.trim()))
+            .collect::<Result<_, _>>()?;
+    }
+    if !args.budgets.is_empty() {
+        opts.budgets = args.budgets.clone();
+    }
+    opts.spp = args.spp;
+    opts.reference_spp = args.reference_spp;
+    opts.resolution = args.width.zip(args.height);
+    if args.vis_samples.is_some() {
+        opts.vis_samples = args.vis_samples;
+    }
+    let scene = scene::load(&args.scene)?;
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    let bar = progress_bar(args.quiet);
+    let steps = 3 + opts.strategies.len() * opts.budgets.len() + 2 + opts.budgets.len();
+    bar.set_length(steps as u64);
+    let progress = |msg: &str| {
+        bar.inc(1);
+        bar.set_message(msg.to_string());
+    };
+    let rows = compare(&scene, &accel, &opts, &progress)?;
+    bar.finish_and_clear();
+    if !args.quiet {
+        println!("{}", gradtrace::output::report::markdown_table(&rows));
+        println!("wrote {}", dir.join("report.html").display());
     }
     Ok(())
 }

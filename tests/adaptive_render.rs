@@ -130,3 +130,38 @@ fn cli_writes_sample_layers() {
     assert!(!dir.join("b.exr").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `compare` end to end on a tiny image: the reference is cached, every
+/// strategy × budget run, the equal-time and 1%-grid runs, and the report files.
+#[test]
+fn compare_writes_the_report_and_caches_the_reference() {
+    use gradtrace::compare::{compare, CompareOptions};
+    let dir = std::env::temp_dir().join(format!("gradtrace-compare-{}", std::process::id()));
+    let scene = gradtrace::scene::load(Path::new("scenes/three_spheres_env.toml")).unwrap();
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    let mut opts = CompareOptions::new(dir.clone());
+    opts.strategies = vec![Strategy::Uniform, Strategy::Gradient];
+    opts.budgets = vec![0.1, 0.25];
+    opts.spp = Some(2);
+    opts.reference_spp = Some(8);
+    opts.resolution = Some((48, 36));
+    opts.vis_samples = Some(4);
+    let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
+    // full + 2×2 adaptive + 2 equal-time + 2 interpolation runs.
+    assert_eq!(rows.len(), 1 + 4 + 2 + 2);
+    assert!(rows
+        .iter()
+        .all(|r| r.rmse.is_finite() && r.flip.is_finite()));
+    for f in [
+        "report.html",
+        "report.json",
+        "report.md",
+        "reference-8spp-48x36.exr",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    // A second run reuses the cached reference (same rows for the same seeds).
+    let again = compare(&scene, &accel, &opts, &|_| {}).unwrap();
+    assert_eq!(rows[1].rmse, again[1].rmse);
+    std::fs::remove_dir_all(&dir).ok();
+}
