@@ -5,7 +5,8 @@
 use gradtrace::accel::{offset_ray_origin, Accel, Hit, PrimRef};
 use gradtrace::math::{Ray, Vec3};
 use gradtrace::scene::{Mesh, Sphere};
-use std::collections::HashMap;
+
+mod scenes;
 
 /// Small deterministic PCG32 so that failures reproduce.
 struct Rng(u64);
@@ -280,69 +281,6 @@ fn t_min_and_t_max_are_respected() {
     assert!((h.t - 3.0e-5).abs() < 1e-6, "{}", h.t);
 }
 
-/// Icosphere with shared vertices (midpoint cache), `level` subdivisions.
-fn icosphere(level: u32, center: Vec3, radius: f32) -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut v: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..level {
-        let mut cache: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut mid = |a: u32, b: u32, v: &mut Vec<Vec3>| {
-            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                v.push(((v[a as usize] + v[b as usize]) * 0.5).normalize());
-                v.len() as u32 - 1
-            })
-        };
-        let mut nf = Vec::with_capacity(f.len() * 4);
-        for &[a, b, c] in &f {
-            let ab = mid(a, b, &mut v);
-            let bc = mid(b, c, &mut v);
-            let ca = mid(c, a, &mut v);
-            nf.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = nf;
-    }
-    let positions = v.iter().map(|&p| center + p * radius).collect();
-    mesh("icosphere", positions, f)
-}
-
 fn cube(min: Vec3, max: Vec3) -> Mesh {
     let p = |i: u32| {
         Vec3::new(
@@ -429,7 +367,7 @@ fn closed_meshes_are_watertight_at_edges_and_vertices() {
     let mut rng = Rng::new(3);
     // Icosphere (level 3: 1280 triangles) at an odd position and scale.
     let c = Vec3::new(10.3, -2.1, 5.7);
-    let ico = icosphere(3, c, 3.7);
+    let ico = scenes::icosphere_mesh(3, c, 3.7, 0);
     let interior = [
         c,
         c + Vec3::new(0.5, -1.1, 0.3),
@@ -611,7 +549,7 @@ fn spawned_rays_do_not_self_intersect() {
     let mut rng = Rng::new(13);
     let c = Vec3::new(40.0, -20.0, 7.0);
     let ico_center = Vec3::new(-30.0, 12.0, 3.0);
-    let ico = icosphere(2, ico_center, 5.0);
+    let ico = scenes::icosphere_mesh(2, ico_center, 5.0, 0);
     let accel = Accel::build(&[ico], &[sphere(c, 3.0)]);
     let mut checked = 0;
     for _ in 0..20_000 {

@@ -318,7 +318,8 @@ fn map(xs: &[f64], f: impl Fn(f64) -> Result<f64>) -> Result<Vec<f64>> {
     xs.iter().map(|&x| f(x)).collect()
 }
 
-fn push_row(csv: &mut String, row: &[f64]) {
+/// Appends one CSV row, every value in `{:.10e}`.
+pub(super) fn push_row(csv: &mut String, row: &[f64]) {
     for (i, v) in row.iter().enumerate() {
         if i > 0 {
             csv.push(',');
@@ -328,10 +329,12 @@ fn push_row(csv: &mut String, row: &[f64]) {
     csv.push('\n');
 }
 
-/// Writes `contents` to `dir/name` through a temporary file and a rename.
-fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
+/// Writes `contents` to `dir/name` through a temporary file and a rename, so a
+/// reader never sees a half-written file; the temporary name carries the process id
+/// so that two processes writing the same figure do not share it.
+pub(super) fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
     let path = dir.join(name);
-    let tmp = dir.join(format!(".{name}.tmp"));
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let err = |e: std::io::Error| Error::Output {
         path: path.clone(),
         message: e.to_string(),
@@ -439,8 +442,9 @@ fn polyline(s: &mut String, pts: &[(f64, f64)], color: &str) {
     s.push_str("\"/>\n");
 }
 
-/// A stack of plot panels, each one row of the document.
-struct Svg {
+/// A stack of plot panels, each one row of the document. Shared with
+/// `sampling.rs` (Figs. 16-17) so the flatland figures have one SVG writer.
+pub(super) struct Svg {
     w: f64,
     h: f64,
     panels: Vec<Panel>,
@@ -453,7 +457,10 @@ struct Series {
     points: Vec<(f64, f64)>,
 }
 
-struct Panel {
+/// One plot panel: labelled polylines, optional circled markers and rows of
+/// sample-position ticks (the first tick row along the top edge, later ones along
+/// the bottom edge).
+pub(super) struct Panel {
     row: f64,
     title: String,
     xlabel: String,
@@ -462,10 +469,11 @@ struct Panel {
     log_y: bool,
     series: Vec<Series>,
     markers: Vec<(f64, f64)>,
+    ticks: Vec<(String, Vec<f64>)>,
 }
 
 impl Panel {
-    fn new(row: f64, title: &str, xlabel: &str, ylabel: &str) -> Self {
+    pub(super) fn new(row: f64, title: &str, xlabel: &str, ylabel: &str) -> Self {
         Self {
             row,
             title: title.into(),
@@ -475,7 +483,12 @@ impl Panel {
             log_y: false,
             series: Vec::new(),
             markers: Vec::new(),
+            ticks: Vec::new(),
         }
+    }
+    /// Log scale on both axes.
+    pub(super) fn log(self) -> Self {
+        self.log_x().log_y()
     }
     fn log_x(mut self) -> Self {
         self.log_x = true;
@@ -485,7 +498,7 @@ impl Panel {
         self.log_y = true;
         self
     }
-    fn series(mut self, label: &str, color: &str, pts: Vec<(f64, f64)>) -> Self {
+    pub(super) fn series(mut self, label: &str, color: &str, pts: Vec<(f64, f64)>) -> Self {
         self.series.push(Series {
             label: label.into(),
             color: color.into(),
@@ -497,22 +510,28 @@ impl Panel {
         self.markers = pts;
         self
     }
+    /// Adds one row of sample-position ticks at the abscissae `xs`; they do not
+    /// widen the axis range.
+    pub(super) fn ticks(mut self, color: &str, xs: Vec<f64>) -> Self {
+        self.ticks.push((color.into(), xs));
+        self
+    }
 }
 
 impl Svg {
-    fn new(w: f64, h: f64) -> Self {
+    pub(super) fn new(w: f64, h: f64) -> Self {
         Self {
             w,
             h,
             panels: Vec::new(),
         }
     }
-    fn panel(mut self, p: Panel) -> Self {
+    pub(super) fn panel(mut self, p: Panel) -> Self {
         self.panels.push(p);
         self
     }
 
-    fn finish(self) -> String {
+    pub(super) fn finish(self) -> String {
         let mut s = svg_open(self.w, self.h);
         let rows = self.panels.len().max(1) as f64;
         let ph = self.h / rows;
@@ -638,6 +657,24 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
             sx(q.0),
             sy(q.1)
         );
+    }
+    // Sample positions: one row of short ticks per set, first row at the top.
+    for (k, (color, xs)) in p.ticks.iter().enumerate() {
+        let (ya, yb) = if k == 0 {
+            (top, top + 8.0)
+        } else {
+            (top + h - 8.0, top + h)
+        };
+        for &x in xs
+            .iter()
+            .filter(|x| x.is_finite() && (!p.log_x || **x > 0.0))
+        {
+            let _ = writeln!(
+                s,
+                r#"<line x1="{0:.2}" y1="{ya}" x2="{0:.2}" y2="{yb}" stroke="{color}"/>"#,
+                sx(x)
+            );
+        }
     }
 }
 

@@ -47,6 +47,7 @@
 //!
 //! Entry point for the figures: [`write_sampling_figures`].
 
+use super::figures::{push_row, write, Panel, Svg};
 use super::quadrature::GaussLegendre;
 use super::{Lighting, Scene};
 use crate::{Error, Result};
@@ -667,8 +668,9 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
     let at = |s: &[PixelSample]| s.iter().map(|p| img.xs[p.index]).collect();
     let fig16 = svg_document(
         900.0,
-        &[
-            Plot::new(
+        vec![
+            Panel::new(
+                0.0,
                 &format!(
                     "Fig. 16/17: chirped bumps B(x), {FIG16_BUDGET} samples each (ticks: analytic top, numerical bottom)"
                 ),
@@ -678,7 +680,8 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
             .series("exact", "#000000", pts(&img.b))
             .ticks("#1f77b4", at(&ana))
             .ticks("#d62728", at(&num)),
-            Plot::new(
+            Panel::new(
+                1.0,
                 "gradient: analytic B_x (Eq. 25) vs numerical from the coarse start",
                 "x",
                 "dB/dx",
@@ -689,7 +692,7 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
                 "#d62728",
                 pts(&quotient),
             ),
-            Plot::new("linear reconstructions", "x", "B")
+            Panel::new(2.0, "linear reconstructions", "x", "B")
                 .series("exact", "#000000", pts(&img.b))
                 .series("analytic-gradient adaptive", "#1f77b4", pts(&lin_ana))
                 .series("numerical adaptive", "#d62728", pts(&lin_num)),
@@ -721,7 +724,8 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
     let col = |f: fn(&BudgetRow) -> f64| rows.iter().map(|r| (r.samples as f64, f(r))).collect();
     let fig17 = svg_document(
         900.0,
-        &[Plot::new(
+        vec![Panel::new(
+            0.0,
             "Fig. 17: RMS error of the reconstructed image vs samples (equal counts)",
             "samples",
             "RMS error",
@@ -781,191 +785,15 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
     Ok(SamplingSummary { files, ..summary })
 }
 
-fn push_row(csv: &mut String, row: &[f64]) {
-    for (i, v) in row.iter().enumerate() {
-        if i > 0 {
-            csv.push(',');
-        }
-        let _ = write!(csv, "{v:.10e}");
-    }
-    csv.push('\n');
-}
-
-/// Writes `contents` to `dir/name` through a temporary file and a rename.
-fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
-    let path = dir.join(name);
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let err = |e: std::io::Error| Error::Output {
-        path: path.clone(),
-        message: e.to_string(),
-    };
-    std::fs::write(&tmp, contents).map_err(err)?;
-    std::fs::rename(&tmp, &path).map_err(err)?;
-    Ok(path)
-}
-
-/// A labelled polyline: label, colour, points.
-type Series = (String, &'static str, Vec<(f64, f64)>);
-
-/// One plot panel: labelled polylines and rows of sample-position ticks. (The
-/// plotting helpers of `figures.rs` are private to it; this is the same style.)
-struct Plot {
-    title: String,
-    xlabel: String,
-    ylabel: String,
-    log: bool,
-    series: Vec<Series>,
-    ticks: Vec<(&'static str, Vec<f64>)>,
-}
-
-impl Plot {
-    fn new(title: &str, xlabel: &str, ylabel: &str) -> Self {
-        Self {
-            title: title.into(),
-            xlabel: xlabel.into(),
-            ylabel: ylabel.into(),
-            log: false,
-            series: Vec::new(),
-            ticks: Vec::new(),
-        }
-    }
-    /// Log scale on both axes.
-    fn log(mut self) -> Self {
-        self.log = true;
-        self
-    }
-    fn series(mut self, label: &str, color: &'static str, pts: Vec<(f64, f64)>) -> Self {
-        self.series.push((label.into(), color, pts));
-        self
-    }
-    fn ticks(mut self, color: &'static str, xs: Vec<f64>) -> Self {
-        self.ticks.push((color, xs));
-        self
-    }
-}
-
-/// Stacks the panels vertically, 300 px each. Non-finite points (and non-positive
-/// ones on log axes) are skipped, never written.
-fn svg_document(w: f64, plots: &[Plot]) -> String {
-    let ph = 300.0;
-    let h = ph * plots.len().max(1) as f64;
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n"
-    );
-    for (k, p) in plots.iter().enumerate() {
-        draw(&mut s, p, 70.0, k as f64 * ph + 30.0, w - 100.0, ph - 75.0);
-    }
-    s.push_str("</svg>\n");
-    s
-}
-
-fn draw(s: &mut String, p: &Plot, left: f64, top: f64, w: f64, h: f64) {
-    let t = |v: f64| if p.log { v.log10() } else { v };
-    let ok =
-        |&(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && (!p.log || x > 0.0 && y > 0.0);
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for &(x, y) in p.series.iter().flat_map(|sr| sr.2.iter()).filter(|q| ok(q)) {
-        (x0, x1) = (x0.min(t(x)), x1.max(t(x)));
-        (y0, y1) = (y0.min(t(y)), y1.max(t(y)));
-    }
-    if x0 > x1 {
-        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
-    }
-    if x1 - x0 < 1e-300 {
-        x1 = x0 + 1.0;
-    }
-    if y1 - y0 < 1e-300 {
-        y1 = y0 + 1.0;
-    }
-    let pad = 0.05 * (y1 - y0);
-    let (y0, y1) = (y0 - pad, y1 + pad);
-    let sx = |x: f64| left + (t(x) - x0) / (x1 - x0) * w;
-    let sy = |y: f64| top + h - (t(y) - y0) / (y1 - y0) * h;
-    let _ = writeln!(
-        s,
-        r#"<rect x="{left}" y="{top}" width="{w}" height="{h}" fill="none" stroke="black"/>"#
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{left}" y="{}" font-size="14">{}</text>"#,
-        top - 8.0,
-        p.title
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" font-size="12" text-anchor="middle">{}</text>"#,
-        left + 0.5 * w,
-        top + h + 34.0,
-        p.xlabel
-    );
-    let (lx, ly) = (left - 52.0, top + 0.5 * h);
-    let _ = writeln!(
-        s,
-        r#"<text x="{lx}" y="{ly}" font-size="12" text-anchor="middle" transform="rotate(-90 {lx} {ly})">{}</text>"#,
-        p.ylabel
-    );
-    for i in 0..=4 {
-        let f = i as f64 / 4.0;
-        let (vx, vy) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
-        let unlog = |v: f64| if p.log { 10f64.powf(v) } else { v };
-        let (gx, gy) = (left + f * w, top + h - f * h);
-        let _ = writeln!(
-            s,
-            r##"<line x1="{gx:.2}" y1="{top}" x2="{gx:.2}" y2="{}" stroke="#eeeeee"/><text x="{gx:.2}" y="{}" font-size="11" text-anchor="middle">{}</text>"##,
-            top + h,
-            top + h + 16.0,
-            tick(unlog(vx))
-        );
-        let _ = writeln!(
-            s,
-            r##"<line x1="{left}" y1="{gy:.2}" x2="{}" y2="{gy:.2}" stroke="#eeeeee"/><text x="{}" y="{:.2}" font-size="11" text-anchor="end">{}</text>"##,
-            left + w,
-            left - 4.0,
-            gy + 4.0,
-            tick(unlog(vy))
-        );
-    }
-    for (k, (label, color, pts)) in p.series.iter().enumerate() {
-        s.push_str("<polyline fill=\"none\" stroke-width=\"1.2\" stroke=\"");
-        s.push_str(color);
-        s.push_str("\" points=\"");
-        for &(x, y) in pts.iter().filter(|q| ok(q)) {
-            let _ = write!(s, "{:.2},{:.2} ", sx(x), sy(y));
-        }
-        s.push_str("\"/>\n");
-        let ly = top + 16.0 + 16.0 * k as f64;
-        let _ = writeln!(
-            s,
-            r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="2"/><text x="{}" y="{}" font-size="12">{label}</text>"#,
-            left + w - 250.0,
-            left + w - 225.0,
-            left + w - 220.0,
-            ly + 4.0
-        );
-    }
-    // Sample positions: one row of short ticks per set, first row at the top.
-    for (k, (color, xs)) in p.ticks.iter().enumerate() {
-        let (ya, yb) = if k == 0 {
-            (top, top + 8.0)
-        } else {
-            (top + h - 8.0, top + h)
-        };
-        for &x in xs.iter().filter(|x| x.is_finite() && (!p.log || **x > 0.0)) {
-            let _ = writeln!(
-                s,
-                r#"<line x1="{0:.2}" y1="{ya}" x2="{0:.2}" y2="{yb}" stroke="{color}"/>"#,
-                sx(x)
-            );
-        }
-    }
-}
-
-fn tick(v: f64) -> String {
-    if v != 0.0 && (v.abs() >= 1e4 || v.abs() < 1e-2) {
-        format!("{v:.1e}")
-    } else {
-        format!("{v:.3}")
-    }
+/// Stacks the panels vertically, 300 px each, with the shared plot writer of
+/// `figures.rs`. Non-finite points (and non-positive ones on log axes) are skipped,
+/// never written.
+fn svg_document(w: f64, plots: Vec<Panel>) -> String {
+    let h = 300.0 * plots.len().max(1) as f64;
+    plots
+        .into_iter()
+        .fold(Svg::new(w, h), |svg, p| svg.panel(p))
+        .finish()
 }
 
 #[cfg(test)]

@@ -83,9 +83,10 @@ pub fn ground(size: f32) -> Rect {
     }
 }
 
-/// A unit icosphere subdivided `levels` times, with exact vertex normals (a
-/// smooth mesh whose shading normals vary across every triangle).
-pub fn add_icosphere(s: &mut Scene, center: Vec3, radius: f32, levels: u32, material: u32) {
+/// An icosphere of `radius` around `center`, subdivided `levels` times with shared
+/// vertices (midpoint cache), with exact vertex normals (a smooth mesh whose
+/// shading normals vary across every triangle). Named "icosphere", object id 0.
+pub fn icosphere_mesh(levels: u32, center: Vec3, radius: f32, material: u32) -> Mesh {
     let t = (1.0 + 5f32.sqrt()) / 2.0;
     let mut v: Vec<Vec3> = [
         (-1.0, t, 0.0),
@@ -144,18 +145,27 @@ pub fn add_icosphere(s: &mut Scene, center: Vec3, radius: f32, levels: u32, mate
         }
         f = nf;
     }
-    s.object_names.push(format!("icosphere{}", s.meshes.len()));
-    s.meshes.push(Mesh {
-        name: String::new(),
+    Mesh {
+        name: "icosphere".into(),
         positions: v.iter().map(|&p| center + radius * p).collect(),
-        normals: v.clone(),
+        normals: v,
         uvs: vec![],
         triangles: f,
         material,
         emission: Vec3::ZERO,
         bump: None,
         rect: None,
+        object_id: 0,
+    }
+}
+
+/// Adds [`icosphere_mesh`] to the scene as its own object.
+pub fn add_icosphere(s: &mut Scene, center: Vec3, radius: f32, levels: u32, material: u32) {
+    s.object_names.push(format!("icosphere{}", s.meshes.len()));
+    s.meshes.push(Mesh {
+        name: String::new(),
         object_id: s.object_names.len() as u32,
+        ..icosphere_mesh(levels, center, radius, material)
     });
 }
 
