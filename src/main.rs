@@ -307,7 +307,6 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth,
         seed: args.seed,
         integrator: args.integrator.map(Into::into),
-        threads: args.threads.map(|t| t as usize),
         resolution: args.width.zip(args.height),
         aovs: !args.no_aovs,
         gradients: args.gradients,

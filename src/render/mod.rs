@@ -1,5 +1,5 @@
-//! scene + BVH → per-pixel estimates (radiance and AOVs) by path tracing.
-//!
+//! scene + BVH → per-pixel estimates (radiance, AOVs, analytic gradients) by
+//! path tracing; `adaptive` evaluates the same estimator at quadtree samples.
 
 pub mod adaptive;
 pub mod gradients;
@@ -20,14 +20,14 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// Options for one render; `None` fields fall back to the scene's `[render]` table.
+/// The thread count is the caller's rayon pool (the CLI's `--threads`); it never
+/// changes the image.
 #[derive(Clone, Debug, Default)]
 pub struct RenderOptions {
     pub spp: Option<u32>,
     pub max_depth: Option<u32>,
     pub seed: Option<u32>,
     pub integrator: Option<Integrator>,
-    /// Worker threads (None: rayon's default, all cores). Never changes the image.
-    pub threads: Option<usize>,
     /// Override of the camera resolution.
     pub resolution: Option<(u32, u32)>,
     /// Compute the AOV planes (normal, depth, albedo, object id, variance).
