@@ -69,8 +69,9 @@ struct CompareArgs {
     /// Image height in pixels [default: the scene's].
     #[arg(long, value_name = "H", requires = "width", value_parser = clap::value_parser!(u32).range(1..))]
     height: Option<u32>,
-    /// Shadow rays per line for the samples' visibility gradients [default: 8].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    /// Shadow rays per line for the samples' visibility gradients; 0 samples the
+    /// lights by points and drops the visibility term [default: 8].
+    #[arg(long, value_name = "N")]
     vis_samples: Option<u32>,
     /// Output folder [default: out/<scene-stem>].
     #[arg(long, value_name = "DIR")]
@@ -124,8 +125,8 @@ struct RenderArgs {
     gradients: bool,
     /// With --gradients: shadow rays per azimuth line for the first hit's direct
     /// light; the same rays give the radiance and the visibility (soft-shadow)
-    /// gradient [default: 32].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    /// gradient [default: 32]. 0: point light sampling and no visibility term.
+    #[arg(long, value_name = "N")]
     vis_samples: Option<u32>,
     /// With --gradients: bisection steps refining each visibility jump (extra
     /// shadow rays per jump) [default: 0].

@@ -165,3 +165,26 @@ fn compare_writes_the_report_and_caches_the_reference() {
     assert_eq!(rows[1].rmse, again[1].rmse);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `vis_samples = 0` keeps the shading terms but samples lights by points and
+/// drops the visibility term; any other count keeps it where shadows exist.
+#[test]
+fn zero_vis_samples_drops_only_the_visibility_term() {
+    let scene = gradtrace::scene::load(Path::new("scenes/three_spheres_env.toml")).unwrap();
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    let run = |n: u32| {
+        let opts = RenderOptions {
+            gradients: true,
+            vis_samples: Some(n),
+            ..small()
+        };
+        gradtrace::render::render(&scene, &accel, &opts, &|_, _| {})
+            .unwrap()
+            .gradients
+            .unwrap()
+    };
+    let (points, lines) = (run(0), run(8));
+    assert!(points.vis.iter().all(|&v| v == 0.0));
+    assert!(lines.vis.iter().filter(|&&v| v > 0.0).count() > 100);
+    assert!(points.grad_u.iter().all(|g| g.is_finite()));
+}

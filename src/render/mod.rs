@@ -35,7 +35,8 @@ pub struct RenderOptions {
     /// Compute the analytic image gradient planes (`grad.*` layers).
     pub gradients: bool,
     /// With gradients: shadow rays per φ-line for the first hit's direct light
-    /// (visibility gradients need a line; default 32).
+    /// (visibility gradients need a line; default 32). 0: point sampling and no
+    /// visibility term, the cheapest gradients.
     pub vis_samples: Option<u32>,
     /// With gradients: bisection steps that refine each visibility jump (default 0).
     pub vis_refine: Option<u32>,
@@ -203,13 +204,15 @@ impl Setup {
             max_depth,
             rr_depth: settings.rr_depth,
             lights: LightSet::build(scene),
-            // Lines exist to find visibility jumps: none where nothing casts shadows.
-            lines: (opts.gradients && gradients::visibility::scene_can_cast_shadows(scene)).then(
-                || path::LineConfig {
-                    n_theta: opts.vis_samples.unwrap_or(32).max(1),
-                    refine: opts.vis_refine.unwrap_or(0),
-                },
-            ),
+            // Lines exist to find visibility jumps: none where nothing casts shadows,
+            // and none when asked for 0 rays per line (shading terms only).
+            lines: (opts.gradients
+                && opts.vis_samples != Some(0)
+                && gradients::visibility::scene_can_cast_shadows(scene))
+            .then(|| path::LineConfig {
+                n_theta: opts.vis_samples.unwrap_or(32),
+                refine: opts.vis_refine.unwrap_or(0),
+            }),
             far_light: opts.far_light,
         })
     }
