@@ -156,9 +156,14 @@ impl PathTracer<'_> {
             // Next-event estimation (one light sample per vertex).
             let u_pick = sampler.next_1d();
             let u_light = sampler.next_2d();
-            prev_line = false;
+            // In line mode every line-coverable light is accounted for by the lines
+            // in expectation over the pick, whichever light this sample picked, so the
+            // continuation must not count them again even when the pick fell on a
+            // (point-sampled) mesh emitter.
+            prev_line =
+                grad.is_some() && self.lines.is_some() && depth == 1 && !material.is_delta();
             let line = match (&mut grad, self.lines) {
-                (Some((g, hd)), Some(cfg)) if depth == 1 && !material.is_delta() => self
+                (Some((g, hd)), Some(cfg)) if prev_line => self
                     .lights
                     .pick_line(scene, u_pick)
                     .map(|(ll, pmf)| (ll, pmf, g, *hd, cfg)),
@@ -168,7 +173,6 @@ impl PathTracer<'_> {
                 let (l, rays) = self.line_direct(&si, wo, material, &hd, ll, pmf, u_light, cfg, g);
                 radiance += l;
                 out.rays += rays;
-                prev_line = true;
             } else if !material.is_delta() {
                 if let Some(ls) = self.lights.sample(scene, si.p, u_pick, u_light) {
                     let wi_local = si.frame.to_local(ls.wi);

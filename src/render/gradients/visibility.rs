@@ -121,8 +121,11 @@ pub fn trace_line(
         if t_max <= 0.0 || w.dot(ng) <= 0.0 {
             return None;
         }
+        // The segment must end short of the light as seen from the offset origin,
+        // not from x: the offset moves the origin toward the light.
         let o = offset_origin(x, ng, w);
-        Some((Ray::segment(o, w, t_max * (1.0 - 1e-4)), lp))
+        let t_o = light_extent(domain, o, w).0;
+        Some((Ray::segment(o, w, t_o * (1.0 - 1e-4)), lp))
     };
     let probe = |theta: f32| -> (bool, Option<(Vec3, Vec3)>) {
         match shadow_ray(theta) {
@@ -693,33 +696,41 @@ mod tests {
             Vec3::new(1.3, 0.1, 0.0),
             Vec3::new(0.2, 0.0, 0.9),
         );
-        let x = Vec3::new(0.3, 0.0, 0.2);
-        let centre = corner + 0.5 * (eu + ev);
-        let frame = Frame::from_normal((centre - x).normalize());
-        let inside = |w: Vec3| {
-            let n = eu.cross(ev);
-            let t = (corner - x).dot(n) / w.dot(n);
-            let q = x + w * t - corner;
-            let (uu, uv, vv) = (eu.length_squared(), eu.dot(ev), ev.length_squared());
-            let det = uu * vv - uv * uv;
-            let a = (vv * q.dot(eu) - uv * q.dot(ev)) / det;
-            let b = (uu * q.dot(ev) - uv * q.dot(eu)) / det;
-            t > 0.0 && (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)
-        };
-        for k in 0..32 {
-            let phi = k as f32 / 32.0 * TAU;
-            let d = frame.s * phi.cos() + frame.t * phi.sin();
-            let (mut lo, mut hi) = (0.0f32, 1.5f32);
-            for _ in 0..50 {
-                let mid = 0.5 * (lo + hi);
-                if inside(frame.n * mid.cos() + d * mid.sin()) {
-                    lo = mid;
-                } else {
-                    hi = mid;
+        for x in [
+            Vec3::new(0.3, 0.0, 0.2),
+            Vec3::new(2.8, 0.0, 2.5),
+            Vec3::new(-2.0, 0.5, 0.1),
+        ] {
+            let centre = corner + 0.5 * (eu + ev);
+            let frame = Frame::from_normal((centre - x).normalize());
+            let inside = |w: Vec3| {
+                let n = eu.cross(ev);
+                let t = (corner - x).dot(n) / w.dot(n);
+                let q = x + w * t - corner;
+                let (uu, uv, vv) = (eu.length_squared(), eu.dot(ev), ev.length_squared());
+                let det = uu * vv - uv * uv;
+                let a = (vv * q.dot(eu) - uv * q.dot(ev)) / det;
+                let b = (uu * q.dot(ev) - uv * q.dot(eu)) / det;
+                t > 0.0 && (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)
+            };
+            for k in 0..32 {
+                let phi = k as f32 / 32.0 * TAU;
+                let d = frame.s * phi.cos() + frame.t * phi.sin();
+                let (mut lo, mut hi) = (0.0f32, 1.5f32);
+                for _ in 0..50 {
+                    let mid = 0.5 * (lo + hi);
+                    if inside(frame.n * mid.cos() + d * mid.sin()) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
                 }
+                let analytic = rect_exit_angle(x, frame.n, d, corner, eu, ev);
+                assert!(
+                    (analytic - lo).abs() < 1e-4,
+                    "x {x} φ {phi}: {analytic} vs {lo}"
+                );
             }
-            let analytic = rect_exit_angle(x, frame.n, d, corner, eu, ev);
-            assert!((analytic - lo).abs() < 1e-4, "φ {phi}: {analytic} vs {lo}");
         }
     }
 }
