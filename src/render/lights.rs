@@ -326,8 +326,7 @@ fn build_env_sampler(env: &Environment) -> EnvSampler {
             ..
         } => {
             // Power of each part: the lobe integrates to peak·2π(1−e^{−2κ})/κ.
-            let k = sharpness.max(1e-4);
-            let lobe = luminance(*peak) * 2.0 * PI * (-(-2.0 * k).exp_m1()) / k;
+            let lobe = luminance(*peak) * gaussian_lobe_integral(*sharpness);
             let flat = luminance(*ambient) * 4.0 * PI;
             let total = lobe + flat;
             let p = if total > 0.0 { lobe / total } else { 0.0 };
@@ -337,6 +336,12 @@ fn build_env_sampler(env: &Environment) -> EnvSampler {
             }
         }
     }
+}
+
+/// ∫ exp(κ (ω·d − 1)) dω over the sphere = 2π (1 − e^{−2κ}) / κ.
+fn gaussian_lobe_integral(sharpness: f32) -> f32 {
+    let k = sharpness.max(1e-4);
+    2.0 * PI * (-(-2.0 * k).exp_m1()) / k
 }
 
 fn mean_luminance(env: &Environment) -> f32 {
@@ -365,8 +370,7 @@ fn mean_luminance(env: &Environment) -> f32 {
             ambient,
             ..
         } => {
-            let k = sharpness.max(1e-4);
-            luminance(*ambient) + luminance(*peak) * (-(-2.0 * k).exp_m1()) / (2.0 * k)
+            luminance(*ambient) + luminance(*peak) * gaussian_lobe_integral(*sharpness) / (4.0 * PI)
         }
     }
 }
@@ -431,40 +435,30 @@ fn sample_sphere(scene: &Scene, i: u32, p: Vec3, u: Vec2) -> Option<LightSample>
     let to_c = s.center - p;
     let dist2 = to_c.length_squared();
     let r2 = s.radius * s.radius;
-    if dist2 <= r2 * 1.0001 {
+    let (wi, q, n) = if dist2 <= r2 * 1.0001 {
         // Inside (or on) the light: uniform area sampling of the whole sphere.
         let n = warp::square_to_uniform_sphere(u);
         let q = s.center + s.radius * n;
-        let d = q - p;
-        let d2 = d.length_squared();
-        let wi = d / d2.sqrt().max(1e-30);
-        let cos_l = -n.dot(wi);
-        if cos_l <= 0.0 {
+        let wi = (q - p) / (q - p).length().max(1e-30);
+        if -n.dot(wi) <= 0.0 {
             return None;
         }
-        return Some(LightSample {
-            wi,
-            radiance: s.emission,
-            pdf: d2 / (4.0 * PI * r2 * cos_l),
-            point: Some((q, n)),
-        });
-    }
-    let dist = dist2.sqrt();
-    let sin2_max = r2 / dist2;
-    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-    let frame = Frame::from_normal(to_c / dist);
-    let local = warp::square_to_uniform_cone(u, cos_max);
-    let wi = frame.to_world(local);
-    // Point on the sphere along wi: nearer root of |p + t wi − c|² = r².
-    let b = to_c.dot(wi);
-    let disc = (r2 - (to_c - b * wi).length_squared()).max(0.0);
-    let t = b - disc.sqrt();
-    let q = p + t * wi;
-    let n = (q - s.center).normalize_or_zero();
+        (wi, q, n)
+    } else {
+        let dist = dist2.sqrt();
+        let cos_max = (1.0 - r2 / dist2).max(0.0).sqrt();
+        let wi = Frame::from_normal(to_c / dist).to_world(warp::square_to_uniform_cone(u, cos_max));
+        // Point on the sphere along wi: nearer root of |p + t wi − c|² = r².
+        let b = to_c.dot(wi);
+        let disc = (r2 - (to_c - b * wi).length_squared()).max(0.0);
+        let q = p + (b - disc.sqrt()) * wi;
+        (wi, q, (q - s.center).normalize_or_zero())
+    };
+    // One density formula for sampling and for MIS, so the two always agree.
     Some(LightSample {
         wi,
         radiance: s.emission,
-        pdf: warp::uniform_cone_pdf(cos_max),
+        pdf: sphere_pdf(scene, i, p, q, n),
         point: Some((q, n)),
     })
 }
