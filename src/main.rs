@@ -73,6 +73,10 @@ struct CompareArgs {
     /// lights by points and drops the visibility term [default: 8].
     #[arg(long, value_name = "N")]
     vis_samples: Option<u32>,
+    /// How many of each adaptive sample's camera samples carry the analytic
+    /// gradient; the rest only refine its radiance [default: min(spp, 8)].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    gradient_spp: Option<u32>,
     /// Output folder [default: out/<scene-stem>].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -136,6 +140,10 @@ struct RenderArgs {
     /// 2|n_x|·d exceeds F, the far-light criterion of the first-order paper, Sec. 5.2.
     #[arg(long, value_name = "F")]
     far_light: Option<f32>,
+    /// With --strategy: how many of each sample's --spp camera samples carry the
+    /// analytic gradient; the rest only refine its radiance [default: min(spp, 8)].
+    #[arg(long, value_name = "N", requires = "strategy", value_parser = clap::value_parser!(u32).range(1..))]
+    gradient_spp: Option<u32>,
     /// Adaptive sampling: place samples with this strategy (uniform, gradient,
     /// durand, variance, gradient+vis, second-order) and reconstruct every pixel
     /// from them; each sample is a --spp estimate with analytic gradients.
@@ -314,6 +322,7 @@ fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
         vis_samples: args.vis_samples,
         vis_refine: args.vis_refine,
         far_light: args.far_light,
+        gradient_spp: args.gradient_spp,
     };
 
     if let Some(name) = &args.strategy {
@@ -463,6 +472,7 @@ fn compare_cmd(args: CompareArgs) -> anyhow::Result<()> {
     if args.vis_samples.is_some() {
         opts.vis_samples = args.vis_samples;
     }
+    opts.gradient_spp = args.gradient_spp;
     let scene = scene::load(&args.scene)?;
     let accel = Accel::build(&scene.meshes, &scene.spheres);
     let bar = progress_bar(args.quiet);

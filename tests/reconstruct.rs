@@ -4,7 +4,7 @@
 
 use glam::{Vec2, Vec3};
 use gradtrace::adaptive::{refine, Sample, SampleSet, SampleValue, Settings, Strategy};
-use gradtrace::reconstruct::{reconstruct, Interpolation};
+use gradtrace::reconstruct::{reconstruct, reconstruct_with, Interpolation, Options};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
 /// A per-channel linear image `a + b·u + c·v`.
@@ -105,12 +105,17 @@ impl HasPosition for Pt {
 }
 
 /// Our per-channel Sibson C1 (written out to allow neighbour filtering) must equal
-/// spade's `interpolate_gradient` with flatness 0.5 inside the hull.
+/// spade's `interpolate_gradient` with flatness 0.5 inside the hull, when the
+/// gradients are used as sampled (no slope limiter; the point-sized cells of
+/// `scattered` touch no border, so no mirror samples are added).
 #[test]
 fn c1_matches_spade_interpolate_gradient() {
     let (w, h) = (64u32, 48u32);
     let set = scattered(w, h, 160, sincos);
-    let r = reconstruct(&set, Interpolation::Gradient).unwrap();
+    let raw = Options {
+        slope_limiter: false,
+    };
+    let r = reconstruct_with(&set, Interpolation::Gradient, &raw).unwrap();
     for (ch, pick) in [|v: Vec3| v.x, |v: Vec3| v.y, |v: Vec3| v.z]
         .into_iter()
         .enumerate()
@@ -273,4 +278,97 @@ fn degenerate_inputs() {
     let mut bad = scattered(10, 10, 20, linear);
     bad.samples[3].pos.x = f32::NAN;
     assert!(reconstruct(&bad, Interpolation::Gradient).is_err());
+}
+
+/// One sample with a wild gradient (a heavy-tailed Monte Carlo visibility term, say)
+/// in a coarse layout. Unlimited, Sibson's Taylor terms spread it over the cell as a
+/// blob far outside the image's range; the Barth–Jespersen limiter keeps every pixel
+/// within the range of the samples, and leaves the rest of the image as accurate as
+/// before.
+#[test]
+fn slope_limiter_contains_an_outlier_gradient() {
+    let (w, h) = (96u32, 64u32);
+    let mut set = refine(&sincos, w, h, &Settings::new(Strategy::Uniform, 0.04)).unwrap();
+    let k = set
+        .samples
+        .iter()
+        .position(|s| s.pos.distance(Vec2::new(48.0, 32.0)) < 6.0)
+        .unwrap();
+    set.samples[k].value.grad_u += Vec3::splat(3.0);
+    let truth = |x: usize, y: usize| sincos(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).radiance;
+    let worst = |opts: &Options| {
+        let r = reconstruct_with(&set, Interpolation::Gradient, opts).unwrap();
+        let mut worst = 0.0f32;
+        for y in 0..r.height {
+            for x in 0..r.width {
+                worst = worst.max((r.image[y * r.width + x] - truth(x, y)).abs().max_element());
+            }
+        }
+        worst
+    };
+    let limited = worst(&Options::default());
+    let raw = worst(&Options {
+        slope_limiter: false,
+    });
+    println!("outlier gradient: worst pixel error {raw:.3} unlimited, {limited:.3} limited");
+    // sin·cos spans [-1, 1] (plus offsets); samples are ~5 px apart.
+    assert!(
+        raw > 1.5,
+        "the outlier should show without the limiter ({raw})"
+    );
+    assert!(
+        limited < 0.4,
+        "limited reconstruction still off by {limited}"
+    );
+    // On the clean image the limiter costs little accuracy.
+    let clean = refine(&sincos, w, h, &Settings::new(Strategy::Uniform, 0.04)).unwrap();
+    let lin = rmse(&clean, Interpolation::Linear, sincos);
+    let c1 = rmse(&clean, Interpolation::Gradient, sincos);
+    println!("clean sin·cos: RMSE linear {lin:.3e}, limited C1 {c1:.3e}");
+    assert!(c1 < 0.6 * lin);
+}
+
+/// Pixels in the strip between the image border and the outermost samples (up to
+/// half a block wide) are interpolated from the samples next to them: the mirror
+/// samples close the hull. Two objects meet along a horizontal line; without the
+/// mirrors the Delaunay slivers along the left border handed border pixels values
+/// from the far side of that line (dark columns in rendered images).
+#[test]
+fn border_strip_uses_its_own_surface() {
+    let (w, h) = (120u32, 80u32);
+    // Above the horizon: background (no object, infinite depth, black); below: a
+    // ground plane receding towards it, lit by a ramp.
+    let img = |p: Vec2| {
+        let below = p.y > 37.3;
+        if !below {
+            let mut v = SampleValue::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+            v.object_id = gradtrace::adaptive::NO_OBJECT;
+            v.depth = f32::INFINITY;
+            return v;
+        }
+        let mut v = SampleValue::new(Vec3::splat(2.0 + 0.01 * p.x), Vec3::splat(0.01), Vec3::ZERO);
+        v.depth = 50.0 - 0.3 * p.y;
+        v
+    };
+    for strategy in [Strategy::Gradient, Strategy::Variance] {
+        let set = refine(&img, w, h, &Settings::new(strategy, 0.08)).unwrap();
+        for mode in [Interpolation::Linear, Interpolation::Gradient] {
+            let r = reconstruct(&set, mode).unwrap();
+            let mut worst = 0.0f32;
+            for y in 0..r.height {
+                for x in (0..4).chain(r.width - 4..r.width) {
+                    let t = img(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).radiance;
+                    // Next to the horizon a pixel keeps only its own surface's
+                    // samples (renormalised weights, not exact on the ramp).
+                    if (y as f32 + 0.5 - 37.3).abs() < 2.0 {
+                        continue;
+                    }
+                    worst = worst.max((r.image[y * r.width + x] - t).abs().max_element());
+                }
+            }
+            println!("{strategy:?} {mode:?}: worst border-strip error {worst:.2e}");
+            // The other surface is 2 away (without the mirrors: errors of 3.2).
+            assert!(worst < 1e-3, "{strategy:?} {mode:?}: {worst}");
+        }
+    }
 }

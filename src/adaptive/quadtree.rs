@@ -501,6 +501,12 @@ impl Tree {
                 .sqrt()
                     / d
             }
+            // The analytic gradient is a point value; a cell's gradient magnitude is
+            // estimated as the largest over its sample and its neighbours', so that a
+            // bump whose slope vanishes exactly at a sample still counts.
+            Strategy::Gradient | Strategy::GradientVis => {
+                self.own_metric(va).max(self.own_metric(vb))
+            }
             _ => 0.0,
         }
     }
@@ -541,10 +547,7 @@ impl Tree {
             self.mark_dirty(id as u32);
         }
         let tol = self.settings.depth_tolerance;
-        let pairs = matches!(
-            self.settings.strategy,
-            Strategy::Variance | Strategy::SecondOrder
-        );
+        let pairs = !matches!(self.settings.strategy, Strategy::Uniform | Strategy::Durand);
         let mut nb = Vec::with_capacity(9);
         for id in first as u32..end as u32 {
             self.neighbours(id, &mut nb);

@@ -34,6 +34,9 @@ pub struct CompareOptions {
     pub resolution: Option<(u32, u32)>,
     /// Shadow rays per line for the visibility gradients of the samples.
     pub vis_samples: Option<u32>,
+    /// Camera samples per adaptive sample that carry the gradient (see
+    /// [`RenderOptions::gradient_spp`]).
+    pub gradient_spp: Option<u32>,
     pub seed: Option<u32>,
     /// Directory of the report (default `out/<scene>`); the reference is cached there.
     pub out_dir: PathBuf,
@@ -49,6 +52,7 @@ impl CompareOptions {
             reference_spp: None,
             resolution: None,
             vis_samples: Some(8),
+            gradient_spp: None,
             seed: None,
             out_dir,
         }
@@ -76,6 +80,7 @@ pub fn compare(
         resolution: opts.resolution,
         seed: opts.seed,
         vis_samples: opts.vis_samples,
+        gradient_spp: opts.gradient_spp,
         ..Default::default()
     };
     let (w, h) = opts

@@ -148,6 +148,32 @@ struct Data {
 /// Errors: an empty image or sample set, a non-finite sample position, or positions
 /// spade rejects (magnitudes beyond ~1e20 or below ~1e-20 other than zero).
 pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstruction> {
+    reconstruct_with(set, mode, &Options::default())
+}
+
+/// Switches of [`reconstruct_with`]; the default is what the renderer uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Options {
+    /// Barth–Jespersen limiting of the sample gradients before `Gradient`
+    /// interpolation (see [`limit_gradients`]); off gives Sibson's interpolant with
+    /// the gradients exactly as sampled.
+    pub slope_limiter: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            slope_limiter: true,
+        }
+    }
+}
+
+/// [`reconstruct`] with explicit [`Options`].
+pub fn reconstruct_with(
+    set: &SampleSet,
+    mode: Interpolation,
+    options: &Options,
+) -> Result<Reconstruction> {
     let (w, h) = (set.width as usize, set.height as usize);
     let bad = |message: String| Error::Option {
         option: "samples".into(),
@@ -163,7 +189,7 @@ pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstructio
         return Err(bad(format!("sample position {} is not finite", s.pos)));
     }
     let d = |v: Vec3| v.as_dvec3();
-    let data = Data {
+    let mut data = Data {
         pos: set.samples.iter().map(|s| s.pos.as_dvec2()).collect(),
         value: set.samples.iter().map(|s| d(s.value.radiance)).collect(),
         grad_u: set.samples.iter().map(|s| d(s.value.grad_u)).collect(),
@@ -183,8 +209,13 @@ pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstructio
         .collect();
     // `bulk_load_stable` keeps the first of duplicate positions, so a duplicated
     // sample simply does not take part.
-    let dt =
+    let mut dt =
         Dt::bulk_load_stable(nodes).map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
+    if mode == Interpolation::Gradient && options.slope_limiter {
+        limit_gradients(&dt, &mut data);
+    }
+    add_border_ghosts(set, &mut dt, &mut data, mode)
+        .map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
 
     let centre = |x: usize, y: usize| Point2::new(x as f64 + 0.5, y as f64 + 0.5);
     let mut row_start = Vec::with_capacity(h);
@@ -210,6 +241,135 @@ pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstructio
         image,
         density: set.density(),
     })
+}
+
+/// Barth–Jespersen slope limiting of the sample gradients (Barth & Jespersen 1989,
+/// the standard limiter on unstructured meshes), per colour channel.
+///
+/// A Monte Carlo gradient is noisy, and the visibility term is heavy-tailed (a line
+/// grazing a blocker); one outlier, expanded over a large quadtree cell by the C1
+/// interpolant's Taylor terms, paints a bright or negative blob. The limiter scales
+/// each sample's gradient by the largest φ ∈ [0, 1] for which its first-order
+/// expansion, evaluated at the midpoint of every Delaunay edge to a same-surface
+/// neighbour, stays within the range of the values of the sample and those
+/// neighbours. Linear images pass unchanged (φ = 1), as do smooth slopes; only
+/// expansions that overshoot every neighbour are cut back.
+fn limit_gradients(dt: &Dt, data: &mut Data) {
+    let mut phi = vec![DVec3::ONE; data.pos.len()];
+    let mut same = Vec::with_capacity(16);
+    for v in dt.vertices() {
+        let i = v.data().idx as usize;
+        same.clear();
+        same.extend(
+            v.out_edges()
+                .map(|e| e.to().data().idx as usize)
+                .filter(|&j| {
+                    !surfaces_differ(
+                        data.object[i],
+                        data.depth[i],
+                        data.object[j],
+                        data.depth[j],
+                        data.tolerance,
+                    )
+                }),
+        );
+        let (lo, hi) = same
+            .iter()
+            .fold((data.value[i], data.value[i]), |(lo, hi), &j| {
+                (lo.min(data.value[j]), hi.max(data.value[j]))
+            });
+        let mut f = DVec3::ONE;
+        for &j in &same {
+            let half = (data.pos[j] - data.pos[i]) * 0.5;
+            let delta = data.grad_u[i] * half.x + data.grad_v[i] * half.y;
+            for c in 0..3 {
+                let room = if delta[c] > 0.0 { hi[c] } else { lo[c] } - data.value[i][c];
+                if delta[c] != 0.0 {
+                    f[c] = f[c].min((room / delta[c]).clamp(0.0, 1.0));
+                }
+            }
+        }
+        phi[i] = f;
+    }
+    for ((gu, gv), f) in data.grad_u.iter_mut().zip(&mut data.grad_v).zip(phi) {
+        *gu *= f;
+        *gv *= f;
+    }
+}
+
+/// Mirror images ("ghosts") of the samples whose cells touch the image border,
+/// reflected across that border (and across both at a corner).
+///
+/// Without them the convex hull of the samples stops up to half a block inside the
+/// image, and the Delaunay triangles along it are long slivers: a pixel in that strip
+/// gets natural neighbours (or a triangle) from far along the border, possibly from
+/// another surface — dark or negative columns at the image edge. With the ghosts the
+/// hull covers every pixel centre and each border pixel is interpolated from the
+/// samples next to it. A ghost sits on its source's surface and carries the source's
+/// extension to its position, so both modes stay exact on linear images: the
+/// first-order Taylor expansion (`Gradient`), or the plane of the best-shaped
+/// same-surface triangle around the source (`Linear`, which must not use gradients).
+fn add_border_ghosts(
+    set: &SampleSet,
+    dt: &mut Dt,
+    data: &mut Data,
+    mode: Interpolation,
+) -> std::result::Result<(), spade::InsertionError> {
+    let (w, h) = (set.width as f64, set.height as f64);
+    let mut ghosts: Vec<(usize, DVec2, DVec3)> = Vec::new();
+    {
+        let ctx = Ctx::new(dt, data);
+        for v in dt.vertices() {
+            let i = v.data().idx as usize;
+            let s = &set.samples[i];
+            let p = data.pos[i];
+            let xs: &[f64] = match (s.cell_min.x <= 0.0, s.cell_max.x as f64 >= w) {
+                (true, true) => &[-1.0, 1.0],
+                (true, false) => &[-1.0],
+                (false, true) => &[1.0],
+                _ => &[],
+            };
+            let ys: &[f64] = match (s.cell_min.y <= 0.0, s.cell_max.y as f64 >= h) {
+                (true, true) => &[-1.0, 1.0],
+                (true, false) => &[-1.0],
+                (false, true) => &[1.0],
+                _ => &[],
+            };
+            let mirror_x = |side: f64| if side < 0.0 { -p.x } else { 2.0 * w - p.x };
+            let mirror_y = |side: f64| if side < 0.0 { -p.y } else { 2.0 * h - p.y };
+            let mut push = |q: DVec2| {
+                // A sample on the border line itself is its own mirror image.
+                if q == p {
+                    return;
+                }
+                let value = ctx.extrapolate(v, Point2::new(q.x, q.y), mode, false);
+                ghosts.push((i, q, value));
+            };
+            for &sx in xs {
+                push(DVec2::new(mirror_x(sx), p.y));
+                for &sy in ys {
+                    push(DVec2::new(mirror_x(sx), mirror_y(sy)));
+                }
+            }
+            for &sy in ys {
+                push(DVec2::new(p.x, mirror_y(sy)));
+            }
+        }
+    }
+    for (src, q, value) in ghosts {
+        let idx = data.pos.len() as u32;
+        data.pos.push(q);
+        data.value.push(value);
+        data.grad_u.push(data.grad_u[src]);
+        data.grad_v.push(data.grad_v[src]);
+        data.object.push(data.object[src]);
+        data.depth.push(data.depth[src]);
+        dt.insert(Node {
+            pos: Point2::new(q.x, q.y),
+            idx,
+        })?;
+    }
+    Ok(())
 }
 
 /// A vertex of a locate answer, used as the next walk's start.
@@ -450,14 +610,27 @@ impl<'a> Ctx<'a> {
         let Some(s) = self.dt.nearest_neighbor(p) else {
             return (DVec3::ZERO, None);
         };
-        (self.extrapolate(s, p, mode), Some(s.fix()))
+        (self.extrapolate(s, p, mode, true), Some(s.fix()))
     }
 
-    fn extrapolate(&self, s: VHandle<'_>, p: Point2<f64>, mode: Interpolation) -> DVec3 {
+    /// The value at `p` (outside the hull) extended from sample `s`: for `Gradient`,
+    /// `s`'s own Taylor expansion, blended with its same-surface neighbours' when
+    /// `blend` is set.
+    fn extrapolate(
+        &self,
+        s: VHandle<'_>,
+        p: Point2<f64>,
+        mode: Interpolation,
+        blend: bool,
+    ) -> DVec3 {
         let si = s.data().idx as usize;
         let pd = DVec2::new(p.x, p.y);
         match mode {
             Interpolation::Linear => self.extend_plane(s, pd).unwrap_or(self.data.value[si]),
+            Interpolation::Gradient if !blend => {
+                let diff = pd - self.data.pos[si];
+                self.data.value[si] + self.data.grad_u[si] * diff.x + self.data.grad_v[si] * diff.y
+            }
             Interpolation::Gradient => {
                 let mut acc = DVec3::ZERO;
                 let mut wsum = 0.0;

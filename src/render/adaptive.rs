@@ -26,6 +26,8 @@ pub struct RenderEstimator<'a> {
     pub camera: &'a Camera,
     /// Camera samples averaged per estimate.
     pub spp: u32,
+    /// The first `gradient_spp` of them carry the gradient (1 ≤ it ≤ spp).
+    pub gradient_spp: u32,
     pub seed: u32,
     /// Nanoseconds spent inside `estimate`, summed over threads (to tell the cost
     /// of rendering from the cost of the quadtree).
@@ -49,7 +51,7 @@ impl Estimator for RenderEstimator<'_> {
                 key,
                 s,
                 self.seed,
-                true,
+                s < self.gradient_spp,
             );
             radiance += r.radiance;
             if let Some(g) = r.gradient {
@@ -63,8 +65,9 @@ impl Estimator for RenderEstimator<'_> {
             }
         }
         let n = self.spp as f32;
-        let mut v = SampleValue::new(radiance / n, gu / n, gv / n);
-        v.vis_gradient = Some(vis / n);
+        let ng = self.gradient_spp as f32;
+        let mut v = SampleValue::new(radiance / n, gu / ng, gv / ng);
+        v.vis_gradient = Some(vis / ng);
         v.object_id = NO_OBJECT;
         v.depth = f32::INFINITY;
         v.durand = Some(0.0);
@@ -151,6 +154,7 @@ pub fn render_adaptive(
         tracer: setup.tracer(scene, accel),
         camera: &setup.camera,
         spp: setup.spp,
+        gradient_spp: opts.gradient_spp.unwrap_or(8).clamp(1, setup.spp),
         seed: setup.seed,
         busy_ns: AtomicU64::new(0),
     };
@@ -173,4 +177,45 @@ pub fn render_adaptive(
             estimate_cpu_s,
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// Only the first `gradient_spp` camera samples carry the gradient: with the same
+    /// first two samples, the gradient is the same whether 2 or 8 samples are taken
+    /// in all, while the radiance averages all of them.
+    #[test]
+    fn gradient_comes_from_the_first_gradient_spp_samples() {
+        let scene = crate::scene::load(Path::new("scenes/three_spheres_env.toml")).unwrap();
+        let accel = Accel::build(&scene.meshes, &scene.spheres);
+        let opts = RenderOptions {
+            resolution: Some((64, 48)),
+            gradients: true,
+            vis_samples: Some(4),
+            ..Default::default()
+        };
+        let setup = Setup::new(&scene, &opts).unwrap();
+        let est = |spp: u32, gradient_spp: u32| RenderEstimator {
+            tracer: setup.tracer(&scene, &accel),
+            camera: &setup.camera,
+            spp,
+            gradient_spp,
+            seed: 7,
+            busy_ns: AtomicU64::new(0),
+        };
+        let mut differ = 0;
+        for k in 0..40 {
+            let p = Vec2::new(3.5 + 1.47 * k as f32, 30.25 + 0.3 * k as f32);
+            let (a, b) = (est(2, 2).estimate(p), est(8, 2).estimate(p));
+            assert_eq!((a.grad_u, a.grad_v), (b.grad_u, b.grad_v), "at {p}");
+            assert_eq!(a.vis_gradient, b.vis_gradient);
+            differ += (a.radiance != b.radiance) as u32;
+            let c = est(8, 8).estimate(p);
+            differ += (c.grad_u != b.grad_u) as u32;
+        }
+        assert!(differ > 40, "radiance and gradient should depend on the counts");
+    }
 }

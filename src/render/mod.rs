@@ -43,6 +43,12 @@ pub struct RenderOptions {
     /// With gradients: treat near lights as distant where 2|n_x|·d exceeds this
     /// factor (the far-light criterion of Sec. 5.2), dropping their SV term.
     pub far_light: Option<f32>,
+    /// Adaptive renders: how many of each sample's `spp` camera samples carry the
+    /// analytic gradient (dual lanes, and line sampling for the visibility term);
+    /// the rest are plain path samples that only refine the radiance. The gradient
+    /// steers placement and interpolation and needs far fewer samples than a
+    /// converged radiance, so this bounds its cost (default: all of them, up to 8).
+    pub gradient_spp: Option<u32>,
 }
 
 /// What a render produced: row-major planes, top row first.
