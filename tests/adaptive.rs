@@ -392,3 +392,95 @@ fn progress_is_monotone_and_ends_at_the_total() {
         assert_eq!(seen.last().unwrap().0, n);
     }
 }
+
+/// A Monte Carlo estimator's gradient carries noise: on a flat half of the image the
+/// estimate is pure noise (true gradient 0), on the other half sits the bump. The
+/// estimator reports its variance, and the gradient strategy subtracts it from |∇I|²,
+/// so the noise no longer draws samples away from the bump.
+#[test]
+fn gradient_noise_does_not_draw_samples() {
+    let (w, h) = (128u32, 128u32);
+    // Deterministic pseudo-noise of fixed power: a gradient of length 0.5 per
+    // channel in a random direction, so E|Ĵ|² − Var is exactly the true |J|² = 0.
+    let angle = |p: Vec2| {
+        let x = (p.x * 12.9898 + p.y * 78.233).sin() * 43758.547;
+        x.fract() * std::f32::consts::TAU
+    };
+    let noisy = |report: bool| {
+        move |p: Vec2| {
+            let mut v = bump(p);
+            if p.x > 64.0 {
+                let (s, c) = angle(p).sin_cos();
+                v.grad_u += Vec3::splat(0.5 * c);
+                v.grad_v += Vec3::splat(0.5 * s);
+            }
+            if report {
+                v.gradient_variance = Some(if p.x > 64.0 { 3.0 * 0.25 } else { 0.0 });
+            }
+            v
+        }
+    };
+    let near = |p: Vec2| p.distance(Vec2::new(40.0, 80.0)) < 9.0;
+    let mut fracs = Vec::new();
+    for report in [false, true] {
+        let set = refine(
+            &noisy(report),
+            w,
+            h,
+            &Settings::new(Strategy::Gradient, 0.1),
+        )
+        .unwrap();
+        let frac =
+            set.samples.iter().filter(|s| near(s.pos)).count() as f32 / set.samples.len() as f32;
+        println!(
+            "noise variance {}: {:.1}% of the samples within 9 px of the bump",
+            if report { "reported" } else { "unknown" },
+            100.0 * frac
+        );
+        fracs.push(frac);
+    }
+    assert!(
+        fracs[1] > 2.0 * fracs[0],
+        "denoised metric should concentrate on the bump: {fracs:?}"
+    );
+}
+
+/// When the budget cannot refine every object boundary to pixel size, the boundaries
+/// with the larger radiance jump go first, whatever the strategy: two discs, one in
+/// strong contrast with the background and one barely different from it.
+#[test]
+fn forced_refinement_takes_the_largest_jumps_first() {
+    let (w, h) = (160u32, 80u32);
+    let (ca, cb, r) = (Vec2::new(40.0, 40.0), Vec2::new(120.0, 40.0), 25.0);
+    let img = move |p: Vec2| {
+        let (a, b) = (p.distance(ca) < r, p.distance(cb) < r);
+        let value = if a {
+            1.0
+        } else if b {
+            0.21
+        } else {
+            0.2
+        };
+        let mut v = SampleValue::new(Vec3::splat(value), Vec3::ZERO, Vec3::ZERO);
+        v.object_id = if a {
+            1
+        } else if b {
+            2
+        } else {
+            0
+        };
+        v
+    };
+    let near_rim = |p: Vec2, c: Vec2| (p.distance(c) - r).abs() < 2.0;
+    for strategy in [
+        Strategy::Gradient,
+        Strategy::Variance,
+        Strategy::SecondOrder,
+    ] {
+        let set = refine(&img, w, h, &Settings::new(strategy, 0.08)).unwrap();
+        let count = |c: Vec2| set.samples.iter().filter(|s| near_rim(s.pos, c)).count();
+        let (na, nb) = (count(ca), count(cb));
+        println!("{strategy:?}: {na} samples on the strong rim, {nb} on the faint one");
+        assert!(na > 3 * nb, "{strategy:?}: {na} vs {nb}");
+    }
+}

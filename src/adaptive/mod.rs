@@ -51,6 +51,10 @@ pub struct SampleValue {
     /// Magnitude of the visibility (soft-shadow) image gradient, Eq. 45–49. The renderer
     /// fills it; required by [`Strategy::GradientVis`].
     pub vis_gradient: Option<f32>,
+    /// Variance of the gradient estimate (summed over the six components of the 3×2
+    /// Jacobian), when the estimator is Monte Carlo. The gradient strategies subtract
+    /// it from |∇I|², so noise alone does not draw samples.
+    pub gradient_variance: Option<f32>,
 }
 
 impl SampleValue {
@@ -65,6 +69,7 @@ impl SampleValue {
             importance: None,
             durand: None,
             vis_gradient: None,
+            gradient_variance: None,
         }
     }
 
@@ -72,6 +77,15 @@ impl SampleValue {
     /// an iso-luminant colour edge still counts.
     pub fn gradient_norm(&self) -> f32 {
         (self.grad_u.length_squared() + self.grad_v.length_squared()).sqrt()
+    }
+
+    /// [`Self::gradient_norm`] with the estimator's noise taken out:
+    /// √max(|Ĵ|² − Var, 0), since E|Ĵ|² = |J|² + Var for an unbiased estimate Ĵ.
+    pub fn gradient_norm_denoised(&self) -> f32 {
+        let sq = self.grad_u.length_squared() + self.grad_v.length_squared();
+        (sq - self.gradient_variance.unwrap_or(0.0).max(0.0))
+            .max(0.0)
+            .sqrt()
     }
 }
 

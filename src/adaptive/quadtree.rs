@@ -187,6 +187,10 @@ struct Cell {
     /// Importance per unit area (before the optional importance weight).
     metric: f32,
     forced: bool,
+    /// Largest radiance jump |ΔI| to a neighbour on another surface: orders forced
+    /// cells (the same for every strategy) when the budget cannot refine every
+    /// boundary to pixel size.
+    jump: f32,
     /// Bumped whenever the heap key changes; older heap entries are skipped.
     version: u32,
 }
@@ -202,6 +206,7 @@ impl Cell {
             split: 0,
             metric: 0.0,
             forced: false,
+            jump: 0.0,
             version: 0,
         }
     }
@@ -474,8 +479,10 @@ impl Tree {
     /// The metric a sample has on its own (strategies that need no neighbours).
     fn own_metric(&self, v: &SampleValue) -> f32 {
         match self.settings.strategy {
-            Strategy::Gradient => v.gradient_norm(),
-            Strategy::GradientVis => v.gradient_norm() + v.vis_gradient.unwrap_or(0.0).abs(),
+            Strategy::Gradient => v.gradient_norm_denoised(),
+            Strategy::GradientVis => {
+                v.gradient_norm_denoised() + v.vis_gradient.unwrap_or(0.0).abs()
+            }
             Strategy::Durand => v.durand.unwrap_or(0.0).abs(),
             Strategy::Uniform | Strategy::Variance | Strategy::SecondOrder => 0.0,
         }
@@ -522,10 +529,11 @@ impl Tree {
         }
     }
 
-    fn force(&mut self, id: u32) {
+    fn force(&mut self, id: u32, jump: f32) {
         let c = &mut self.cells[id as usize];
-        if c.split == 0 && !c.forced && c.size() > 1.0 + 1e-4 && c.splittable() {
+        if c.split == 0 && c.size() > 1.0 + 1e-4 && c.splittable() && (!c.forced || jump > c.jump) {
             c.forced = true;
+            c.jump = c.jump.max(if jump.is_finite() { jump } else { 0.0 });
             self.mark_dirty(id);
         }
     }
@@ -552,9 +560,11 @@ impl Tree {
         for id in first as u32..end as u32 {
             self.neighbours(id, &mut nb);
             for &n in &nb {
-                if is_discontinuous(&self.values[id as usize], &self.values[n as usize], tol) {
-                    self.force(id);
-                    self.force(n);
+                let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
+                if is_discontinuous(va, vb, tol) {
+                    let jump = (va.radiance - vb.radiance).length();
+                    self.force(id, jump);
+                    self.force(n, jump);
                 } else if pairs {
                     let m = self.pair_metric(id, n);
                     self.raise(id, m);
@@ -586,9 +596,14 @@ impl Tree {
         c.version += 1;
         let metric = if c.metric.is_finite() { c.metric } else { 0.0 };
         let area = c.area();
+        let key = if c.forced {
+            c.jump * area
+        } else {
+            metric * weight * area
+        };
         self.heap.push(Entry {
             forced: c.forced,
-            key: metric * weight * area,
+            key,
             area,
             id,
             version: c.version,

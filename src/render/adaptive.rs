@@ -41,6 +41,7 @@ impl Estimator for RenderEstimator<'_> {
         // the same whatever order or thread evaluates it.
         let key = hash2(p.x.to_bits(), p.y.to_bits());
         let (mut radiance, mut gu, mut gv, mut vis) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0f32);
+        let mut sq = 0.0f32;
         let mut first = None;
         for s in 0..self.spp {
             // A pixel-sized box footprint around p, as the full render's pixels have.
@@ -58,6 +59,7 @@ impl Estimator for RenderEstimator<'_> {
                 let t = g.total();
                 gu += t[0];
                 gv += t[1];
+                sq += t[0].length_squared() + t[1].length_squared();
                 vis += magnitude(&g.vis);
             }
             if s == 0 {
@@ -68,6 +70,12 @@ impl Estimator for RenderEstimator<'_> {
         let ng = self.gradient_spp as f32;
         let mut v = SampleValue::new(radiance / n, gu / ng, gv / ng);
         v.vis_gradient = Some(vis / ng);
+        // Variance of the mean gradient from the per-sample spread (summed over
+        // components): (E|g|² − |E g|²) / (n − 1) with the unbiased n/(n − 1) factor.
+        if self.gradient_spp > 1 {
+            let mean_sq = v.grad_u.length_squared() + v.grad_v.length_squared();
+            v.gradient_variance = Some(((sq / ng - mean_sq) / (ng - 1.0)).max(0.0));
+        }
         v.object_id = NO_OBJECT;
         v.depth = f32::INFINITY;
         v.durand = Some(0.0);
@@ -216,6 +224,9 @@ mod tests {
             let c = est(8, 8).estimate(p);
             differ += (c.grad_u != b.grad_u) as u32;
         }
-        assert!(differ > 40, "radiance and gradient should depend on the counts");
+        assert!(
+            differ > 40,
+            "radiance and gradient should depend on the counts"
+        );
     }
 }
