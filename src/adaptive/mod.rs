@@ -16,7 +16,7 @@ use crate::math::Vec2;
 use crate::math::Vec3;
 use crate::{Error, Result};
 
-pub use quadtree::{refine, refine_with_progress};
+pub use quadtree::{refine, refine_with_progress, refine_with_stats, RefineStats};
 
 /// Object id for "no object" (background / environment). Only equality matters.
 pub const NO_OBJECT: u32 = u32::MAX;

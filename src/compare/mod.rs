@@ -203,7 +203,7 @@ pub fn compare(
         runs,
         notes: vec![
             format!(
-                "Reference: every pixel at {ref_spp} spp. Speed-ups are against the full render at {spp} spp per pixel ({full_time:.2} s), \
+                "Reference: every pixel at {ref_spp} spp ({reference_time:.1} s when rendered). Speed-ups are against the full render at {spp} spp per pixel ({full_time:.2} s), \
                  the same number of samples per evaluated point as the adaptive runs."
             ),
             "Adaptive runs evaluate the renderer (path tracing with analytic gradients of the direct light) at the quadtree's \

@@ -255,40 +255,46 @@ pub fn reconstruct_with(
 /// neighbours. Linear images pass unchanged (φ = 1), as do smooth slopes; only
 /// expansions that overshoot every neighbour are cut back.
 fn limit_gradients(dt: &Dt, data: &mut Data) {
-    let mut phi = vec![DVec3::ONE; data.pos.len()];
-    let mut same = Vec::with_capacity(16);
-    for v in dt.vertices() {
-        let i = v.data().idx as usize;
-        same.clear();
-        same.extend(
-            v.out_edges()
-                .map(|e| e.to().data().idx as usize)
-                .filter(|&j| {
-                    !surfaces_differ(
-                        data.object[i],
-                        data.depth[i],
-                        data.object[j],
-                        data.depth[j],
-                        data.tolerance,
-                    )
-                }),
-        );
-        let (lo, hi) = same
-            .iter()
-            .fold((data.value[i], data.value[i]), |(lo, hi), &j| {
-                (lo.min(data.value[j]), hi.max(data.value[j]))
+    let d = &*data;
+    let differ = |i: usize, j: usize| {
+        surfaces_differ(
+            d.object[i],
+            d.depth[i],
+            d.object[j],
+            d.depth[j],
+            d.tolerance,
+        )
+    };
+    // Independent per sample, so it runs in parallel (and stays deterministic).
+    let mut phi = vec![DVec3::ONE; d.pos.len()];
+    let factors: Vec<(usize, DVec3)> = (0..dt.num_vertices())
+        .into_par_iter()
+        .map(|k| {
+            let v = dt.vertex(FixedVertexHandle::from_index(k));
+            let i = v.data().idx as usize;
+            let same = || {
+                v.out_edges()
+                    .map(|e| e.to().data().idx as usize)
+                    .filter(move |&j| !differ(i, j))
+            };
+            let (lo, hi) = same().fold((d.value[i], d.value[i]), |(lo, hi), j| {
+                (lo.min(d.value[j]), hi.max(d.value[j]))
             });
-        let mut f = DVec3::ONE;
-        for &j in &same {
-            let half = (data.pos[j] - data.pos[i]) * 0.5;
-            let delta = data.grad_u[i] * half.x + data.grad_v[i] * half.y;
-            for c in 0..3 {
-                let room = if delta[c] > 0.0 { hi[c] } else { lo[c] } - data.value[i][c];
-                if delta[c] != 0.0 {
-                    f[c] = f[c].min((room / delta[c]).clamp(0.0, 1.0));
+            let mut f = DVec3::ONE;
+            for j in same() {
+                let half = (d.pos[j] - d.pos[i]) * 0.5;
+                let delta = d.grad_u[i] * half.x + d.grad_v[i] * half.y;
+                for c in 0..3 {
+                    let room = if delta[c] > 0.0 { hi[c] } else { lo[c] } - d.value[i][c];
+                    if delta[c] != 0.0 {
+                        f[c] = f[c].min((room / delta[c]).clamp(0.0, 1.0));
+                    }
                 }
             }
-        }
+            (i, f)
+        })
+        .collect();
+    for (i, f) in factors {
         phi[i] = f;
     }
     for ((gu, gv), f) in data.grad_u.iter_mut().zip(&mut data.grad_v).zip(phi) {
@@ -316,7 +322,7 @@ fn add_border_ghosts(
     mode: Interpolation,
 ) -> std::result::Result<(), spade::InsertionError> {
     let (w, h) = (set.width as f64, set.height as f64);
-    let mut ghosts: Vec<(usize, DVec2, DVec3)> = Vec::new();
+    let mut ghosts: Vec<(usize, FixedVertexHandle, DVec2, DVec3)> = Vec::new();
     {
         let ctx = Ctx::new(dt, data);
         for v in dt.vertices() {
@@ -343,7 +349,7 @@ fn add_border_ghosts(
                     return;
                 }
                 let value = ctx.extrapolate(v, Point2::new(q.x, q.y), mode, false);
-                ghosts.push((i, q, value));
+                ghosts.push((i, v.fix(), q, value));
             };
             for &sx in xs {
                 push(DVec2::new(mirror_x(sx), p.y));
@@ -356,7 +362,9 @@ fn add_border_ghosts(
             }
         }
     }
-    for (src, q, value) in ghosts {
+    for (src, near, q, value) in ghosts {
+        // Start the insertion walk at the source sample, next to its mirror image.
+        ScanlineHint::set(near);
         let idx = data.pos.len() as u32;
         data.pos.push(q);
         data.value.push(value);

@@ -127,7 +127,8 @@ impl RenderEstimator<'_> {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AdaptiveStats {
     pub wall_s: f64,
-    /// Quadtree refinement, excluding the estimates it asked for.
+    /// The quadtree's own work, excluding the estimate batches it asked for (idle
+    /// threads at a batch's end count as estimating, as a full render's last tile does).
     pub quadtree_s: f64,
     pub reconstruct_s: f64,
     /// Time inside the estimator, summed over threads.
@@ -167,11 +168,8 @@ pub fn render_adaptive(
         busy_ns: AtomicU64::new(0),
     };
     let (w, h) = (setup.camera.width, setup.camera.height);
-    let t = Instant::now();
-    let samples = adaptive::refine_with_progress(&est, w, h, settings, progress)?;
-    let refine_s = t.elapsed().as_secs_f64();
+    let (samples, refine) = adaptive::refine_with_stats(&est, w, h, settings, progress)?;
     let estimate_cpu_s = est.busy_ns.load(Ordering::Relaxed) as f64 * 1e-9;
-    let threads = rayon::current_num_threads().max(1) as f64;
     let t = Instant::now();
     let reconstruction = reconstruct::reconstruct(&samples, interpolation)?;
     let reconstruct_s = t.elapsed().as_secs_f64();
@@ -180,7 +178,7 @@ pub fn render_adaptive(
         samples,
         stats: AdaptiveStats {
             wall_s: start.elapsed().as_secs_f64(),
-            quadtree_s: (refine_s - estimate_cpu_s / threads).max(0.0),
+            quadtree_s: refine.quadtree_s,
             reconstruct_s,
             estimate_cpu_s,
         },
