@@ -144,7 +144,7 @@ fn compare_writes_the_report_and_caches_the_reference() {
     opts.budgets = vec![0.1, 0.25];
     opts.spp = Some(2);
     opts.reference_spp = Some(8);
-    opts.resolution = Some((48, 36));
+    opts.resolution = Some((96, 72));
     opts.vis_samples = Some(4);
     let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
     // full + 2×2 adaptive + 2 equal-time + 2 interpolation runs.
@@ -156,10 +156,16 @@ fn compare_writes_the_report_and_caches_the_reference() {
         "report.html",
         "report.json",
         "report.md",
-        "reference-8spp-48x36.exr",
+        "reference-8spp-96x72.exr",
     ] {
         assert!(dir.join(f).exists(), "{f}");
     }
+    // Sec. 8 is also scored on the ground plane, away from the silhouettes.
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(
+        md.contains("Sec. 8, 1% grid on the largest surface"),
+        "{md}"
+    );
     // A second run reuses the cached reference (same rows for the same seeds).
     let again = compare(&scene, &accel, &opts, &|_| {}).unwrap();
     assert_eq!(rows[1].rmse, again[1].rmse);
