@@ -17,8 +17,13 @@
 //! group; ties go to the heavier anchor), keeps only that surface's samples and
 //! renormalises their weights. Where all contributors share a surface nothing changes.
 //!
-//! **Outside the convex hull** of the samples (a border strip, at most half a block wide
-//! for the quadtree) the image is extrapolated from the nearest sample `s`:
+//! **The image border.** Samples whose cells touch the border are mirrored across it
+//! ([`add_border_ghosts`]), so the hull covers every pixel centre of a quadtree or
+//! stratified set. **Gradients** are Barth–Jespersen limited first ([`limit_gradients`])
+//! so that one noisy Monte Carlo gradient cannot paint a blob.
+//!
+//! **Outside the convex hull** of the samples (only for sets whose cells do not tile
+//! the image) the image is extrapolated from the nearest sample `s`:
 //! `Linear` extends the plane of the best-shaped triangle around `s` whose corners all
 //! lie on `s`'s surface (the one whose smallest barycentric weight is largest), or
 //! takes `s`'s value if there is none; `Gradient` blends the first-order Taylor
