@@ -70,11 +70,11 @@ struct CompareArgs {
     #[arg(long, value_name = "H", requires = "width", value_parser = clap::value_parser!(u32).range(1..))]
     height: Option<u32>,
     /// Shadow rays per line for the samples' visibility gradients; 0 samples the
-    /// lights by points and drops the visibility term [default: 8].
+    /// lights by points and drops the visibility term [default: 4].
     #[arg(long, value_name = "N")]
     vis_samples: Option<u32>,
     /// How many of each adaptive sample's camera samples carry the analytic
-    /// gradient; the rest only refine its radiance [default: min(spp, 8)].
+    /// gradient; the rest only refine its radiance [default: min(spp, 16)].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     gradient_spp: Option<u32>,
     /// Output folder [default: out/<scene-stem>].
@@ -129,7 +129,8 @@ struct RenderArgs {
     gradients: bool,
     /// With --gradients: shadow rays per azimuth line for the first hit's direct
     /// light; the same rays give the radiance and the visibility (soft-shadow)
-    /// gradient [default: 32]. 0: point light sampling and no visibility term.
+    /// gradient [default: 32; 4 with --strategy]. 0: point light sampling and no
+    /// visibility term.
     #[arg(long, value_name = "N")]
     vis_samples: Option<u32>,
     /// With --gradients: bisection steps refining each visibility jump (extra
@@ -141,7 +142,7 @@ struct RenderArgs {
     #[arg(long, value_name = "F")]
     far_light: Option<f32>,
     /// With --strategy: how many of each sample's --spp camera samples carry the
-    /// analytic gradient; the rest only refine its radiance [default: min(spp, 8)].
+    /// analytic gradient; the rest only refine its radiance [default: min(spp, 16)].
     #[arg(long, value_name = "N", requires = "strategy", value_parser = clap::value_parser!(u32).range(1..))]
     gradient_spp: Option<u32>,
     /// Adaptive sampling: place samples with this strategy (uniform, gradient,

@@ -153,9 +153,12 @@ pub fn render_adaptive(
     progress: super::Progress,
 ) -> crate::Result<AdaptiveRender> {
     let start = Instant::now();
-    // Gradients are what the strategies and the C1 reconstruction feed on.
+    // Gradients are what the strategies and the C1 reconstruction feed on. Many
+    // short lines (16 camera samples × 4 shadow rays) give a less noisy gradient
+    // than few long ones for the same rays.
     let opts = RenderOptions {
         gradients: true,
+        vis_samples: opts.vis_samples.or(Some(4)),
         ..opts.clone()
     };
     let setup = Setup::new(scene, &opts)?;
@@ -163,7 +166,7 @@ pub fn render_adaptive(
         tracer: setup.tracer(scene, accel),
         camera: &setup.camera,
         spp: setup.spp,
-        gradient_spp: opts.gradient_spp.unwrap_or(8).clamp(1, setup.spp),
+        gradient_spp: opts.gradient_spp.unwrap_or(16).clamp(1, setup.spp),
         seed: setup.seed,
         busy_ns: AtomicU64::new(0),
     };

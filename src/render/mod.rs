@@ -47,7 +47,7 @@ pub struct RenderOptions {
     /// analytic gradient (dual lanes, and line sampling for the visibility term);
     /// the rest are plain path samples that only refine the radiance. The gradient
     /// steers placement and interpolation and needs far fewer samples than a
-    /// converged radiance, so this bounds its cost (default: all of them, up to 8).
+    /// converged radiance, so this bounds its cost (default: all of them, up to 16).
     pub gradient_spp: Option<u32>,
 }
 
