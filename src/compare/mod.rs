@@ -184,11 +184,9 @@ pub fn compare(
         vis_samples: Some(opts.vis_samples.unwrap_or(0).max(32)),
         ..base.clone()
     };
-    let mut grid_images = Vec::new();
     for interp in [Interpolation::Linear, Interpolation::Gradient] {
         let settings = Settings::new(Strategy::Uniform, 0.01);
         let out = render_adaptive(scene, accel, &grid_opts, &settings, interp, &|_, _| {})?;
-        grid_images.push(out.reconstruction.image.clone());
         runs.push(Run {
             label: format!("1% grid, {} interpolation", interp.name()),
             kind: RunKind::Interpolation { budget: 0.01 },
@@ -216,18 +214,19 @@ pub fn compare(
         .map(|(id, mask)| (id, erode(&mask, w as usize, h as usize, spacing)))
         .filter(|(_, mask)| mask.contains(&true));
     if let Some((id, mask)) = surface {
-        let n = mask.iter().filter(|&&m| m).count();
-        let masked = |img: &[Vec3]| -> Result<f32> {
-            let pick = |v: &[Vec3]| -> Vec<Vec3> {
-                v.iter()
-                    .zip(&mask)
-                    .filter(|(_, &m)| m)
-                    .map(|(c, _)| *c)
-                    .collect()
-            };
-            crate::output::metrics::rmse(&pick(img), &pick(&reference))
+        let pick = |v: &[Vec3]| -> Vec<Vec3> {
+            v.iter()
+                .zip(&mask)
+                .filter(|(_, &m)| m)
+                .map(|(c, _)| *c)
+                .collect()
         };
-        let (lin, grad) = (masked(&grid_images[0])?, masked(&grid_images[1])?);
+        let reference_on_mask = pick(&reference);
+        let n = reference_on_mask.len();
+        let masked = |img: &[Vec3]| crate::output::metrics::rmse(&pick(img), &reference_on_mask);
+        // The last two runs are the grid's, linear then gradient.
+        let grid = &runs[runs.len() - 2..];
+        let (lin, grad) = (masked(&grid[0].image)?, masked(&grid[1].image)?);
         let line = format!(
             "Sec. 8, 1% grid on the largest surface (shape {id}, the {n} pixels more than {spacing} px from any other surface): RMSE linear {lin:.4e}, gradient {grad:.4e} ({:.2}×).",
             grad / lin.max(f32::MIN_POSITIVE)

@@ -271,7 +271,6 @@ fn limit_gradients(dt: &Dt, data: &mut Data) {
         )
     };
     // Independent per sample, so it runs in parallel (and stays deterministic).
-    let mut phi = vec![DVec3::ONE; d.pos.len()];
     let factors: Vec<(usize, DVec3)> = (0..dt.num_vertices())
         .into_par_iter()
         .map(|k| {
@@ -300,11 +299,8 @@ fn limit_gradients(dt: &Dt, data: &mut Data) {
         })
         .collect();
     for (i, f) in factors {
-        phi[i] = f;
-    }
-    for ((gu, gv), f) in data.grad_u.iter_mut().zip(&mut data.grad_v).zip(phi) {
-        *gu *= f;
-        *gv *= f;
+        data.grad_u[i] *= f;
+        data.grad_v[i] *= f;
     }
 }
 
@@ -334,20 +330,8 @@ fn add_border_ghosts(
             let i = v.data().idx as usize;
             let s = &set.samples[i];
             let p = data.pos[i];
-            let xs: &[f64] = match (s.cell_min.x <= 0.0, s.cell_max.x as f64 >= w) {
-                (true, true) => &[-1.0, 1.0],
-                (true, false) => &[-1.0],
-                (false, true) => &[1.0],
-                _ => &[],
-            };
-            let ys: &[f64] = match (s.cell_min.y <= 0.0, s.cell_max.y as f64 >= h) {
-                (true, true) => &[-1.0, 1.0],
-                (true, false) => &[-1.0],
-                (false, true) => &[1.0],
-                _ => &[],
-            };
-            let mirror_x = |side: f64| if side < 0.0 { -p.x } else { 2.0 * w - p.x };
-            let mirror_y = |side: f64| if side < 0.0 { -p.y } else { 2.0 * h - p.y };
+            let xs = mirrored(p.x, s.cell_min.x, s.cell_max.x, w);
+            let ys = mirrored(p.y, s.cell_min.y, s.cell_max.y, h);
             let mut push = |q: DVec2| {
                 // A sample on the border line itself is its own mirror image.
                 if q == p {
@@ -356,14 +340,14 @@ fn add_border_ghosts(
                 let value = ctx.extrapolate(v, Point2::new(q.x, q.y), mode, false);
                 ghosts.push((i, v.fix(), q, value));
             };
-            for &sx in xs {
-                push(DVec2::new(mirror_x(sx), p.y));
-                for &sy in ys {
-                    push(DVec2::new(mirror_x(sx), mirror_y(sy)));
+            for &mx in xs.iter().flatten() {
+                push(DVec2::new(mx, p.y));
+                for &my in ys.iter().flatten() {
+                    push(DVec2::new(mx, my));
                 }
             }
-            for &sy in ys {
-                push(DVec2::new(p.x, mirror_y(sy)));
+            for &my in ys.iter().flatten() {
+                push(DVec2::new(p.x, my));
             }
         }
     }
@@ -383,6 +367,15 @@ fn add_border_ghosts(
         })?;
     }
     Ok(())
+}
+
+/// Coordinate `x` mirrored across each end of `[0, extent]` that its cell `[lo, hi]`
+/// touches.
+fn mirrored(x: f64, lo: f32, hi: f32, extent: f64) -> [Option<f64>; 2] {
+    [
+        (lo <= 0.0).then_some(-x),
+        (hi as f64 >= extent).then_some(2.0 * extent - x),
+    ]
 }
 
 /// A vertex of a locate answer, used as the next walk's start.

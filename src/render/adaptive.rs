@@ -17,7 +17,6 @@ use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
 use crate::reconstruct::{self, Interpolation, Reconstruction};
 use crate::scene::{Camera, Scene};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// The path tracer evaluated at arbitrary image points.
@@ -29,14 +28,10 @@ pub struct RenderEstimator<'a> {
     /// The first `gradient_spp` of them carry the gradient (1 ≤ it ≤ spp).
     pub gradient_spp: u32,
     pub seed: u32,
-    /// Nanoseconds spent inside `estimate`, summed over threads (to tell the cost
-    /// of rendering from the cost of the quadtree).
-    pub busy_ns: AtomicU64,
 }
 
 impl Estimator for RenderEstimator<'_> {
     fn estimate(&self, p: Vec2) -> SampleValue {
-        let t0 = Instant::now();
         // Random numbers are addressed by the sample position, so the estimate is
         // the same whatever order or thread evaluates it.
         let key = hash2(p.x.to_bits(), p.y.to_bits());
@@ -84,8 +79,6 @@ impl Estimator for RenderEstimator<'_> {
             v.depth = fh.depth;
             v.durand = Some(self.durand(p));
         }
-        self.busy_ns
-            .fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
         v
     }
 }
@@ -131,8 +124,8 @@ pub struct AdaptiveStats {
     /// threads at a batch's end count as estimating, as a full render's last tile does).
     pub quadtree_s: f64,
     pub reconstruct_s: f64,
-    /// Time inside the estimator, summed over threads.
-    pub estimate_cpu_s: f64,
+    /// Wall time of the estimate batches (the rendering itself).
+    pub estimate_s: f64,
 }
 
 /// What an adaptive render produced.
@@ -168,11 +161,9 @@ pub fn render_adaptive(
         spp: setup.spp,
         gradient_spp: opts.gradient_spp.unwrap_or(16).clamp(1, setup.spp),
         seed: setup.seed,
-        busy_ns: AtomicU64::new(0),
     };
     let (w, h) = (setup.camera.width, setup.camera.height);
     let (samples, refine) = adaptive::refine_with_stats(&est, w, h, settings, progress)?;
-    let estimate_cpu_s = est.busy_ns.load(Ordering::Relaxed) as f64 * 1e-9;
     let t = Instant::now();
     let reconstruction = reconstruct::reconstruct(&samples, interpolation)?;
     let reconstruct_s = t.elapsed().as_secs_f64();
@@ -183,7 +174,7 @@ pub fn render_adaptive(
             wall_s: start.elapsed().as_secs_f64(),
             quadtree_s: refine.quadtree_s,
             reconstruct_s,
-            estimate_cpu_s,
+            estimate_s: refine.evaluate_s,
         },
     })
 }
@@ -213,7 +204,6 @@ mod tests {
             spp,
             gradient_spp,
             seed: 7,
-            busy_ns: AtomicU64::new(0),
         };
         let mut differ = 0;
         for k in 0..40 {
