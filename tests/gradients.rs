@@ -515,25 +515,7 @@ fn converged_soft_shadow_gradient_matches_image_differences() {
         )
         .unwrap(),
     );
-    let white = add_material(
-        &mut s,
-        Material::Lambert {
-            albedo: Vec3::splat(0.8),
-        },
-    );
-    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
-    add_quad(&mut s, ground(3.0), white, Vec3::ZERO);
-    add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.35, white, Vec3::ZERO);
-    add_quad(
-        &mut s,
-        Rect {
-            corner: Vec3::new(-0.6, 2.0, -0.6),
-            edge_u: Vec3::new(1.2, 0.0, 0.0),
-            edge_v: Vec3::new(0.0, 0.0, 1.2),
-        },
-        black,
-        Vec3::splat(6.0),
-    );
+    add_sphere_under_square_light(&mut s, 0.8, 0.6, 0.35, 0.6, 6.0);
     let accel = Accel::build(&s.meshes, &s.spheres);
     let lights = LightSet::build(&s);
     let tracer = PathTracer {

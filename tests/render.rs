@@ -475,25 +475,7 @@ fn gradients_are_finite_on_hard_configurations() {
 #[test]
 fn line_sampling_renders_the_same_image_as_point_sampling() {
     let mut s = empty_scene(camera(32, 24));
-    let white = add_material(
-        &mut s,
-        Material::Lambert {
-            albedo: Vec3::splat(0.7),
-        },
-    );
-    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
-    add_quad(&mut s, ground(3.0), white, Vec3::ZERO);
-    add_sphere(&mut s, Vec3::new(0.0, 0.5, 0.0), 0.5, white, Vec3::ZERO);
-    add_quad(
-        &mut s,
-        Rect {
-            corner: Vec3::new(-0.5, 2.0, -0.5),
-            edge_u: Vec3::new(1.0, 0.0, 0.0),
-            edge_v: Vec3::new(0.0, 0.0, 1.0),
-        },
-        black,
-        Vec3::splat(4.0),
-    );
+    let (_, black) = add_sphere_under_square_light(&mut s, 0.7, 0.5, 0.5, 0.5, 4.0);
     // The same shape as a plain mesh emitter (no `rect`): point-sampled only.
     add_quad(
         &mut s,

@@ -83,6 +83,40 @@ pub fn ground(size: f32) -> Rect {
     }
 }
 
+/// A Lambert sphere (albedo `albedo`, centre height `height`, `radius`) on a 6 × 6
+/// ground of the same material, under a square light of half-width `half` at
+/// height 2 emitting `radiance`: the soft-shadow set-up. Returns the (white, black)
+/// material ids.
+pub fn add_sphere_under_square_light(
+    s: &mut Scene,
+    albedo: f32,
+    height: f32,
+    radius: f32,
+    half: f32,
+    radiance: f32,
+) -> (u32, u32) {
+    let white = add_material(
+        s,
+        Material::Lambert {
+            albedo: Vec3::splat(albedo),
+        },
+    );
+    let black = add_material(s, Material::Lambert { albedo: Vec3::ZERO });
+    add_quad(s, ground(3.0), white, Vec3::ZERO);
+    add_sphere(s, Vec3::new(0.0, height, 0.0), radius, white, Vec3::ZERO);
+    add_quad(
+        s,
+        Rect {
+            corner: Vec3::new(-half, 2.0, -half),
+            edge_u: Vec3::new(2.0 * half, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0 * half),
+        },
+        black,
+        Vec3::splat(radiance),
+    );
+    (white, black)
+}
+
 /// An icosphere of `radius` around `center`, subdivided `levels` times with shared
 /// vertices (midpoint cache), with exact vertex normals (a smooth mesh whose
 /// shading normals vary across every triangle). Named "icosphere", object id 0.
