@@ -123,8 +123,8 @@ struct RenderArgs {
     /// then holds only R, G, B.
     #[arg(long)]
     no_aovs: bool,
-    /// Also compute the analytic image gradients of the direct illumination and
-    /// write them as `grad.*` layers (∂I/∂u, ∂I/∂v and the per-term magnitudes).
+    /// Also compute the analytic image gradients (direct illumination, and the
+    /// curvature/bump and camera terms of indirect light) and write them as `grad.*` layers (∂I/∂u, ∂I/∂v and the per-term magnitudes).
     #[arg(long)]
     gradients: bool,
     /// With --gradients: shadow rays per azimuth line for the first hit's direct

@@ -611,3 +611,113 @@ fn converged_soft_shadow_gradient_matches_image_differences() {
         vis_share / checked as f32
     );
 }
+
+/// Level 3c: indirect light. A sphere that no light reaches directly (the only
+/// emitter faces away from it, up at a large white dome): its shading is all
+/// indirect, so the direct terms vanish and the image gradient must come from the
+/// indirect term (the first hit's BRDF × cosine differentiated at the path's own
+/// continuation). Checked against image differences of the converged estimate, on
+/// a smooth sphere (curvature only: exact up to noise) and on a bump-mapped one,
+/// where the estimate leaves out one small term — the boundary of the geometric
+/// hemisphere, which cuts the tilted shading lobe where its cosine is a few
+/// percent (see `indirect_sample`).
+#[test]
+fn converged_indirect_gradient_matches_image_differences() {
+    for (bumpy, median_bound, max_bound) in [(false, 0.05, 0.2), (true, 0.15, 0.6)] {
+        let (errors, without) = indirect_gradient_errors(bumpy);
+        let median = errors[errors.len() / 2];
+        let worst = *errors.last().unwrap();
+        let lost = without[without.len() / 2];
+        println!(
+            "bumps {bumpy}: relative error median {median:.3}, max {worst:.3}; \
+             without the indirect term: median {lost:.3}"
+        );
+        assert!(median < median_bound && worst < max_bound, "bumps {bumpy}");
+        assert!(
+            lost > 0.9,
+            "bumps {bumpy}: without the term the gradient is lost"
+        );
+    }
+}
+
+/// Sorted relative errors of the analytic gradient against image differences, with
+/// and without its indirect term, at pixels on the indirectly lit sphere.
+fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
+    let mut s = empty_scene(cam(64, 48));
+    let white = add_material(
+        &mut s,
+        Material::Lambert {
+            albedo: Vec3::splat(0.8),
+        },
+    );
+    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+    add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, white, Vec3::ZERO);
+    if bumpy {
+        let b = add_bump(
+            &mut s,
+            &[(0.012, [6.0, 4.0], 0.3), (0.008, [-3.0, 9.0], 1.0)],
+        );
+        s.spheres[0].bump = Some(b);
+    }
+    let sphere_id = s.spheres[0].object_id;
+    // The dome's radiance varies on a scale of tens of metres: the far field, in
+    // which leaving out the spatial variation of indirect light is exact.
+    add_sphere(&mut s, Vec3::ZERO, 60.0, white, Vec3::ZERO);
+    let light = Rect {
+        corner: Vec3::new(-3.0, 30.0, -3.0),
+        edge_u: Vec3::new(0.0, 0.0, 6.0),
+        edge_v: Vec3::new(6.0, 0.0, 0.0),
+    };
+    add_quad(&mut s, light, black, Vec3::splat(200.0));
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let lights = LightSet::build(&s);
+    let tracer = PathTracer {
+        scene: &s,
+        accel: &accel,
+        lights: &lights,
+        max_depth: 3,
+        rr_depth: 5,
+        lines: None,
+        far_light: None,
+    };
+    let spp = 16384;
+    let h = 0.25f32;
+    let (mut errors, mut without) = (Vec::new(), Vec::new());
+    for (px, py) in [
+        (26u32, 20u32),
+        (32, 18),
+        (36, 26),
+        (28, 28),
+        (34, 22),
+        (30, 24),
+        (24, 30),
+        (38, 20),
+    ] {
+        let pixel = py * s.camera.width + px;
+        let mean = |shift: Vec2| {
+            let (mut l, mut g) = (
+                Vec3::ZERO,
+                gradtrace::render::gradients::GradientSample::default(),
+            );
+            for i in 0..spp {
+                let r = camera_sample(&tracer, &s.camera, pixel, i, 0, true, shift);
+                assert_eq!(r.first_hit.map(|f| f.object_id), Some(sphere_id));
+                l += r.radiance;
+                g.add_scaled(&r.gradient.unwrap(), 1.0 / spp as f32);
+            }
+            (l / spp as f32, g)
+        };
+        let (_, g) = mean(Vec2::ZERO);
+        assert_eq!(g.value, Vec3::ZERO, "no direct light reaches the sphere");
+        for axis in 0..2 {
+            let e = if axis == 0 { Vec2::X } else { Vec2::Y } * h;
+            let fd = (mean(e).0 - mean(-e).0) / (2.0 * h);
+            let an = g.total()[axis];
+            errors.push(rel_err(fd, an, 0.01));
+            without.push(rel_err(fd, an - g.indirect[axis], 0.01));
+        }
+    }
+    errors.sort_by(|a, b| a.total_cmp(b));
+    without.sort_by(|a, b| a.total_cmp(b));
+    (errors, without)
+}

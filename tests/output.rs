@@ -186,6 +186,7 @@ fn image_from_render_names_every_plane() {
         cv: s(11.0),
         cdv: s(12.0),
         vis: s(13.0),
+        indirect: s(15.0),
         ratio: s(14.0),
     });
     let img = image_from_render(&r);
@@ -207,11 +208,13 @@ fn image_from_render_names_every_plane() {
             "grad.cv.Y",
             "grad.cdv.Y",
             "grad.vis.Y",
+            "grad.indirect.Y",
             "grad.ratio.Y"
         ]
     );
     assert_eq!(img.channel("grad.v.B").unwrap().data, vec![-8.0; n]);
     assert_eq!(img.channel("grad.cdv.Y").unwrap().data, s(12.0));
+    assert_eq!(img.channel("grad.indirect.Y").unwrap().data, s(15.0));
     assert_eq!(img.channel("grad.ratio.Y").unwrap().data, s(14.0));
 }
 

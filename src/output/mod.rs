@@ -92,13 +92,14 @@ pub mod names {
     pub const GRAD_U: &str = "grad.u.";
     pub const GRAD_V: &str = "grad.v.";
     /// Scalar gradient-term planes, in the order of `render::GradientPlanes`'
-    /// fields sv, dv, cv, cdv, vis, ratio.
-    pub const GRAD_TERMS: [&str; 6] = [
+    /// fields sv, dv, cv, cdv, vis, indirect, ratio.
+    pub const GRAD_TERMS: [&str; 7] = [
         "grad.sv.Y",
         "grad.dv.Y",
         "grad.cv.Y",
         "grad.cdv.Y",
         "grad.vis.Y",
+        "grad.indirect.Y",
         "grad.ratio.Y",
     ];
 }
@@ -106,7 +107,7 @@ pub mod names {
 /// Collects the beauty (`R,G,B`) and every AOV plane the render produced
 /// (`normal.X/Y/Z`, `depth.Z`, `albedo.R/G/B`, `object.id`, `variance.R/G/B`, and
 /// for gradient renders `grad.u.R/G/B`, `grad.v.R/G/B` and the term magnitudes
-/// `grad.{sv,dv,cv,cdv,vis,ratio}.Y`).
+/// `grad.{sv,dv,cv,cdv,vis,indirect,ratio}.Y`).
 pub fn image_from_render(render: &RenderOutput) -> OutputImage {
     use names::*;
     let mut img = OutputImage::new(render.width, render.height);
@@ -129,7 +130,7 @@ pub fn image_from_render(render: &RenderOutput) -> OutputImage {
     if let Some(g) = &render.gradients {
         img.push_vec3(GRAD_U, RGB, &g.grad_u);
         img.push_vec3(GRAD_V, RGB, &g.grad_v);
-        let terms = [&g.sv, &g.dv, &g.cv, &g.cdv, &g.vis, &g.ratio];
+        let terms = [&g.sv, &g.dv, &g.cv, &g.cdv, &g.vis, &g.indirect, &g.ratio];
         for (name, plane) in GRAD_TERMS.iter().zip(terms) {
             img.push_scalar(name, plane.clone());
         }

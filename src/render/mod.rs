@@ -68,7 +68,7 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
-/// Per-pixel analytic gradients of the direct illumination (pixel units; u to
+/// Per-pixel analytic image gradients (direct illumination and the indirect term; pixel units; u to
 /// the right, v downwards) and the magnitudes of the first-order paper's terms.
 #[derive(Clone, Debug, Default)]
 pub struct GradientPlanes {
@@ -85,6 +85,8 @@ pub struct GradientPlanes {
     pub cdv: Vec<f32>,
     /// |visibility term| projected to the image.
     pub vis: Vec<f32>,
+    /// |indirect term| (curvature/bump and camera terms of indirect light).
+    pub indirect: Vec<f32>,
     /// CDV / SV (the paper's Fig. 5e), 0 where both vanish.
     pub ratio: Vec<f32>,
 }
@@ -99,6 +101,7 @@ impl GradientPlanes {
             cv: vec![0.0; n],
             cdv: vec![0.0; n],
             vis: vec![0.0; n],
+            indirect: vec![0.0; n],
             ratio: vec![0.0; n],
         }
     }
@@ -116,6 +119,7 @@ impl GradientPlanes {
         self.dv[i] = fin(gradients::magnitude(&g.dv));
         self.cv[i] = fin(g.cv);
         self.vis[i] = fin(gradients::magnitude(&g.vis));
+        self.indirect[i] = fin(gradients::magnitude(&g.indirect));
         self.ratio[i] = if cdv <= 0.0 {
             0.0
         } else {

@@ -9,6 +9,7 @@ use super::gradients::{GradientSample, SV};
 use super::interaction::{interaction, offset_origin, segment_between, Interaction};
 use super::lights::{LightSet, LineLight};
 use crate::accel::Accel;
+use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
 use crate::math::{finite_or_zero, Frame, Ray, Vec3};
 use crate::scene::Scene;
@@ -48,7 +49,8 @@ pub struct LineConfig {
 pub struct SampleResult {
     pub radiance: Vec3,
     pub first_hit: Option<FirstHit>,
-    /// Analytic image gradient of the direct illumination, when asked for.
+    /// Analytic image gradient (direct illumination, plus the indirect term), when
+    /// asked for.
     pub gradient: Option<GradientSample>,
     pub rays: u32,
 }
@@ -78,7 +80,9 @@ impl PathTracer<'_> {
     /// Radiance arriving at the camera along `ray`. With `dd` (the image
     /// derivatives ∂d/∂u, ∂d/∂v of the ray's unit direction) the result also
     /// carries the analytic gradient of the direct illumination at the first hit,
-    /// computed from the same light sample and shadow ray as the radiance.
+    /// computed from the same light sample and shadow ray as the radiance, plus the
+    /// curvature/bump and camera terms of the indirect light from the path's own
+    /// continuation (`GradientSample::indirect`).
     pub fn li(
         &self,
         mut ray: Ray,
@@ -97,6 +101,11 @@ impl PathTracer<'_> {
         // The previous vertex sampled its direct light by lines: emitters that
         // lines cover are not counted again when the path hits them.
         let mut prev_line = false;
+        // With gradients: the first hit's material and continuation (direction,
+        // density, BSDF weight), and the radiance once emitters seen directly from
+        // the first hit are counted — what the path adds after that is indirect.
+        let mut continuation: Option<(&Material, Vec3, f32, Vec3)> = None;
+        let mut direct_done: Option<Vec3> = None;
         for depth in 1..=self.max_depth {
             sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
             out.rays += 1;
@@ -114,6 +123,9 @@ impl PathTracer<'_> {
                         power_heuristic(prev_pdf, self.lights.pdf_env(scene, ray.dir))
                     };
                     radiance += beta * le * w;
+                }
+                if depth == 2 {
+                    direct_done = Some(radiance);
                 }
                 break;
             };
@@ -144,6 +156,9 @@ impl PathTracer<'_> {
                     power_heuristic(prev_pdf, light_pdf)
                 };
                 radiance += beta * si.emission * w;
+            }
+            if depth == 2 {
+                direct_done = Some(radiance);
             }
             if depth == self.max_depth {
                 break;
@@ -206,6 +221,9 @@ impl PathTracer<'_> {
             if wi.dot(si.ng) <= 0.0 || !bs.weight.is_finite() {
                 break;
             }
+            if grad.is_some() && depth == 1 && !bs.is_delta {
+                continuation = Some((material, wi, bs.pdf, bs.weight));
+            }
             beta *= bs.weight;
             prev_pdf = if bs.is_delta { f32::INFINITY } else { bs.pdf };
             prev_p = si.p;
@@ -224,6 +242,15 @@ impl PathTracer<'_> {
             }
         }
         out.radiance = radiance;
+        if let (Some((g, hd)), Some((material, wi, pdf, weight)), Some(done)) =
+            (grad.as_mut(), continuation, direct_done)
+        {
+            // The path's indirect contribution is weight × L_in (Russian roulette's
+            // 1/q stays in L_in, keeping it unbiased).
+            let gathered = radiance - done;
+            let l_in = Vec3::select(weight.cmpgt(Vec3::ZERO), gathered / weight, Vec3::ZERO);
+            g.indirect = shading::indirect_sample(material, hd, wi, pdf, l_in);
+        }
         if let Some((g, _)) = grad {
             out.gradient = Some(g);
         }

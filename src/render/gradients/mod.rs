@@ -19,6 +19,12 @@
 //! Differentiating at a fixed area sample is unbiased for the derivative of the
 //! unshadowed-boundary part of the integral, because the light's domain does not
 //! move with x; the moving visibility boundary is the separate visibility term.
+//!
+//! Indirect light: the path's continuation from the first hit is a direction
+//! sample of the same kind, so f·(n·ω_i)₊ at that fixed direction, over the same
+//! duals, times the radiance the path brought back, gives the curvature/bump and
+//! camera terms of the indirect light (`shading::indirect_sample`). Without it a
+//! bumpy surface in shadow, lit only by bounced light, would have zero gradient.
 
 pub mod geometry;
 pub mod shading;
@@ -52,6 +58,10 @@ pub struct GradientSample {
     pub dv: [Vec3; 2],
     /// Visibility (soft shadow) term of ∂I/∂u, ∂I/∂v.
     pub vis: [Vec3; 2],
+    /// Indirect term: the first hit's BRDF × cosine differentiated through n and
+    /// ω_o at the path's own continuation direction, times the radiance that path
+    /// brought back (see [`indirect_sample`](shading::indirect_sample)).
+    pub indirect: [Vec3; 2],
     /// 2·|∂n/∂x|: twice the Frobenius norm of the shading normal's derivative per
     /// unit length on the surface (the CV term; 0 on flat unbumped surfaces).
     pub cv: f32,
@@ -60,7 +70,7 @@ pub struct GradientSample {
 impl GradientSample {
     /// ∂I/∂u and ∂I/∂v: the sum of all terms.
     pub fn total(&self) -> [Vec3; 2] {
-        [0, 1].map(|i| self.sv[i] + self.cdv[i] + self.cam[i] + self.vis[i])
+        [0, 1].map(|i| self.sv[i] + self.cdv[i] + self.cam[i] + self.vis[i] + self.indirect[i])
     }
 
     /// Adds `w ×` the lanes of an RGB dual contribution.
@@ -83,6 +93,7 @@ impl GradientSample {
             self.cam[k] += o.cam[k] * w;
             self.dv[k] += o.dv[k] * w;
             self.vis[k] += o.vis[k] * w;
+            self.indirect[k] += o.indirect[k] * w;
         }
         self.cv += o.cv * w;
     }

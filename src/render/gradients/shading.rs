@@ -2,7 +2,7 @@
 //! f(ω_o, ω_i; n) (n·ω_i)₊ L_e G / p, whose lanes are the gradient terms.
 
 use super::geometry::HitDuals;
-use super::{GDual, GVec3};
+use super::{GDual, GVec3, CAM, CDV};
 use crate::brdf::Material;
 use crate::math::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -46,6 +46,36 @@ pub fn direct_sample(material: &Material, h: &HitDuals, light: &LightPoint) -> [
     };
     let f_cos = brdf_cos(material, h.n, h.wo, wi);
     [0, 1, 2].map(|c| f_cos[c] * scale * radiance[c])
+}
+
+/// The indirect part of ∂I/∂u, ∂I/∂v from one continuation of the path: the path
+/// left the first hit along `wi` (world space, density `pdf` in solid angle) and
+/// brought back `l_in`, the radiance arriving along `wi` (everything the path
+/// gathered beyond the first hit except emitters seen directly, which the direct
+/// term covers). Differentiating f·(n·ω_i)₊ through the normal (CDV lanes:
+/// curvature and bump maps) and the view direction (CAM lanes) at fixed `wi`
+/// is unbiased for those terms of the indirect integral (its domain does not move;
+/// the cosine vanishes at the horizon). Not included: the spatial variation of the
+/// incident indirect field (∂L_in/∂x, the SV term of indirect light) — indirect
+/// light is treated as distant, the far-field case of Sec. 5.2 — and, on bump maps,
+/// the moving boundary of the geometric hemisphere (paths below it end), where the
+/// tilted shading cosine is small but not zero.
+pub fn indirect_sample(
+    material: &Material,
+    h: &HitDuals,
+    wi: Vec3,
+    pdf: f32,
+    l_in: Vec3,
+) -> [Vec3; 2] {
+    if !(pdf > 0.0 && pdf.is_finite()) {
+        return [Vec3::ZERO; 2];
+    }
+    let f_cos = brdf_cos(material, h.n, h.wo, GVec3::constant(wi));
+    let scale = l_in / pdf;
+    [0, 1].map(|k| {
+        let lane = |l: usize| Vec3::new(f_cos[0].d[l], f_cos[1].d[l], f_cos[2].d[l]);
+        (lane(CDV + k) + lane(CAM + k)) * scale
+    })
 }
 
 /// f(ω_o, ω_i; n) · (n·ω_i)₊ in world space, per RGB channel, for every material
