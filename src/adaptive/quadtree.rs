@@ -309,6 +309,34 @@ impl PartialEq for Entry {
 
 impl Eq for Entry {}
 
+/// Batches at least this large are compared with their neighbours in parallel.
+const PARALLEL_MIN: usize = 256;
+
+/// How a new sample relates to one neighbour.
+#[derive(Clone, Copy, Debug)]
+enum Link {
+    /// Another surface, with this radiance jump |ΔI|.
+    Boundary(f32),
+    /// The same surface, with this pair metric.
+    Pair(f32),
+}
+
+/// A new sample's links to its (at most nine) neighbours.
+#[derive(Clone, Copy, Debug)]
+struct Comparisons {
+    links: [(u32, Link); 9],
+    len: usize,
+}
+
+impl Default for Comparisons {
+    fn default() -> Self {
+        Self {
+            links: [(NONE, Link::Pair(0.0)); 9],
+            len: 0,
+        }
+    }
+}
+
 struct Tree {
     width: u32,
     height: u32,
@@ -319,6 +347,8 @@ struct Tree {
     nby: usize,
     cells: Vec<Cell>,
     values: Vec<SampleValue>,
+    /// `own_metric` of every evaluated sample, computed once.
+    own: Vec<f32>,
     heap: BinaryHeap<Entry>,
     leaves: usize,
     dirty: Vec<u32>,
@@ -346,6 +376,7 @@ impl Tree {
             nby,
             cells: Vec::with_capacity(target),
             values: Vec::with_capacity(target),
+            own: Vec::with_capacity(target),
             heap: BinaryHeap::new(),
             leaves: 0,
             dirty: Vec::new(),
@@ -562,7 +593,7 @@ impl Tree {
             // estimated as the largest over its sample and its neighbours', so that a
             // bump whose slope vanishes exactly at a sample still counts.
             Strategy::Gradient | Strategy::GradientVis => {
-                self.own_metric(va).max(self.own_metric(vb))
+                self.own[a as usize].max(self.own[b as usize])
             }
             _ => 0.0,
         }
@@ -596,29 +627,60 @@ impl Tree {
         }
     }
 
+    /// What the comparisons of new sample `id` with its neighbours ask for: each
+    /// neighbour with a radiance jump (another surface: force both) or a pair metric
+    /// (raise both). Read-only, so a batch is analysed in parallel.
+    fn compare_with_neighbours(&self, id: u32, pairs: bool) -> Comparisons {
+        let mut nb = Vec::with_capacity(9);
+        self.neighbours(id, &mut nb);
+        let mut out = Comparisons::default();
+        let tol = self.settings.depth_tolerance;
+        for &n in &nb {
+            let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
+            let link = if is_discontinuous(va, vb, tol) {
+                Link::Boundary((va.radiance - vb.radiance).length())
+            } else if pairs {
+                Link::Pair(self.pair_metric(id, n))
+            } else {
+                continue;
+            };
+            out.links[out.len] = (n, link);
+            out.len += 1;
+        }
+        out
+    }
+
     /// Scores the cells `first..end` (just evaluated): own metric, comparisons with
     /// neighbours (boundaries and pair metrics, which may also raise the neighbours),
-    /// then (re)queues every cell whose key changed.
+    /// then (re)queues every cell whose key changed. The comparisons are computed in
+    /// parallel and applied in cell order, so the result does not depend on threads.
     fn process_new(&mut self, first: usize, end: usize) {
         for id in first..end {
-            self.cells[id].metric = self.own_metric(&self.values[id]).max(0.0);
+            let own = self.own_metric(&self.values[id]);
+            self.own.push(own);
+            self.cells[id].metric = own.max(0.0);
             self.mark_dirty(id as u32);
         }
-        let tol = self.settings.depth_tolerance;
         let pairs = !matches!(self.settings.strategy, Strategy::Uniform | Strategy::Durand);
-        let mut nb = Vec::with_capacity(9);
-        for id in first as u32..end as u32 {
-            self.neighbours(id, &mut nb);
-            for &n in &nb {
-                let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
-                if is_discontinuous(va, vb, tol) {
-                    let jump = (va.radiance - vb.radiance).length();
-                    self.force(id, jump);
-                    self.force(n, jump);
-                } else if pairs {
-                    let m = self.pair_metric(id, n);
-                    self.raise(id, m);
-                    self.raise(n, m);
+        let this = &*self;
+        let compare = |id: u32| this.compare_with_neighbours(id, pairs);
+        let ids = first as u32..end as u32;
+        let found: Vec<Comparisons> = if end - first >= PARALLEL_MIN {
+            ids.into_par_iter().map(compare).collect()
+        } else {
+            ids.map(compare).collect()
+        };
+        for (id, c) in (first as u32..).zip(found) {
+            for &(n, link) in &c.links[..c.len] {
+                match link {
+                    Link::Boundary(jump) => {
+                        self.force(id, jump);
+                        self.force(n, jump);
+                    }
+                    Link::Pair(m) => {
+                        self.raise(id, m);
+                        self.raise(n, m);
+                    }
                 }
             }
         }
