@@ -464,7 +464,7 @@ fn json(
 /// print it).
 pub fn markdown_table(rows: &[ReportRow]) -> String {
     let mut s = String::from(
-        "| strategy | kind | budget | samples | wall time (s) | overhead (s) | RMSE | relMSE | FLIP | speed-up vs ref. |\n\
+        "| strategy | kind | budget | samples | wall time (s) | overhead (s) | RMSE | relMSE | FLIP | speed-up vs full |\n\
          |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
@@ -586,7 +586,7 @@ fn html(
     );
 
     s += "<h2>Summary</h2>\n<table><tr><th>strategy</th><th>kind</th><th>budget</th><th>samples</th>\
-          <th>wall time (s)</th><th>overhead (s)</th><th>RMSE</th><th>relMSE</th><th>FLIP</th><th>speed-up vs ref.</th></tr>\n";
+          <th>wall time (s)</th><th>overhead (s)</th><th>RMSE</th><th>relMSE</th><th>FLIP</th><th>speed-up vs full</th></tr>\n";
     for r in rows {
         let _ = writeln!(
             s,
