@@ -46,7 +46,17 @@ fn detail(p: Vec2) -> SampleValue {
 }
 
 /// A disc that is another object (or, with `by_depth`, the same object 5× closer).
-fn disc(by_depth: bool) -> impl Fn(Vec2) -> SampleValue + Sync {
+/// What separates the disc from the ramp around it.
+#[derive(Clone, Copy, Debug)]
+enum Boundary {
+    ObjectId,
+    Depth,
+    /// Same object and depth, but the shading normal faces away (a bump map's
+    /// terminator): the disc is black.
+    BackFacing,
+}
+
+fn disc(by: Boundary) -> impl Fn(Vec2) -> SampleValue + Sync {
     move |p: Vec2| {
         let inside = p.distance(Vec2::new(61.3, 66.7)) < 30.0;
         let mut v = SampleValue::new(
@@ -55,10 +65,13 @@ fn disc(by_depth: bool) -> impl Fn(Vec2) -> SampleValue + Sync {
             Vec3::new(0.0, 0.002, 0.0),
         );
         if inside {
-            if by_depth {
-                v.depth = 0.2;
-            } else {
-                v.object_id = 7;
+            match by {
+                Boundary::Depth => v.depth = 0.2,
+                Boundary::ObjectId => v.object_id = 7,
+                Boundary::BackFacing => {
+                    v = SampleValue::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+                    v.back_facing = true;
+                }
             }
         }
         v
@@ -129,8 +142,8 @@ fn budget_is_honoured_exactly() {
 fn object_boundaries_are_refined_to_pixel_size() {
     let (w, h) = (128u32, 128u32);
     let centre = Vec2::new(61.3, 66.7);
-    for by_depth in [false, true] {
-        let f = disc(by_depth);
+    for by in [Boundary::ObjectId, Boundary::Depth, Boundary::BackFacing] {
+        let f = disc(by);
         for strategy in QUADTREE {
             let set = refine(&f, w, h, &Settings::new(strategy, 0.3)).unwrap();
             let mut crossing = 0;
@@ -146,13 +159,12 @@ fn object_boundaries_are_refined_to_pixel_size() {
                     let size = (b.x - a.x).max(b.y - a.y);
                     assert!(
                         size <= 1.0,
-                        "{strategy:?} by_depth={by_depth}: cell {a}..{b} crosses the silhouette at size {size}"
+                        "{strategy:?} by {by:?}: cell {a}..{b} crosses the silhouette at size {size}"
                     );
                 }
             }
             println!(
-                "{strategy:?} (boundary by {}): {crossing} boundary-crossing cells, all at pixel size",
-                if by_depth { "depth" } else { "object id" }
+                "{strategy:?} (boundary by {by:?}): {crossing} boundary-crossing cells, all at pixel size"
             );
             assert!(
                 crossing > 150,
@@ -280,13 +292,22 @@ fn bad_input_is_an_error() {
     for st in Strategy::ALL {
         assert_eq!(Strategy::from_name(st.name()).unwrap(), st);
     }
+    // The spellings, as the CLI help lists them.
+    assert_eq!(
+        Strategy::from_name("gradient+vis").unwrap(),
+        Strategy::GradientVis
+    );
+    assert_eq!(
+        Strategy::from_name("second-order").unwrap(),
+        Strategy::SecondOrder
+    );
 }
 
 #[test]
 fn identical_for_any_thread_count() {
     let f = |p: Vec2| {
         let mut v = detail(p);
-        let d = disc(false)(p);
+        let d = disc(Boundary::ObjectId)(p);
         v.object_id = d.object_id;
         v
     };

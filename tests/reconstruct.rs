@@ -169,23 +169,23 @@ fn c1_beats_linear_on_smooth_image() {
 }
 
 /// A disc (value 1) on a background (value 0), constant per surface; the disc is
-/// another object, or the same object at a fifth of the depth. No pixel may be a blend
+/// another object, or the same object at a fifth of the depth, or the background is
+/// the same object's back-facing side (a bump map's terminator, black). No pixel may be a blend
 /// of the two (0 < v < 1), whatever the sample layout; once the quadtree has refined the
 /// silhouette to pixel size, every pixel also gets its own surface. The uniform layout
 /// leaves pixel centres between samples of both surfaces, which is where a missing
 /// silhouette rule would blend.
 #[test]
 fn never_interpolates_across_silhouettes() {
-    for by_depth in [false, true] {
+    for by in ["object id", "depth", "terminator"] {
         let disc = move |p: Vec2| {
             let inside = p.distance(Vec2::new(50.3, 41.7)) < 23.0;
             let mut v = SampleValue::new(Vec3::splat(inside as u32 as f32), Vec3::ZERO, Vec3::ZERO);
-            if inside {
-                if by_depth {
-                    v.depth = 0.2;
-                } else {
-                    v.object_id = 1;
-                }
+            match by {
+                "object id" => v.object_id = inside as u32,
+                "depth" if inside => v.depth = 0.2,
+                "terminator" => v.back_facing = !inside,
+                _ => {}
             }
             v
         };
@@ -207,9 +207,8 @@ fn never_interpolates_across_silhouettes() {
                     }
                 }
                 println!(
-                    "disc by {}, {strategy:?} samples, {mode:?}: {blended} blended pixels, \
-                     {wrong} pixels of the wrong surface",
-                    if by_depth { "depth" } else { "object id" }
+                    "disc by {by}, {strategy:?} samples, {mode:?}: {blended} blended pixels, \
+                     {wrong} pixels of the wrong surface"
                 );
                 assert_eq!(blended, 0);
                 if strategy != Strategy::Uniform {

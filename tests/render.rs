@@ -515,3 +515,62 @@ fn line_sampling_renders_the_same_image_as_point_sampling() {
         "point sampling {points} vs line sampling {lines}"
     );
 }
+
+/// A bump map tilts the shading normal away from the camera near a sphere's
+/// silhouette: there the path ends at the first hit (the terminator's black dots),
+/// and the first hit says so (`back_facing`), which the adaptive sampler treats as a
+/// boundary. Every such sample must be black; the others near the rim must not all be.
+#[test]
+fn back_facing_shading_normals_are_flagged_and_black() {
+    let mut s = empty_scene(camera(48, 36));
+    let m = add_material(
+        &mut s,
+        Material::Lambert {
+            albedo: Vec3::splat(0.7),
+        },
+    );
+    add_sphere(&mut s, Vec3::new(0.0, 0.5, 0.0), 1.0, m, Vec3::ZERO);
+    let b = add_bump(&mut s, &[(0.03, [16.0, 0.0], 0.0), (0.03, [0.0, 8.0], 0.5)]);
+    s.spheres[0].bump = Some(b);
+    s.environment = Some(Environment::Constant {
+        radiance: Vec3::ONE,
+    });
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let lights = LightSet::build(&s);
+    let tracer = PathTracer {
+        scene: &s,
+        accel: &accel,
+        lights: &lights,
+        max_depth: 4,
+        rr_depth: 5,
+        lines: None,
+        far_light: None,
+    };
+    let (mut back, mut front) = (0, 0);
+    for pixel in 0..s.camera.width * s.camera.height {
+        for i in 0..4 {
+            let r = gradtrace::render::camera_sample(
+                &tracer,
+                &s.camera,
+                pixel,
+                i,
+                0,
+                false,
+                Vec2::ZERO,
+            );
+            let Some(fh) = r.first_hit else { continue };
+            if fh.back_facing {
+                back += 1;
+                assert_eq!(
+                    r.radiance,
+                    Vec3::ZERO,
+                    "pixel {pixel}: a back-facing hit is black"
+                );
+            } else {
+                front += 1;
+            }
+        }
+    }
+    println!("{back} back-facing and {front} front-facing first hits");
+    assert!(back > 10 && front > 10 * back);
+}

@@ -42,6 +42,12 @@ pub struct SampleValue {
     /// neighbouring samples counts as an object boundary (self-occlusion silhouettes),
     /// for refinement and for reconstruction alike.
     pub depth: f32,
+    /// The shading normal at the visible point faces away from the camera, so the
+    /// path ends there and the radiance drops to the emitted light: the black dots
+    /// along a bump map's terminator. A change of side between neighbouring samples
+    /// is a discontinuity like an object boundary (refined to pixel size, never
+    /// interpolated across).
+    pub back_facing: bool,
     /// Optional non-negative weight multiplied into every strategy's metric (e.g. to
     /// down-weight a region the caller cares less about). `None` means 1.
     pub importance: Option<f32>,
@@ -66,11 +72,18 @@ impl SampleValue {
             grad_v,
             object_id: 0,
             depth: 1.0,
+            back_facing: false,
             importance: None,
             durand: None,
             vis_gradient: None,
             gradient_variance: None,
         }
+    }
+
+    /// The object id and the side of the terminator ([`back_facing`](Self::back_facing))
+    /// in one id: samples with different ids are never interpolated together.
+    pub fn surface_id(&self) -> u64 {
+        (u64::from(self.object_id) << 1) | u64::from(self.back_facing)
     }
 
     /// Frobenius norm of the 3×2 image Jacobian: |∇I| over all colour channels, so that
@@ -148,10 +161,13 @@ impl Strategy {
     }
 
     /// Parses [`Strategy::name`]; the error lists the valid choices.
+    /// The strategy called `name`; `+` and `-` may stand for `_` (the issue's
+    /// spelling `gradient+vis`, `second-order`).
     pub fn from_name(name: &str) -> Result<Self> {
+        let canonical = name.replace(['+', '-'], "_");
         Self::ALL
             .into_iter()
-            .find(|s| s.name() == name)
+            .find(|s| s.name() == canonical)
             .ok_or_else(|| Error::Option {
                 option: "strategy".into(),
                 message: format!(
@@ -275,14 +291,17 @@ pub(crate) fn quadrant(min: Vec2, max: Vec2, centre: Vec2, q: u8) -> (Vec2, Vec2
     (Vec2::new(x0, y0), Vec2::new(x1, y1))
 }
 
-/// True when two samples lie on different surfaces: a different object id, or a
-/// relative depth jump above `tolerance`. Two infinite depths (background) match.
+/// True when two samples lie on different surfaces: a different [`surface id`]
+/// (object, or side of a bump map's terminator), or a relative depth jump above
+/// `tolerance`. Two infinite depths (background) match.
+///
+/// [`surface id`]: SampleValue::surface_id
 pub fn is_discontinuous(a: &SampleValue, b: &SampleValue, tolerance: f32) -> bool {
-    surfaces_differ(a.object_id, a.depth, b.object_id, b.depth, tolerance)
+    surfaces_differ(a.surface_id(), a.depth, b.surface_id(), b.depth, tolerance)
 }
 
 /// [`is_discontinuous`] on the raw fields.
-pub fn surfaces_differ(obj_a: u32, da: f32, obj_b: u32, db: f32, tolerance: f32) -> bool {
+pub fn surfaces_differ(obj_a: u64, da: f32, obj_b: u64, db: f32, tolerance: f32) -> bool {
     if obj_a != obj_b {
         return true;
     }

@@ -3,7 +3,8 @@
 //! Every sample is the centre of a cell; a cell's importance is `metric × area`. A
 //! binary heap holds the leaves; the most important ones are split into four children
 //! whose centres are evaluated. Cells whose sample sees a different surface than a
-//! neighbouring sample ("object boundary": object id or depth jump) are *forced*: they
+//! neighbouring sample ("object boundary": object id or depth jump, or the side of a
+//! bump map's terminator, `SampleValue::back_facing`) are *forced*: they
 //! sort before every metric-driven cell and are split down to pixel size. Among
 //! themselves they are ordered by the radiance jump across the boundary × area, the
 //! same for every strategy, so that when the budget cannot refine every boundary the

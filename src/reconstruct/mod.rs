@@ -9,7 +9,8 @@
 //!   which is what makes sparse gradient samples worth more than plain values (Fig. 13).
 //!
 //! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
-//! the same surface when they have the same object id and their depths differ by at
+//! the same surface when they have the same object id, lie on the same side of a bump
+//! map's terminator (`SampleValue::surface_id`) and their depths differ by at
 //! most `SampleSet::depth_tolerance` (relative), the same test the quadtree uses to
 //! force refinement. Of the samples that would contribute (the triangle's corners, or
 //! the natural neighbours), the pixel takes the surface that carries the largest share
@@ -142,7 +143,8 @@ struct Data {
     value: Vec<DVec3>,
     grad_u: Vec<DVec3>,
     grad_v: Vec<DVec3>,
-    object: Vec<u32>,
+    /// [`SampleValue::surface_id`](crate::adaptive::SampleValue::surface_id) of each sample.
+    object: Vec<u64>,
     depth: Vec<f32>,
     /// Relative depth jump that separates two surfaces of one object.
     tolerance: f32,
@@ -199,7 +201,7 @@ pub fn reconstruct_with(
         value: set.samples.iter().map(|s| d(s.value.radiance)).collect(),
         grad_u: set.samples.iter().map(|s| d(s.value.grad_u)).collect(),
         grad_v: set.samples.iter().map(|s| d(s.value.grad_v)).collect(),
-        object: set.samples.iter().map(|s| s.value.object_id).collect(),
+        object: set.samples.iter().map(|s| s.value.surface_id()).collect(),
         depth: set.samples.iter().map(|s| s.value.depth).collect(),
         tolerance: set.depth_tolerance,
     };
@@ -521,7 +523,7 @@ impl<'a> Ctx<'a> {
 
     /// Keeps the samples of the surface with the largest total weight and
     /// renormalises their weights into `kept`. A surface is the set of samples
-    /// compatible with an anchor sample (same object id, relative depth difference within
+    /// compatible with an anchor sample (same surface id, relative depth difference within
     /// the set's tolerance); every contributing sample is tried as the anchor and the
     /// heaviest group wins (ties: the heavier anchor, then the earlier one).
     fn keep_majority_surface(&mut self) {

@@ -77,6 +77,7 @@ impl Estimator for RenderEstimator<'_> {
         if let Some(fh) = first.and_then(|r| r.first_hit) {
             v.object_id = fh.object_id;
             v.depth = fh.depth;
+            v.back_facing = fh.back_facing;
             v.durand = Some(self.durand(p));
         }
         v

@@ -61,6 +61,9 @@ pub struct FirstHit {
     pub depth: f32,
     pub albedo: Vec3,
     pub object_id: u32,
+    /// The shading normal faces away from the camera (a bump map's terminator): the
+    /// path ends at this hit.
+    pub back_facing: bool,
 }
 
 /// Power heuristic with β = 2 (Veach 1997), written to stay finite when one
@@ -144,6 +147,7 @@ impl PathTracer<'_> {
                     depth: hit.t,
                     albedo: scene.materials[si.material as usize].albedo(),
                     object_id: si.object_id,
+                    back_facing: si.frame.n.dot(ray.dir) >= 0.0,
                 });
             }
             if si.emission != Vec3::ZERO {
