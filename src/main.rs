@@ -77,6 +77,10 @@ struct CompareArgs {
     /// gradient; the rest only refine its radiance [default: min(spp, 16)].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     gradient_spp: Option<u32>,
+    /// Random seed of every run; the reference uses its own stream derived from it
+    /// [default: the scene's `[render] seed`].
+    #[arg(long, value_name = "S")]
+    seed: Option<u32>,
     /// Output folder [default: out/<scene-stem>].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -474,6 +478,7 @@ fn compare_cmd(args: CompareArgs) -> anyhow::Result<()> {
         opts.vis_samples = args.vis_samples;
     }
     opts.gradient_spp = args.gradient_spp;
+    opts.seed = args.seed;
     let scene = scene::load(&args.scene)?;
     let accel = Accel::build(&scene.meshes, &scene.spheres);
     let bar = progress_bar(args.quiet);

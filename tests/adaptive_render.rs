@@ -152,14 +152,17 @@ fn compare_writes_the_report_and_caches_the_reference() {
     assert!(rows
         .iter()
         .all(|r| r.rmse.is_finite() && r.flip.is_finite()));
-    for f in [
-        "report.html",
-        "report.json",
-        "report.md",
-        "reference-8spp-96x72.exr",
-    ] {
+    for f in ["report.html", "report.json", "report.md"] {
         assert!(dir.join(f).exists(), "{f}");
     }
+    let cached = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .any(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            name.starts_with("reference-8spp-96x72-seed") && name.ends_with(".exr")
+        });
+    assert!(cached, "cached reference");
     // Sec. 8 is also scored on the ground plane, away from the silhouettes.
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(
@@ -169,6 +172,14 @@ fn compare_writes_the_report_and_caches_the_reference() {
     // A second run reuses the cached reference (same rows for the same seeds).
     let again = compare(&scene, &accel, &opts, &|_| {}).unwrap();
     assert_eq!(rows[1].rmse, again[1].rmse);
+    // The reference has random numbers of its own: at the runs' own spp it is a
+    // second, independent render, not a copy of the full render (RMSE 0).
+    opts.reference_spp = Some(2);
+    opts.strategies = vec![Strategy::Uniform];
+    opts.budgets = vec![0.25];
+    let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
+    assert_eq!(rows[0].label, "full");
+    assert!(rows[0].rmse > 1e-3, "full vs reference: {}", rows[0].rmse);
     std::fs::remove_dir_all(&dir).ok();
 }
 
