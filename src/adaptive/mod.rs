@@ -160,9 +160,8 @@ impl Strategy {
         }
     }
 
-    /// Parses [`Strategy::name`]; the error lists the valid choices.
-    /// The strategy called `name`; `+` and `-` may stand for `_` (the issue's
-    /// spelling `gradient+vis`, `second-order`).
+    /// Parses [`Strategy::name`] (`+` and `-` may stand for `_`: `gradient+vis`,
+    /// `second-order`); the error lists the valid choices.
     pub fn from_name(name: &str) -> Result<Self> {
         let canonical = name.replace(['+', '-'], "_");
         Self::ALL
@@ -300,9 +299,9 @@ pub fn is_discontinuous(a: &SampleValue, b: &SampleValue, tolerance: f32) -> boo
     surfaces_differ(a.surface_id(), a.depth, b.surface_id(), b.depth, tolerance)
 }
 
-/// [`is_discontinuous`] on the raw fields.
-pub fn surfaces_differ(obj_a: u64, da: f32, obj_b: u64, db: f32, tolerance: f32) -> bool {
-    if obj_a != obj_b {
+/// [`is_discontinuous`] on the raw fields (surface ids and depths).
+pub fn surfaces_differ(surf_a: u64, da: f32, surf_b: u64, db: f32, tolerance: f32) -> bool {
+    if surf_a != surf_b {
         return true;
     }
     if !da.is_finite() || !db.is_finite() {

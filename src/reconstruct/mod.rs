@@ -144,7 +144,7 @@ struct Data {
     grad_u: Vec<DVec3>,
     grad_v: Vec<DVec3>,
     /// [`SampleValue::surface_id`](crate::adaptive::SampleValue::surface_id) of each sample.
-    object: Vec<u64>,
+    surface: Vec<u64>,
     depth: Vec<f32>,
     /// Relative depth jump that separates two surfaces of one object.
     tolerance: f32,
@@ -201,7 +201,7 @@ pub fn reconstruct_with(
         value: set.samples.iter().map(|s| d(s.value.radiance)).collect(),
         grad_u: set.samples.iter().map(|s| d(s.value.grad_u)).collect(),
         grad_v: set.samples.iter().map(|s| d(s.value.grad_v)).collect(),
-        object: set.samples.iter().map(|s| s.value.surface_id()).collect(),
+        surface: set.samples.iter().map(|s| s.value.surface_id()).collect(),
         depth: set.samples.iter().map(|s| s.value.depth).collect(),
         tolerance: set.depth_tolerance,
     };
@@ -265,9 +265,9 @@ fn limit_gradients(dt: &Dt, data: &mut Data) {
     let d = &*data;
     let differ = |i: usize, j: usize| {
         surfaces_differ(
-            d.object[i],
+            d.surface[i],
             d.depth[i],
-            d.object[j],
+            d.surface[j],
             d.depth[j],
             d.tolerance,
         )
@@ -361,7 +361,7 @@ fn add_border_ghosts(
         data.value.push(value);
         data.grad_u.push(data.grad_u[src]);
         data.grad_v.push(data.grad_v[src]);
-        data.object.push(data.object[src]);
+        data.surface.push(data.surface[src]);
         data.depth.push(data.depth[src]);
         dt.insert(Node {
             pos: Point2::new(q.x, q.y),
@@ -419,9 +419,9 @@ impl<'a> Ctx<'a> {
     fn differ(&self, a: usize, b: usize) -> bool {
         let d = self.data;
         surfaces_differ(
-            d.object[a],
+            d.surface[a],
             d.depth[a],
-            d.object[b],
+            d.surface[b],
             d.depth[b],
             d.tolerance,
         )
@@ -532,18 +532,19 @@ impl<'a> Ctx<'a> {
             let (v, w) = self.weights[k];
             self.kept.push((self.sample(v), w));
         }
-        let (obj, depth, tol) = (&self.data.object, &self.data.depth, self.data.tolerance);
-        let differ = |a: usize, b: usize| surfaces_differ(obj[a], depth[a], obj[b], depth[b], tol);
-        // Common case first: one object, depths within the tolerance of each other.
+        let (surf, depth, tol) = (&self.data.surface, &self.data.depth, self.data.tolerance);
+        let differ =
+            |a: usize, b: usize| surfaces_differ(surf[a], depth[a], surf[b], depth[b], tol);
+        // Common case first: one surface id, depths within the tolerance of each other.
         let first = self.kept[0].0;
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        let mut one_object = true;
+        let mut one_id = true;
         for &(i, _) in &self.kept {
-            one_object &= obj[i] == obj[first];
+            one_id &= surf[i] == surf[first];
             lo = lo.min(depth[i].abs());
             hi = hi.max(depth[i].abs());
         }
-        let one_surface = one_object
+        let one_surface = one_id
             && ((lo.is_finite() && hi - lo <= tol * lo) || (lo.is_infinite() && hi.is_infinite()));
         if one_surface {
             return;
