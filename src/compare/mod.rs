@@ -144,11 +144,15 @@ pub fn compare(
     }
 
     // How much shorter than the reference render itself the gradient runs are.
-    let against_reference = gradient_times
-        .iter()
-        .map(|&(budget, t)| format!("{:.0}%: {:.1}×", budget * 100.0, reference_time / t))
-        .collect::<Vec<_>>()
-        .join(", ");
+    // (Only when the cached render time is known.)
+    let against_reference = (reference_time > 0.0 && !gradient_times.is_empty()).then(|| {
+        let list = gradient_times
+            .iter()
+            .map(|&(budget, t)| format!("{:.0}%: {:.1}×", budget * 100.0, reference_time / t))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!("gradient's wall time against the reference render ({reference_time:.1} s): {list} shorter.")
+    });
     // Equal wall time: every pixel rendered, with as many samples as the gradient
     // strategy's time buys.
     for (budget, t_grad) in gradient_times {
@@ -250,19 +254,18 @@ pub fn compare(
         reference_spp: ref_spp,
         exposure: 0.0,
         runs,
-        notes: vec![
-            format!(
+        notes: [
+            Some(format!(
                 "Reference: every pixel at {ref_spp} spp, with random numbers independent of every run ({reference_time:.1} s when rendered). Speed-ups are against the full render at {spp} spp per pixel ({full_time:.2} s), \
                  the same number of samples per evaluated point as the adaptive runs."
-            ),
-            format!(
-                "gradient's wall time against the reference render ({reference_time:.1} s): {against_reference} shorter."
-            ),
-            "Adaptive runs evaluate the renderer (path tracing with analytic gradients: direct light, soft shadows and the indirect term) at the quadtree's \
+            )),
+            against_reference,
+            Some("Adaptive runs evaluate the renderer (path tracing with analytic gradients: direct light, soft shadows and the indirect term) at the quadtree's \
              samples and reconstruct the pixels by Sibson C1 interpolation with those gradients; overhead = quadtree + reconstruction."
-                .into(),
+                .into()),
         ]
         .into_iter()
+        .flatten()
         .chain(notes)
         .collect(),
     };

@@ -251,7 +251,9 @@ impl PathTracer<'_> {
         {
             // The path's indirect contribution is weight × L_in (Russian roulette's
             // 1/q stays in L_in, keeping it unbiased).
-            let gathered = radiance - done;
+            // A non-finite deeper bounce must not poison the gradient (the radiance
+            // itself is cleaned when it is accumulated).
+            let gathered = finite_or_zero(radiance - done);
             let l_in = Vec3::select(weight.cmpgt(Vec3::ZERO), gathered / weight, Vec3::ZERO);
             g.indirect = shading::indirect_sample(material, hd, wi, pdf, l_in);
         }

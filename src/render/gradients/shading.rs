@@ -59,7 +59,10 @@ pub fn direct_sample(material: &Material, h: &HitDuals, light: &LightPoint) -> [
 /// incident indirect field (∂L_in/∂x, the SV term of indirect light) — indirect
 /// light is treated as distant, the far-field case of Sec. 5.2 — and, on bump maps,
 /// the moving boundary of the geometric hemisphere (paths below it end), where the
-/// tilted shading cosine is small but not zero.
+/// tilted shading cosine is small but not zero. Per sample the estimate is
+/// heavy-tailed near the horizon (∝ (∂n·ω_i)/(n·ω_i) under cosine sampling); the
+/// sampler subtracts the gradient's variance and the reconstruction slope-limits, so
+/// outliers neither draw samples nor paint blobs.
 pub fn indirect_sample(
     material: &Material,
     h: &HitDuals,
