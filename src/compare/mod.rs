@@ -14,11 +14,11 @@ use crate::accel::Accel;
 use crate::adaptive::{Settings, Strategy};
 use crate::output::report::{self, ReportInput, ReportRow, Run, RunKind};
 use crate::reconstruct::Interpolation;
-use crate::render::adaptive::render_adaptive;
-use crate::render::{render, RenderOptions};
+use crate::render::adaptive::{render_adaptive, AdaptiveRender};
+use crate::render::{render, RenderOptions, RenderOutput};
 use crate::scene::Scene;
 use crate::{Error, Result};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -94,19 +94,9 @@ pub fn compare(
     ));
 
     // The full render every adaptive run is measured against.
-    let t = Instant::now();
-    let full = render(scene, accel, &base, &|_, _| {})?;
-    let full_time = t.elapsed().as_secs_f64();
+    let (full, full_time) = timed_render(scene, accel, &base)?;
     progress(&format!("full render: {spp} spp, {full_time:.2} s"));
-    let mut runs = vec![Run {
-        label: "full".into(),
-        kind: RunKind::EqualTime { spp },
-        samples: full.width * full.height * spp as usize,
-        wall_time_s: full_time,
-        overhead_s: 0.0,
-        image: full.beauty,
-        sample_positions: Vec::new(),
-    }];
+    let mut runs = vec![full_run("full", full, spp, full_time)];
 
     let mut gradient_times = Vec::new();
     for &strategy in &opts.strategies {
@@ -131,15 +121,11 @@ pub fn compare(
             if strategy == Strategy::Gradient {
                 gradient_times.push((budget, st.wall_s));
             }
-            runs.push(Run {
-                label: strategy.name().into(),
-                kind: RunKind::Adaptive { budget },
-                samples: out.samples.samples.len(),
-                wall_time_s: st.wall_s,
-                overhead_s: st.quadtree_s + st.reconstruct_s,
-                image: out.reconstruction.image,
-                sample_positions: out.samples.samples.iter().map(|s| s.pos).collect(),
-            });
+            runs.push(adaptive_run(
+                strategy.name().into(),
+                RunKind::Adaptive { budget },
+                out,
+            ));
         }
     }
 
@@ -157,30 +143,16 @@ pub fn compare(
     // strategy's time buys.
     for (budget, t_grad) in gradient_times {
         let spp_eq = ((spp as f64 * t_grad / full_time).round() as u32).max(1);
-        let t = Instant::now();
-        let out = render(
-            scene,
-            accel,
-            &RenderOptions {
-                spp: Some(spp_eq),
-                ..base.clone()
-            },
-            &|_, _| {},
-        )?;
-        let secs = t.elapsed().as_secs_f64();
+        let equal_time = RenderOptions {
+            spp: Some(spp_eq),
+            ..base.clone()
+        };
+        let (out, secs) = timed_render(scene, accel, &equal_time)?;
         progress(&format!(
             "equal time as gradient at {:.0}%: {spp_eq} spp, {secs:.2} s",
             budget * 100.0
         ));
-        runs.push(Run {
-            label: "uniform-all-pixels".into(),
-            kind: RunKind::EqualTime { spp: spp_eq },
-            samples: out.width * out.height * spp_eq as usize,
-            wall_time_s: secs,
-            overhead_s: 0.0,
-            image: out.beauty,
-            sample_positions: Vec::new(),
-        });
+        runs.push(full_run("uniform-all-pixels", out, spp_eq, secs));
     }
 
     // Sec. 8: 1% of the pixels on a regular grid, gradient vs linear interpolation.
@@ -197,20 +169,11 @@ pub fn compare(
     for interp in [Interpolation::Linear, Interpolation::Gradient] {
         let settings = Settings::new(Strategy::Uniform, 0.01);
         let out = render_adaptive(scene, accel, &grid_opts, &settings, interp, &|_, _| {})?;
-        runs.push(Run {
-            label: format!("1% grid, {} interpolation", interp.name()),
-            kind: RunKind::Interpolation { budget: 0.01 },
-            samples: out.samples.samples.len(),
-            wall_time_s: out.stats.wall_s,
-            overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s,
-            image: out.reconstruction.image,
-            sample_positions: out
-                .samples
-                .samples
-                .iter()
-                .map(|s| s.pos)
-                .collect::<Vec<Vec2>>(),
-        });
+        runs.push(adaptive_run(
+            format!("1% grid, {} interpolation", interp.name()),
+            RunKind::Interpolation { budget: 0.01 },
+            out,
+        ));
     }
 
     // Sec. 8 is about soft shadows on the ground plane: also score the grid runs on
@@ -320,6 +283,39 @@ fn largest_surface(
     Ok(Some((id, ids.iter().map(|&v| v as u32 == id).collect())))
 }
 
+/// Every pixel rendered with `opts`, and the wall time it took.
+fn timed_render(scene: &Scene, accel: &Accel, opts: &RenderOptions) -> Result<(RenderOutput, f64)> {
+    let t = Instant::now();
+    let out = render(scene, accel, opts, &|_, _| {})?;
+    Ok((out, t.elapsed().as_secs_f64()))
+}
+
+/// A report run of a full render at `spp` samples per pixel.
+fn full_run(label: &str, out: RenderOutput, spp: u32, secs: f64) -> Run {
+    Run {
+        label: label.into(),
+        kind: RunKind::EqualTime { spp },
+        samples: out.width * out.height * spp as usize,
+        wall_time_s: secs,
+        overhead_s: 0.0,
+        image: out.beauty,
+        sample_positions: Vec::new(),
+    }
+}
+
+/// A report run of an adaptive render (its overhead: quadtree + reconstruction).
+fn adaptive_run(label: String, kind: RunKind, out: AdaptiveRender) -> Run {
+    Run {
+        label,
+        kind,
+        samples: out.samples.samples.len(),
+        wall_time_s: out.stats.wall_s,
+        overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s,
+        image: out.reconstruction.image,
+        sample_positions: out.samples.samples.iter().map(|s| s.pos).collect(),
+    }
+}
+
 /// The reference image, rendered once and cached as
 /// `reference-<spp>spp-<w>x<h>-seed<s>.exr` with its render time in a `.txt` sidecar.
 ///
@@ -357,18 +353,12 @@ fn cached_reference(
             }
         }
     }
-    let t = Instant::now();
-    let out = render(
-        scene,
-        accel,
-        &RenderOptions {
-            spp: Some(spp),
-            seed: Some(seed),
-            ..base.clone()
-        },
-        &|_, _| {},
-    )?;
-    let secs = t.elapsed().as_secs_f64();
+    let reference = RenderOptions {
+        spp: Some(spp),
+        seed: Some(seed),
+        ..base.clone()
+    };
+    let (out, secs) = timed_render(scene, accel, &reference)?;
     std::fs::create_dir_all(dir).map_err(|source| Error::Io {
         path: dir.to_path_buf(),
         source,
