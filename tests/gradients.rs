@@ -640,9 +640,12 @@ fn converged_indirect_gradient_matches_image_differences() {
     }
 }
 
-/// Sorted relative errors of the analytic gradient against image differences, with
-/// and without its indirect term, at pixels on the indirectly lit sphere.
-fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
+/// A sphere (radius 0.8, `material`) inside a white dome of radius 60, lit by a 6 × 6
+/// emitter 30 m up that faces up (so only the dome's top is lit and the sphere sees
+/// no emitter) or down (lighting the sphere directly too). The dome's radiance varies
+/// on a scale of tens of metres: the far field, in which leaving out the spatial
+/// variation of indirect light is exact. The sphere is `spheres[0]`, 64 × 48 pixels.
+fn sphere_in_dome(material: Material, light_faces_up: bool, radiance: f32) -> Scene {
     let mut s = empty_scene(cam(64, 48));
     let white = add_material(
         &mut s,
@@ -650,8 +653,44 @@ fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
             albedo: Vec3::splat(0.8),
         },
     );
+    let m = add_material(&mut s, material);
     let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
-    add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, white, Vec3::ZERO);
+    add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, m, Vec3::ZERO);
+    add_sphere(&mut s, Vec3::ZERO, 60.0, white, Vec3::ZERO);
+    let (across, deep) = (Vec3::new(6.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 6.0));
+    let (edge_u, edge_v) = if light_faces_up {
+        (deep, across)
+    } else {
+        (across, deep)
+    };
+    let light = Rect {
+        corner: Vec3::new(-3.0, 30.0, -3.0),
+        edge_u,
+        edge_v,
+    };
+    add_quad(&mut s, light, black, Vec3::splat(radiance));
+    s
+}
+
+/// Pixels of `sphere_in_dome` on the sphere.
+const DOME_SPHERE_PIXELS: [(u32, u32); 8] = [
+    (26, 20),
+    (32, 18),
+    (36, 26),
+    (28, 28),
+    (34, 22),
+    (30, 24),
+    (24, 30),
+    (38, 20),
+];
+
+/// Sorted relative errors of the analytic gradient against image differences, with
+/// and without its indirect term, at pixels on the indirectly lit sphere.
+fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
+    let white = Material::Lambert {
+        albedo: Vec3::splat(0.8),
+    };
+    let mut s = sphere_in_dome(white, true, 200.0);
     if bumpy {
         let b = add_bump(
             &mut s,
@@ -660,15 +699,6 @@ fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
         s.spheres[0].bump = Some(b);
     }
     let sphere_id = s.spheres[0].object_id;
-    // The dome's radiance varies on a scale of tens of metres: the far field, in
-    // which leaving out the spatial variation of indirect light is exact.
-    add_sphere(&mut s, Vec3::ZERO, 60.0, white, Vec3::ZERO);
-    let light = Rect {
-        corner: Vec3::new(-3.0, 30.0, -3.0),
-        edge_u: Vec3::new(0.0, 0.0, 6.0),
-        edge_v: Vec3::new(6.0, 0.0, 0.0),
-    };
-    add_quad(&mut s, light, black, Vec3::splat(200.0));
     let accel = Accel::build(&s.meshes, &s.spheres);
     let lights = LightSet::build(&s);
     let tracer = PathTracer {
@@ -683,16 +713,7 @@ fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
     let spp = 16384;
     let h = 0.25f32;
     let (mut errors, mut without) = (Vec::new(), Vec::new());
-    for (px, py) in [
-        (26u32, 20u32),
-        (32, 18),
-        (36, 26),
-        (28, 28),
-        (34, 22),
-        (30, 24),
-        (24, 30),
-        (38, 20),
-    ] {
+    for (px, py) in DOME_SPHERE_PIXELS {
         let pixel = py * s.camera.width + px;
         let mean = |shift: Vec2| {
             let (mut l, mut g) = (
@@ -732,31 +753,13 @@ fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
 #[test]
 fn glossy_indirect_gradient_matches_image_differences() {
     use gradtrace::render::path::LineConfig;
-    let mut s = empty_scene(cam(64, 48));
-    let white = add_material(
-        &mut s,
-        Material::Lambert {
-            albedo: Vec3::splat(0.8),
-        },
-    );
-    let glossy = add_material(
-        &mut s,
-        Material::BlinnPhong {
-            kd: Vec3::splat(0.1),
-            ks: Vec3::splat(0.8),
-            exponent: 60.0,
-        },
-    );
-    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
-    add_sphere(&mut s, Vec3::new(0.0, 0.6, 0.0), 0.8, glossy, Vec3::ZERO);
-    add_sphere(&mut s, Vec3::ZERO, 60.0, white, Vec3::ZERO);
-    // Facing down: lights the sphere directly and the dome's lower half.
-    let light = Rect {
-        corner: Vec3::new(-3.0, 30.0, -3.0),
-        edge_u: Vec3::new(6.0, 0.0, 0.0),
-        edge_v: Vec3::new(0.0, 0.0, 6.0),
+    let glossy = Material::BlinnPhong {
+        kd: Vec3::splat(0.1),
+        ks: Vec3::splat(0.8),
+        exponent: 60.0,
     };
-    add_quad(&mut s, light, black, Vec3::splat(50.0));
+    // Facing down: lights the sphere directly and the dome's lower half.
+    let s = sphere_in_dome(glossy, false, 50.0);
     let accel = Accel::build(&s.meshes, &s.spheres);
     let lights = LightSet::build(&s);
     let lines = Some(LineConfig {
@@ -775,14 +778,7 @@ fn glossy_indirect_gradient_matches_image_differences() {
     let (three, two) = (tracer(3), tracer(2));
     let (spp, h) = (8192, 0.25f32);
     let (mut errors, mut without) = (Vec::new(), Vec::new());
-    for (px, py) in [
-        (26u32, 20u32),
-        (32, 18),
-        (36, 26),
-        (30, 24),
-        (28, 28),
-        (34, 22),
-    ] {
+    for &(px, py) in &DOME_SPHERE_PIXELS[..6] {
         let pixel = py * s.camera.width + px;
         let indirect = |shift: Vec2| {
             let mut l = Vec3::ZERO;
