@@ -3,7 +3,7 @@
 //! renderer-filled strategies, bad input, and determinism across thread counts.
 
 use glam::{Vec2, Vec3};
-use gradtrace::adaptive::{refine, SampleSet, SampleValue, Settings, Strategy};
+use gradtrace::adaptive::{refine, surfaces_differ, SampleSet, SampleValue, Settings, Strategy};
 use gradtrace::reconstruct::{reconstruct, Interpolation};
 
 /// A gentle ramp plus a sharp Gaussian bump (σ = 3 px) at `(40, 80)`.
@@ -45,15 +45,26 @@ fn detail(p: Vec2) -> SampleValue {
     )
 }
 
-/// A disc that is another object (or, with `by_depth`, the same object 5× closer).
 /// What separates the disc from the ramp around it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Boundary {
     ObjectId,
     Depth,
     /// Same object and depth, but the shading normal faces away (a bump map's
     /// terminator): the disc is black.
     BackFacing,
+    /// A fold: the disc is a part of a receding floor raised 3% towards the camera,
+    /// with the same radiance. Only the tangent-plane depth test sees it (the floor's
+    /// own depth changes by 5% per 8-pixel block).
+    Fold,
+}
+
+/// A floor seen in perspective: inverse depth affine in the image position, depth
+/// falling from 50 at the top to 28 at the bottom of a 128-pixel image. Returns the
+/// depth and ∇(1/depth), raised towards the camera by `lift` (relative).
+fn floor(p: Vec2, lift: f32) -> (f32, Vec2) {
+    let q = 0.02 * (1.0 + 0.006 * p.y) * (1.0 + lift);
+    (1.0 / q, Vec2::new(0.0, 0.02 * 0.006 * (1.0 + lift)))
 }
 
 fn disc(by: Boundary) -> impl Fn(Vec2) -> SampleValue + Sync {
@@ -64,8 +75,12 @@ fn disc(by: Boundary) -> impl Fn(Vec2) -> SampleValue + Sync {
             Vec3::ZERO,
             Vec3::new(0.0, 0.002, 0.0),
         );
+        if by == Boundary::Fold {
+            (v.depth, v.inv_depth_grad) = floor(p, if inside { 0.03 } else { 0.0 });
+        }
         if inside {
             match by {
+                Boundary::Fold => {}
                 Boundary::Depth => v.depth = 0.2,
                 Boundary::ObjectId => v.object_id = 7,
                 Boundary::BackFacing => {
@@ -142,7 +157,12 @@ fn budget_is_honoured_exactly() {
 fn object_boundaries_are_refined_to_pixel_size() {
     let (w, h) = (128u32, 128u32);
     let centre = Vec2::new(61.3, 66.7);
-    for by in [Boundary::ObjectId, Boundary::Depth, Boundary::BackFacing] {
+    for by in [
+        Boundary::ObjectId,
+        Boundary::Depth,
+        Boundary::BackFacing,
+        Boundary::Fold,
+    ] {
         let f = disc(by);
         for strategy in QUADTREE {
             let set = refine(&f, w, h, &Settings::new(strategy, 0.3)).unwrap();
@@ -169,6 +189,45 @@ fn object_boundaries_are_refined_to_pixel_size() {
             assert!(
                 crossing > 150,
                 "a 30 px circle crosses at least ~190 pixel cells"
+            );
+        }
+    }
+}
+
+/// A floor receding in perspective is one surface, although its depth changes by 5%
+/// per initial block: the tangent planes predict that change. With the planes dropped
+/// (zero ∇(1/depth)), the same depths read as steps — the rule the planes replace.
+#[test]
+fn a_receding_floor_is_one_surface() {
+    for with_planes in [true, false] {
+        let point = |p: Vec2| {
+            let (depth, g) = floor(p, 0.0);
+            let mut v = SampleValue::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+            v.depth = depth;
+            v.inv_depth_grad = if with_planes { g } else { Vec2::ZERO };
+            v.surface_point(p)
+        };
+        let mut split = 0;
+        for j in 0..16 {
+            for i in 0..16 {
+                let p = Vec2::new(4.0 + 8.0 * i as f32, 4.0 + 8.0 * j as f32);
+                for step in [
+                    Vec2::new(8.0, 0.0),
+                    Vec2::new(8.0, 8.0),
+                    Vec2::new(0.0, 8.0),
+                ] {
+                    let tol = Settings::new(Strategy::Gradient, 0.1).depth_tolerance;
+                    split += surfaces_differ(&point(p), &point(p + step), tol) as u32;
+                }
+            }
+        }
+        println!("tangent planes {with_planes}: {split} of 768 neighbour pairs read as a step");
+        if with_planes {
+            assert_eq!(split, 0);
+        } else {
+            assert!(
+                split >= 512,
+                "the vertical and diagonal pairs step by 2.7–4.8%"
             );
         }
     }

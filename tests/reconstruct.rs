@@ -169,21 +169,28 @@ fn c1_beats_linear_on_smooth_image() {
 }
 
 /// A disc (value 1) on a background (value 0), constant per surface; the disc is
-/// another object, or the same object at a fifth of the depth, or the background is
-/// the same object's back-facing side (a bump map's terminator, black). No pixel may be a blend
+/// another object, or the same object at a fifth of the depth, or a fold of a
+/// receding floor (raised 3% towards the camera, where the floor's own depth changes
+/// 5% per 8 pixels), or the background is the same object's back-facing side (a bump
+/// map's terminator, black). No pixel may be a blend
 /// of the two (0 < v < 1), whatever the sample layout; once the quadtree has refined the
 /// silhouette to pixel size, every pixel also gets its own surface. The uniform layout
 /// leaves pixel centres between samples of both surfaces, which is where a missing
 /// silhouette rule would blend.
 #[test]
 fn never_interpolates_across_silhouettes() {
-    for by in ["object id", "depth", "terminator"] {
+    for by in ["object id", "depth", "fold", "terminator"] {
         let disc = move |p: Vec2| {
             let inside = p.distance(Vec2::new(50.3, 41.7)) < 23.0;
             let mut v = SampleValue::new(Vec3::splat(inside as u32 as f32), Vec3::ZERO, Vec3::ZERO);
             match by {
                 "object id" => v.object_id = inside as u32,
                 "depth" if inside => v.depth = 0.2,
+                "fold" => {
+                    let lift = if inside { 1.03 } else { 1.0 };
+                    v.depth = 1.0 / (0.02 * (1.0 + 0.006 * p.y) * lift);
+                    v.inv_depth_grad = Vec2::new(0.0, 0.02 * 0.006 * lift);
+                }
                 "terminator" => v.back_facing = !inside,
                 _ => {}
             }
@@ -336,7 +343,8 @@ fn slope_limiter_contains_an_outlier_gradient() {
 fn border_strip_uses_its_own_surface() {
     let (w, h) = (120u32, 80u32);
     // Above the horizon: background (no object, infinite depth, black); below: a
-    // ground plane receding towards it, lit by a ramp.
+    // ground plane receding towards it (inverse depth affine in y, as seen through a
+    // pinhole), lit by a ramp.
     let img = |p: Vec2| {
         let below = p.y > 37.3;
         if !below {
@@ -346,7 +354,8 @@ fn border_strip_uses_its_own_surface() {
             return v;
         }
         let mut v = SampleValue::new(Vec3::splat(2.0 + 0.01 * p.x), Vec3::splat(0.01), Vec3::ZERO);
-        v.depth = 50.0 - 0.3 * p.y;
+        v.depth = 1.0 / (0.02 + 0.0005 * (p.y - 37.3));
+        v.inv_depth_grad = Vec2::new(0.0, 0.0005);
         v
     };
     for strategy in [Strategy::Gradient, Strategy::Variance] {

@@ -3,7 +3,8 @@
 //! Every sample is the centre of a cell; a cell's importance is `metric × area`. A
 //! binary heap holds the leaves; the most important ones are split into four children
 //! whose centres are evaluated. Cells whose sample sees a different surface than a
-//! neighbouring sample ("object boundary": object id or depth jump, or the side of a
+//! neighbouring sample ("object boundary": object id, a depth off both samples'
+//! tangent planes (`surfaces_differ`), or the side of a
 //! bump map's terminator, `SampleValue::back_facing`) are *forced*: they
 //! sort before every metric-driven cell and are split down to pixel size. Among
 //! themselves they are ordered by the radiance jump across the boundary × area, the
@@ -21,7 +22,7 @@
 //! leaves, so it takes cells the strict greedy would have split within a few steps anyway.
 
 use super::{
-    is_discontinuous, quadrant, Estimator, Sample, SampleSet, SampleValue, Settings, Strategy,
+    quadrant, surfaces_differ, Estimator, Sample, SampleSet, SampleValue, Settings, Strategy,
 };
 use crate::math::Vec2;
 use crate::{Error, Result};
@@ -638,7 +639,8 @@ impl Tree {
         let tol = self.settings.depth_tolerance;
         for &n in &nb {
             let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
-            let link = if is_discontinuous(va, vb, tol) {
+            let (pa, pb) = (self.cells[id as usize].pos, self.cells[n as usize].pos);
+            let link = if surfaces_differ(&va.surface_point(pa), &vb.surface_point(pb), tol) {
                 Link::Boundary((va.radiance - vb.radiance).length())
             } else if pairs {
                 Link::Pair(self.pair_metric(id, n))

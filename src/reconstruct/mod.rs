@@ -10,9 +10,9 @@
 //!
 //! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
 //! the same surface when they have the same object id, lie on the same side of a bump
-//! map's terminator (`SampleValue::surface_id`) and their depths differ by at
-//! most `SampleSet::depth_tolerance` (relative), the same test the quadtree uses to
-//! force refinement. Of the samples that would contribute (the triangle's corners, or
+//! map's terminator (`SampleValue::surface_id`) and one's tangent plane predicts the
+//! other's depth within `SampleSet::depth_tolerance` (relative; `surfaces_differ`),
+//! the same test the quadtree uses to force refinement. Of the samples that would contribute (the triangle's corners, or
 //! the natural neighbours), the pixel takes the surface that carries the largest share
 //! of the interpolation weight (each contributing sample is tried as the anchor of a
 //! group; ties go to the heavier anchor), keeps only that surface's samples and
@@ -39,8 +39,8 @@
 
 mod hint;
 
-use crate::adaptive::{surfaces_differ, SampleSet};
-use crate::math::Vec3;
+use crate::adaptive::{surfaces_differ, SampleSet, SurfacePoint};
+use crate::math::{Vec2, Vec3};
 use crate::output::{Channel, OutputImage};
 use crate::{Error, Result};
 use glam::{DVec2, DVec3};
@@ -146,8 +146,31 @@ struct Data {
     /// [`SampleValue::surface_id`](crate::adaptive::SampleValue::surface_id) of each sample.
     surface: Vec<u64>,
     depth: Vec<f32>,
-    /// Relative depth jump that separates two surfaces of one object.
+    /// `SampleValue::inv_depth_grad` of each sample (the tangent plane).
+    inv_depth_grad: Vec<Vec2>,
+    /// `SampleSet::depth_tolerance`: the relative miss of the tangent-plane depth
+    /// prediction that separates two surfaces of one object.
     tolerance: f32,
+}
+
+impl Data {
+    /// Whether samples `a` and `b` lie on different surfaces (the quadtree's test).
+    fn differ(&self, a: usize, b: usize) -> bool {
+        surfaces_differ(
+            &self.surface_point(a),
+            &self.surface_point(b),
+            self.tolerance,
+        )
+    }
+
+    fn surface_point(&self, i: usize) -> SurfacePoint {
+        SurfacePoint {
+            pos: self.pos[i].as_vec2(),
+            surface: self.surface[i],
+            depth: self.depth[i],
+            inv_depth_grad: self.inv_depth_grad[i],
+        }
+    }
 }
 
 /// Interpolates the samples to every pixel centre `(x + 0.5, y + 0.5)`.
@@ -203,6 +226,7 @@ pub fn reconstruct_with(
         grad_v: set.samples.iter().map(|s| d(s.value.grad_v)).collect(),
         surface: set.samples.iter().map(|s| s.value.surface_id()).collect(),
         depth: set.samples.iter().map(|s| s.value.depth).collect(),
+        inv_depth_grad: set.samples.iter().map(|s| s.value.inv_depth_grad).collect(),
         tolerance: set.depth_tolerance,
     };
     let nodes: Vec<Node> = data
@@ -263,15 +287,7 @@ pub fn reconstruct_with(
 /// expansions that overshoot every neighbour are cut back.
 fn limit_gradients(dt: &Dt, data: &mut Data) {
     let d = &*data;
-    let differ = |i: usize, j: usize| {
-        surfaces_differ(
-            d.surface[i],
-            d.depth[i],
-            d.surface[j],
-            d.depth[j],
-            d.tolerance,
-        )
-    };
+    let differ = |i: usize, j: usize| d.differ(i, j);
     // Independent per sample, so it runs in parallel (and stays deterministic).
     let factors: Vec<(usize, DVec3)> = (0..dt.num_vertices())
         .into_par_iter()
@@ -362,7 +378,16 @@ fn add_border_ghosts(
         data.grad_u.push(data.grad_u[src]);
         data.grad_v.push(data.grad_v[src]);
         data.surface.push(data.surface[src]);
-        data.depth.push(data.depth[src]);
+        // The source's tangent plane extended to the ghost, so that the two read as
+        // one surface (a mirrored depth would fold at the border).
+        let g = data.inv_depth_grad[src];
+        let inv = 1.0 / data.depth[src] + g.dot((q - data.pos[src]).as_vec2());
+        let depth = 1.0 / inv;
+        let extended = inv > 0.0 && depth.is_finite();
+        data.depth
+            .push(if extended { depth } else { data.depth[src] });
+        data.inv_depth_grad
+            .push(if extended { g } else { Vec2::ZERO });
         dt.insert(Node {
             pos: Point2::new(q.x, q.y),
             idx,
@@ -417,14 +442,7 @@ impl<'a> Ctx<'a> {
 
     /// Whether samples `a` and `b` lie on different surfaces.
     fn differ(&self, a: usize, b: usize) -> bool {
-        let d = self.data;
-        surfaces_differ(
-            d.surface[a],
-            d.depth[a],
-            d.surface[b],
-            d.depth[b],
-            d.tolerance,
-        )
+        self.data.differ(a, b)
     }
 
     fn sample(&self, v: FixedVertexHandle) -> usize {
@@ -523,30 +541,21 @@ impl<'a> Ctx<'a> {
 
     /// Keeps the samples of the surface with the largest total weight and
     /// renormalises their weights into `kept`. A surface is the set of samples
-    /// compatible with an anchor sample (same surface id, relative depth difference within
-    /// the set's tolerance); every contributing sample is tried as the anchor and the
-    /// heaviest group wins (ties: the heavier anchor, then the earlier one).
+    /// compatible with an anchor sample (`Data::differ` is false); every contributing
+    /// sample is tried as the anchor and the heaviest group wins (ties: the heavier
+    /// anchor, then the earlier one).
     fn keep_majority_surface(&mut self) {
         self.kept.clear();
         for k in 0..self.weights.len() {
             let (v, w) = self.weights[k];
             self.kept.push((self.sample(v), w));
         }
-        let (surf, depth, tol) = (&self.data.surface, &self.data.depth, self.data.tolerance);
-        let differ =
-            |a: usize, b: usize| surfaces_differ(surf[a], depth[a], surf[b], depth[b], tol);
-        // Common case first: one surface id, depths within the tolerance of each other.
+        let data = self.data;
+        let differ = |a: usize, b: usize| data.differ(a, b);
+        // Common case first: the first sample's group is everyone, so it wins and
+        // nothing is dropped.
         let first = self.kept[0].0;
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        let mut one_id = true;
-        for &(i, _) in &self.kept {
-            one_id &= surf[i] == surf[first];
-            lo = lo.min(depth[i].abs());
-            hi = hi.max(depth[i].abs());
-        }
-        let one_surface = one_id
-            && ((lo.is_finite() && hi - lo <= tol * lo) || (lo.is_infinite() && hi.is_infinite()));
-        if one_surface {
+        if self.kept.iter().all(|&(b, _)| !differ(first, b)) {
             return;
         }
         let mut best = (f64::NEG_INFINITY, f64::NEG_INFINITY, 0usize);
