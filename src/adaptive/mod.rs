@@ -99,7 +99,7 @@ impl SampleValue {
         SurfacePoint {
             pos,
             surface: self.surface_id(),
-            depth: self.depth,
+            inv_depth: inverse_depth(self.depth),
             inv_depth_grad: self.inv_depth_grad,
         }
     }
@@ -312,20 +312,31 @@ pub(crate) fn quadrant(min: Vec2, max: Vec2, centre: Vec2, q: u8) -> (Vec2, Vec2
 }
 
 /// A sample as the boundary test sees it: where it is, which surface id it carries and
-/// the depth and tangent plane (as ∇(1/depth)) it found there.
+/// the inverse depth and tangent plane (as ∇(1/depth)) it found there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
     pub pos: Vec2,
     /// [`SampleValue::surface_id`].
     pub surface: u64,
-    pub depth: f32,
+    /// 1/depth; 0 for the background (infinite depth).
+    pub inv_depth: f32,
     pub inv_depth_grad: Vec2,
+}
+
+/// 1/depth, with the background (infinite or non-finite depth) at 0 and depths at or
+/// below 0 clamped to the smallest positive float.
+fn inverse_depth(depth: f32) -> f32 {
+    if depth.is_finite() {
+        1.0 / depth.max(f32::MIN_POSITIVE)
+    } else {
+        0.0
+    }
 }
 
 /// True when two samples lie on different surfaces: a different [`surface id`]
 /// (object, or side of a bump map's terminator), or a depth that neither sample's
-/// tangent plane predicts for the other within `tolerance` (relative). Two infinite
-/// depths (background) match.
+/// tangent plane predicts for the other within `tolerance` (relative). Two
+/// background samples match.
 ///
 /// Inverse depth is affine in image position across a plane seen through a pinhole,
 /// so `1/d_a + ∇(1/d_a)·(x_b − x_a)` predicts `1/d_b` exactly on a plane and to
@@ -336,18 +347,15 @@ pub struct SurfacePoint {
 /// `|d_a − d_b| > tolerance · max(d_a, d_b)`.
 ///
 /// [`surface id`]: SampleValue::surface_id
+#[inline]
 pub fn surfaces_differ(a: &SurfacePoint, b: &SurfacePoint, tolerance: f32) -> bool {
     if a.surface != b.surface {
         return true;
     }
-    let (da, db) = (a.depth, b.depth);
-    if !da.is_finite() || !db.is_finite() {
-        return da.is_finite() != db.is_finite();
+    let (qa, qb) = (a.inv_depth, b.inv_depth);
+    if qa == 0.0 || qb == 0.0 {
+        return (qa == 0.0) != (qb == 0.0);
     }
-    let (qa, qb) = (
-        1.0 / da.abs().max(f32::MIN_POSITIVE),
-        1.0 / db.abs().max(f32::MIN_POSITIVE),
-    );
     let step = b.pos - a.pos;
     let miss_from_a = (qb - qa - a.inv_depth_grad.dot(step)).abs();
     let miss_from_b = (qa - qb + b.inv_depth_grad.dot(step)).abs();

@@ -46,7 +46,9 @@ use crate::{Error, Result};
 use glam::{DVec2, DVec3};
 use hint::ScanlineHint;
 use rayon::prelude::*;
-use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag, VertexHandle};
+use spade::handles::{
+    FixedFaceHandle, FixedUndirectedEdgeHandle, FixedVertexHandle, InnerTag, VertexHandle,
+};
 use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation, Triangulation};
 
 /// How pixel values are interpolated from the samples.
@@ -143,33 +145,21 @@ struct Data {
     value: Vec<DVec3>,
     grad_u: Vec<DVec3>,
     grad_v: Vec<DVec3>,
-    /// [`SampleValue::surface_id`](crate::adaptive::SampleValue::surface_id) of each sample.
-    surface: Vec<u64>,
-    depth: Vec<f32>,
-    /// `SampleValue::inv_depth_grad` of each sample (the tangent plane).
-    inv_depth_grad: Vec<Vec2>,
+    /// Surface id, depth and tangent plane of each sample, for [`surfaces_differ`].
+    surface: Vec<SurfacePoint>,
     /// `SampleSet::depth_tolerance`: the relative miss of the tangent-plane depth
     /// prediction that separates two surfaces of one object.
     tolerance: f32,
+    /// Whether a sample has a Delaunay neighbour on another surface (filled before the
+    /// slope limiter and again once the ghosts are in). A pixel whose contributing
+    /// samples all have none lies away from every boundary and keeps them all.
+    near_boundary: Vec<bool>,
 }
 
 impl Data {
     /// Whether samples `a` and `b` lie on different surfaces (the quadtree's test).
     fn differ(&self, a: usize, b: usize) -> bool {
-        surfaces_differ(
-            &self.surface_point(a),
-            &self.surface_point(b),
-            self.tolerance,
-        )
-    }
-
-    fn surface_point(&self, i: usize) -> SurfacePoint {
-        SurfacePoint {
-            pos: self.pos[i].as_vec2(),
-            surface: self.surface[i],
-            depth: self.depth[i],
-            inv_depth_grad: self.inv_depth_grad[i],
-        }
+        surfaces_differ(&self.surface[a], &self.surface[b], self.tolerance)
     }
 }
 
@@ -224,10 +214,13 @@ pub fn reconstruct_with(
         value: set.samples.iter().map(|s| d(s.value.radiance)).collect(),
         grad_u: set.samples.iter().map(|s| d(s.value.grad_u)).collect(),
         grad_v: set.samples.iter().map(|s| d(s.value.grad_v)).collect(),
-        surface: set.samples.iter().map(|s| s.value.surface_id()).collect(),
-        depth: set.samples.iter().map(|s| s.value.depth).collect(),
-        inv_depth_grad: set.samples.iter().map(|s| s.value.inv_depth_grad).collect(),
+        surface: set
+            .samples
+            .iter()
+            .map(|s| s.value.surface_point(s.pos))
+            .collect(),
         tolerance: set.depth_tolerance,
+        near_boundary: Vec::new(),
     };
     let nodes: Vec<Node> = data
         .pos
@@ -243,10 +236,13 @@ pub fn reconstruct_with(
     let mut dt =
         Dt::bulk_load_stable(nodes).map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
     if mode == Interpolation::Gradient && options.slope_limiter {
+        mark_boundaries(&dt, &mut data);
         limit_gradients(&dt, &mut data);
     }
     add_border_ghosts(set, &mut dt, &mut data, mode)
         .map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
+    // Again: the ghosts add edges along the border.
+    mark_boundaries(&dt, &mut data);
 
     let centre = |x: usize, y: usize| Point2::new(x as f64 + 0.5, y as f64 + 0.5);
     let mut row_start = Vec::with_capacity(h);
@@ -287,7 +283,8 @@ pub fn reconstruct_with(
 /// expansions that overshoot every neighbour are cut back.
 fn limit_gradients(dt: &Dt, data: &mut Data) {
     let d = &*data;
-    let differ = |i: usize, j: usize| d.differ(i, j);
+    // Away from boundaries every Delaunay neighbour is on the sample's surface.
+    let differ = |i: usize, j: usize| d.near_boundary[i] && d.differ(i, j);
     // Independent per sample, so it runs in parallel (and stays deterministic).
     let factors: Vec<(usize, DVec3)> = (0..dt.num_vertices())
         .into_par_iter()
@@ -320,6 +317,26 @@ fn limit_gradients(dt: &Dt, data: &mut Data) {
         data.grad_u[i] *= f;
         data.grad_v[i] *= f;
     }
+}
+
+/// Fills `Data::near_boundary` from the Delaunay edges (each tested once, in
+/// parallel: three tests per sample instead of several per pixel).
+fn mark_boundaries(dt: &Dt, data: &mut Data) {
+    let d = &*data;
+    let edges: Vec<FixedUndirectedEdgeHandle> = dt.fixed_undirected_edges().collect();
+    let crossing: Vec<[usize; 2]> = edges
+        .into_par_iter()
+        .filter_map(|k| {
+            let e = dt.undirected_edge(k);
+            let [a, b] = e.vertices().map(|v| v.data().idx as usize);
+            d.differ(a, b).then_some([a, b])
+        })
+        .collect();
+    let mut near = vec![false; d.pos.len()];
+    for i in crossing.into_iter().flatten() {
+        near[i] = true;
+    }
+    data.near_boundary = near;
 }
 
 /// Mirror images ("ghosts") of the samples whose cells touch the image border,
@@ -377,17 +394,22 @@ fn add_border_ghosts(
         data.value.push(value);
         data.grad_u.push(data.grad_u[src]);
         data.grad_v.push(data.grad_v[src]);
-        data.surface.push(data.surface[src]);
         // The source's tangent plane extended to the ghost, so that the two read as
         // one surface (a mirrored depth would fold at the border).
-        let g = data.inv_depth_grad[src];
-        let inv = 1.0 / data.depth[src] + g.dot((q - data.pos[src]).as_vec2());
-        let depth = 1.0 / inv;
-        let extended = inv > 0.0 && depth.is_finite();
-        data.depth
-            .push(if extended { depth } else { data.depth[src] });
-        data.inv_depth_grad
-            .push(if extended { g } else { Vec2::ZERO });
+        let source = data.surface[src];
+        let pos = q.as_vec2();
+        let inv = source.inv_depth + source.inv_depth_grad.dot(pos - source.pos);
+        let extended = source.inv_depth > 0.0 && inv > 0.0 && inv.is_finite();
+        data.surface.push(SurfacePoint {
+            pos,
+            inv_depth: if extended { inv } else { source.inv_depth },
+            inv_depth_grad: if extended {
+                source.inv_depth_grad
+            } else {
+                Vec2::ZERO
+            },
+            ..source
+        });
         dt.insert(Node {
             pos: Point2::new(q.x, q.y),
             idx,
@@ -552,8 +574,12 @@ impl<'a> Ctx<'a> {
         }
         let data = self.data;
         let differ = |a: usize, b: usize| data.differ(a, b);
-        // Common case first: the first sample's group is everyone, so it wins and
-        // nothing is dropped.
+        // Common case first: away from every boundary nothing is dropped (the
+        // contributing samples are joined by Delaunay edges, none of which crosses
+        // one). Then: the first sample's group is everyone.
+        if self.kept.iter().all(|&(i, _)| !data.near_boundary[i]) {
+            return;
+        }
         let first = self.kept[0].0;
         if self.kept.iter().all(|&(b, _)| !differ(first, b)) {
             return;
