@@ -2,7 +2,7 @@
 //! size, samples following the gradient, lower error than uniform at budget 0.17, the
 //! renderer-filled strategies, bad input, and determinism across thread counts.
 
-use glam::{Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use gradtrace::adaptive::{refine, surfaces_differ, SampleSet, SampleValue, Settings, Strategy};
 use gradtrace::reconstruct::{reconstruct, Interpolation};
 
@@ -229,6 +229,110 @@ fn a_receding_floor_is_one_surface() {
                 split >= 512,
                 "the vertical and diagonal pairs step by 2.7–4.8%"
             );
+        }
+    }
+}
+
+/// Depth steps on one object, read off the tangent planes (`surfaces_differ`).
+/// A sphere seen in perspective is one surface: near its rim the tangent planes of
+/// samples 8 px apart miss each other's depth by far more than the tolerance, but
+/// both misses put the sphere behind the plane, which is curvature, not a step.
+/// Half the sphere raised 3% towards the camera is a step all along the cut (misses
+/// of opposite sign), and so is the sphere's silhouette against a wall of the same
+/// object 3% behind its rim, where the sphere's plane is seen edge-on (both samples
+/// in front of the other's plane). Where the curvature between two samples is as
+/// large as the step, one plane's miss cancels and the pair reads as one surface:
+/// a third of the pairs straddling a 3% step may be missed that way, never more.
+#[test]
+fn steps_on_one_surface_are_told_from_its_curvature() {
+    // Pinhole at the origin looking down +z, focal length 200 px, image centre
+    // (64, 64); a sphere of radius 1 at distance 5 covers a disc of ~41 px radius,
+    // its rim at depth √24 ≈ 4.9.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum Case {
+        Sphere,
+        RightHalfRaised,
+        WallBehind,
+    }
+    let scene = |p: DVec2, case: Case| -> Option<f64> {
+        let d = DVec3::new((p.x - 64.0) / 200.0, (p.y - 64.0) / 200.0, 1.0).normalize();
+        let c = DVec3::new(0.0, 0.0, 5.0);
+        let b = d.dot(c);
+        let disc = b * b - (c.length_squared() - 1.0);
+        let lift = if case == Case::RightHalfRaised && p.x > 64.0 {
+            1.03
+        } else {
+            1.0
+        };
+        if disc >= 0.0 {
+            Some(lift / (b - disc.sqrt()))
+        } else {
+            // The wall z = 1.03 √24 (inverse depth along the ray: d.z / z).
+            (case == Case::WallBehind).then(|| d.z / (1.03 * 24f64.sqrt()))
+        }
+    };
+    let tol = Settings::new(Strategy::Gradient, 0.1).depth_tolerance;
+    let on_sphere = |p: Vec2| p.distance(Vec2::splat(64.0)) < 40.8;
+    for case in [Case::Sphere, Case::RightHalfRaised, Case::WallBehind] {
+        let point = |p: Vec2| {
+            let at = |p: DVec2| scene(p, case);
+            let (pd, h) = (p.as_dvec2(), 1e-4);
+            // The side of p's own surface for the difference quotient.
+            let side = |e: DVec2| {
+                if on_sphere((pd + e).as_vec2()) == on_sphere(p) {
+                    e
+                } else {
+                    -e
+                }
+            };
+            let (ex, ey) = (side(DVec2::X * h), side(DVec2::Y * h));
+            let q = at(pd)?;
+            let g = DVec2::new((at(pd + ex)? - q) / ex.x, (at(pd + ey)? - q) / ey.y);
+            let mut v = SampleValue::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+            v.depth = (1.0 / q) as f32;
+            v.inv_depth_grad = g.as_vec2();
+            Some((v.surface_point(p), q, g))
+        };
+        let (mut pairs, mut curved, mut split, mut split_at_step, mut steps) = (0, 0, 0, 0, 0);
+        for j in 0..32 {
+            for i in 0..32 {
+                let p = Vec2::new(4.0 * i as f32 + 1.3, 4.0 * j as f32 + 1.7);
+                for step in [
+                    Vec2::new(8.0, 0.0),
+                    Vec2::new(0.0, 8.0),
+                    Vec2::new(8.0, 8.0),
+                ] {
+                    let (Some((a, qa, ga)), Some((b, qb, gb))) = (point(p), point(p + step)) else {
+                        continue;
+                    };
+                    pairs += 1;
+                    let d = step.as_dvec2();
+                    let limit = tol as f64 * qa.max(qb);
+                    let (miss_b, miss_a) = (qb - qa - ga.dot(d), qa - qb + gb.dot(d));
+                    curved += (miss_b.abs().min(miss_a.abs()) > limit) as u32;
+                    let differ = surfaces_differ(&a, &b, tol);
+                    split += differ as u32;
+                    let at_step = match case {
+                        Case::Sphere => false,
+                        Case::RightHalfRaised => (p.x > 64.0) != (p.x + step.x > 64.0),
+                        Case::WallBehind => on_sphere(p) != on_sphere(p + step),
+                    };
+                    split_at_step += (differ && at_step) as u32;
+                    steps += at_step as u32;
+                    assert!(!differ || at_step, "{case:?}: split at {p} + {step}");
+                }
+            }
+        }
+        println!(
+            "{case:?}: {pairs} pairs, {curved} with both planes missing beyond the \
+             tolerance, {split} split, all at the step, which {steps} pairs straddle"
+        );
+        match case {
+            Case::Sphere => assert!(curved >= 10, "the rim should defeat the planes: {curved}"),
+            _ => assert!(
+                split_at_step >= 40,
+                "{case:?}: the 3% step: {split_at_step}"
+            ),
         }
     }
 }

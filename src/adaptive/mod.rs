@@ -334,16 +334,24 @@ fn inverse_depth(depth: f32) -> f32 {
 }
 
 /// True when two samples lie on different surfaces: a different [`surface id`]
-/// (object, or side of a bump map's terminator), or a depth that neither sample's
-/// tangent plane predicts for the other within `tolerance` (relative). Two
-/// background samples match.
+/// (object, or side of a bump map's terminator), one of them on the background, or
+/// a step in depth between them. Two background samples match.
 ///
-/// Inverse depth is affine in image position across a plane seen through a pinhole,
-/// so `1/d_a + ∇(1/d_a)·(x_b − x_a)` predicts `1/d_b` exactly on a plane and to
-/// second order on a curved surface; a fold or a self-occlusion silhouette breaks
-/// both predictions even where the step is a few percent of the depth, while a
-/// floor seen at a grazing angle (depth changing fast, but as predicted) stays one
-/// surface. With zero gradients this is the plain relative jump
+/// A step is read off the tangent planes. Inverse depth is affine in image position
+/// across a plane seen through a pinhole, so `1/d_a + ∇(1/d_a)·(x_b − x_a)` predicts
+/// `1/d_b` exactly on a plane, and a floor seen at a grazing angle (depth changing
+/// fast, but as predicted) is one surface. Where both predictions miss by more than
+/// `tolerance` (relative to the nearer depth), the signs of the misses (actual minus
+/// predicted inverse depth) tell a step from a curved surface:
+/// * a convex surface lies behind both tangent planes: two negative misses, large
+///   near a sphere's rim without any step — one surface;
+/// * a step (an occluding fold): `b` behind `a`'s plane and `a` in front of `b`'s,
+///   misses of opposite sign;
+/// * a self-occlusion silhouette whose near side is seen edge-on: that plane
+///   recedes steeply, so both samples lie in front of the other's plane — two
+///   positive misses (as on a concave surface, where refining does no harm).
+///
+/// With zero gradients this is the plain relative jump
 /// `|d_a − d_b| > tolerance · max(d_a, d_b)`.
 ///
 /// [`surface id`]: SampleValue::surface_id
@@ -357,14 +365,9 @@ pub fn surfaces_differ(a: &SurfacePoint, b: &SurfacePoint, tolerance: f32) -> bo
         return (qa == 0.0) != (qb == 0.0);
     }
     let step = b.pos - a.pos;
-    let miss_from_a = (qb - qa - a.inv_depth_grad.dot(step)).abs();
-    let miss_from_b = (qa - qb + b.inv_depth_grad.dot(step)).abs();
-    let miss = miss_from_a.min(miss_from_b);
-    // A non-finite prediction (a tangent plane through the eye) predicts nothing.
-    let miss = if miss.is_finite() {
-        miss
-    } else {
-        (qa - qb).abs()
-    };
-    miss > tolerance * qa.max(qb)
+    // Actual minus predicted inverse depth, at b from a's plane and at a from b's.
+    let miss_at_b = qb - qa - a.inv_depth_grad.dot(step);
+    let miss_at_a = qa - qb + b.inv_depth_grad.dot(step);
+    // (A NaN miss, from a degenerate plane, makes the test false.)
+    miss_at_b.abs().min(miss_at_a.abs()) > tolerance * qa.max(qb) && miss_at_b.max(miss_at_a) > 0.0
 }

@@ -88,7 +88,9 @@ impl Estimator for RenderEstimator<'_> {
 }
 
 /// The surface seen exactly at a sample's position (the camera samples are jittered
-/// over a pixel around it): what the boundary tests and the Durand metric read.
+/// over a pixel around it): what the boundary tests and the Durand metric read. The
+/// terminator side (`back_facing`) is the first camera sample's instead, as it says
+/// whether that sample's path ended black.
 struct CentreHit {
     object_id: u32,
     depth: f32,
