@@ -38,9 +38,9 @@ pub struct SampleValue {
     /// reconstruction never interpolates across different ids.
     pub object_id: u32,
     /// Distance along the camera ray (positive); `INFINITY` for the background. A
-    /// relative jump above [`Settings::depth_tolerance`] between neighbouring samples,
-    /// beyond what [`inv_depth_grad`](Self::inv_depth_grad) predicts, counts as an
-    /// object boundary (self-occlusion silhouettes), for refinement and for
+    /// depth step between neighbouring samples (read off their tangent planes,
+    /// [`inv_depth_grad`](Self::inv_depth_grad); see [`surfaces_differ`]) counts as an
+    /// object boundary (folds, self-occlusion silhouettes), for refinement and for
     /// reconstruction alike.
     pub depth: f32,
     /// ∇(1/depth) per pixel: the visible surface's tangent plane, in the form that is
@@ -205,11 +205,10 @@ pub struct Settings {
     /// Side of the initial blocks in pixels (the paper uses 8). Doubled as often as
     /// needed when the budget cannot pay for one sample per block.
     pub block_size: u32,
-    /// Relative miss of the tangent-plane depth prediction (see [`surfaces_differ`])
-    /// above which two neighbouring samples of the same object are treated as lying
-    /// on different surfaces. 0.02 catches the folds of a mesh (a cow's eye socket:
-    /// a 2.7% step) while the plane's own second-order error over an 8-pixel block
-    /// stays far below it.
+    /// Relative miss of the tangent-plane depth predictions above which two
+    /// neighbouring samples of the same object may lie on different surfaces (see
+    /// [`surfaces_differ`], which also tells curvature from steps). 0.02 catches the
+    /// folds of a mesh, such as the 2.7% step on objects_bumpy's cow face.
     pub depth_tolerance: f32,
 }
 

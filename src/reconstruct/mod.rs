@@ -10,9 +10,10 @@
 //!
 //! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
 //! the same surface when they have the same object id, lie on the same side of a bump
-//! map's terminator (`SampleValue::surface_id`) and one's tangent plane predicts the
-//! other's depth within `SampleSet::depth_tolerance` (relative; `surfaces_differ`),
-//! the same test the quadtree uses to force refinement. Of the samples that would contribute (the triangle's corners, or
+//! map's terminator (`SampleValue::surface_id`) and no depth step lies between them
+//! (`surfaces_differ`, which reads steps off the samples' tangent planes with
+//! `SampleSet::depth_tolerance`): the same test the quadtree uses to force
+//! refinement. Of the samples that would contribute (the triangle's corners, or
 //! the natural neighbours), the pixel takes the surface that carries the largest share
 //! of the interpolation weight (each contributing sample is tried as the anchor of a
 //! group; ties go to the heavier anchor), keeps only that surface's samples and
@@ -147,8 +148,7 @@ struct Data {
     grad_v: Vec<DVec3>,
     /// Surface id, depth and tangent plane of each sample, for [`surfaces_differ`].
     surface: Vec<SurfacePoint>,
-    /// `SampleSet::depth_tolerance`: the relative miss of the tangent-plane depth
-    /// prediction that separates two surfaces of one object.
+    /// `SampleSet::depth_tolerance` (see `surfaces_differ`).
     tolerance: f32,
     /// Whether a sample has a Delaunay neighbour on another surface (filled before the
     /// slope limiter and again once the ghosts are in). A pixel whose contributing
@@ -462,11 +462,6 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Whether samples `a` and `b` lie on different surfaces.
-    fn differ(&self, a: usize, b: usize) -> bool {
-        self.data.differ(a, b)
-    }
-
     fn sample(&self, v: FixedVertexHandle) -> usize {
         self.dt.vertex(v).data().idx as usize
     }
@@ -573,7 +568,6 @@ impl<'a> Ctx<'a> {
             self.kept.push((self.sample(v), w));
         }
         let data = self.data;
-        let differ = |a: usize, b: usize| data.differ(a, b);
         // Common case first: away from every boundary nothing is dropped (the
         // contributing samples are joined by Delaunay edges, none of which crosses
         // one). Then: the first sample's group is everyone.
@@ -581,7 +575,7 @@ impl<'a> Ctx<'a> {
             return;
         }
         let first = self.kept[0].0;
-        if self.kept.iter().all(|&(b, _)| !differ(first, b)) {
+        if self.kept.iter().all(|&(b, _)| !data.differ(first, b)) {
             return;
         }
         let mut best = (f64::NEG_INFINITY, f64::NEG_INFINITY, 0usize);
@@ -589,7 +583,7 @@ impl<'a> Ctx<'a> {
             let group: f64 = self
                 .kept
                 .iter()
-                .filter(|&&(b, _)| !differ(a, b))
+                .filter(|&&(b, _)| !data.differ(a, b))
                 .map(|&(_, wb)| wb)
                 .sum();
             if group > best.0 || (group == best.0 && wa > best.1) {
@@ -597,7 +591,7 @@ impl<'a> Ctx<'a> {
             }
         }
         let anchor = best.2;
-        self.kept.retain(|&(b, _)| !differ(anchor, b));
+        self.kept.retain(|&(b, _)| !data.differ(anchor, b));
         let sum: f64 = self.kept.iter().map(|k| k.1).sum();
         if sum > 0.0 {
             for k in &mut self.kept {
@@ -680,7 +674,7 @@ impl<'a> Ctx<'a> {
                 let mut wsum = 0.0;
                 let neighbours = s.out_edges().map(|e| e.to().data().idx as usize);
                 for k in std::iter::once(si).chain(neighbours) {
-                    if self.differ(si, k) {
+                    if self.data.differ(si, k) {
                         continue;
                     }
                     let diff = pd - self.data.pos[k];
@@ -709,7 +703,7 @@ impl<'a> Ctx<'a> {
                 continue;
             };
             let idx = face.vertices().map(|v| v.data().idx as usize);
-            if idx.iter().any(|&i| self.differ(si, i)) {
+            if idx.iter().any(|&i| self.data.differ(si, i)) {
                 continue;
             }
             let [a, b, c] = idx.map(|i| self.data.pos[i]);
