@@ -57,6 +57,9 @@ enum Boundary {
     /// with the same radiance. Only the tangent-plane depth test sees it (the floor's
     /// own depth changes by 5% per 8-pixel block).
     Fold,
+    /// A crease: the disc is a facet of a flat-shaded surface tilted by 10°, at the
+    /// same depth as the facet around it.
+    Crease,
 }
 
 /// A floor seen in perspective: inverse depth affine in the image position, depth
@@ -78,9 +81,13 @@ fn disc(by: Boundary) -> impl Fn(Vec2) -> SampleValue + Sync {
         if by == Boundary::Fold {
             (v.depth, v.inv_depth_grad) = floor(p, if inside { 0.03 } else { 0.0 });
         }
+        if by == Boundary::Crease {
+            let tilt = if inside { 10f32.to_radians() } else { 0.0 };
+            v.facet_normal = Some(Vec3::new(tilt.sin(), 0.0, tilt.cos()));
+        }
         if inside {
             match by {
-                Boundary::Fold => {}
+                Boundary::Fold | Boundary::Crease => {}
                 Boundary::Depth => v.depth = 0.2,
                 Boundary::ObjectId => v.object_id = 7,
                 Boundary::BackFacing => {
@@ -162,6 +169,7 @@ fn object_boundaries_are_refined_to_pixel_size() {
         Boundary::Depth,
         Boundary::BackFacing,
         Boundary::Fold,
+        Boundary::Crease,
     ] {
         let f = disc(by);
         for strategy in QUADTREE {

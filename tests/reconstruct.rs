@@ -171,15 +171,15 @@ fn c1_beats_linear_on_smooth_image() {
 /// A disc (value 1) on a background (value 0), constant per surface; the disc is
 /// another object, or the same object at a fifth of the depth, or a fold of a
 /// receding floor (raised 3% towards the camera, where the floor's own depth changes
-/// 5% per 8 pixels), or the background is the same object's back-facing side (a bump
-/// map's terminator, black). No pixel may be a blend
-/// of the two (0 < v < 1), whatever the sample layout; once the quadtree has refined the
-/// silhouette to pixel size, every pixel also gets its own surface. The uniform layout
-/// leaves pixel centres between samples of both surfaces, which is where a missing
-/// silhouette rule would blend.
+/// 5% per 8 pixels), or a facet of a flat-shaded surface tilted by 10° (a crease), or
+/// the background is the same object's back-facing side (a bump map's terminator,
+/// black). No pixel may be a blend of the two (0 < v < 1), whatever the sample
+/// layout; once the quadtree has refined the silhouette to pixel size, every pixel
+/// also gets its own surface. The uniform layout leaves pixel centres between
+/// samples of both surfaces, which is where a missing silhouette rule would blend.
 #[test]
 fn never_interpolates_across_silhouettes() {
-    for by in ["object id", "depth", "fold", "terminator"] {
+    for by in ["object id", "depth", "fold", "crease", "terminator"] {
         let disc = move |p: Vec2| {
             let inside = p.distance(Vec2::new(50.3, 41.7)) < 23.0;
             let mut v = SampleValue::new(Vec3::splat(inside as u32 as f32), Vec3::ZERO, Vec3::ZERO);
@@ -190,6 +190,10 @@ fn never_interpolates_across_silhouettes() {
                     let lift = if inside { 1.03 } else { 1.0 };
                     v.depth = 1.0 / (0.02 * (1.0 + 0.006 * p.y) * lift);
                     v.inv_depth_grad = Vec2::new(0.0, 0.02 * 0.006 * lift);
+                }
+                "crease" => {
+                    let tilt = if inside { 10f32.to_radians() } else { 0.0 };
+                    v.facet_normal = Some(Vec3::new(tilt.sin(), 0.0, tilt.cos()));
                 }
                 "terminator" => v.back_facing = !inside,
                 _ => {}

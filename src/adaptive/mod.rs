@@ -49,6 +49,12 @@ pub struct SampleValue {
     /// self-occlusion silhouette whose depth step is small. Zero when unknown, which
     /// predicts a constant depth.
     pub inv_depth_grad: Vec2,
+    /// The geometric normal where the visible surface is flat-shaded (a cube's face,
+    /// a mesh without vertex normals), `None` where its shading normal varies
+    /// smoothly. Two samples on facets with different normals lie across a crease,
+    /// which such a surface shows as a jump in shading (a box's top and front) but no
+    /// depth step or gradient reveals.
+    pub facet_normal: Option<Vec3>,
     /// The shading normal at the visible point faces away from the camera, so the
     /// path ends there and the radiance drops to the emitted light: the black dots
     /// along a bump map's terminator. A change of side between neighbouring samples
@@ -80,6 +86,7 @@ impl SampleValue {
             object_id: 0,
             depth: 1.0,
             inv_depth_grad: Vec2::ZERO,
+            facet_normal: None,
             back_facing: false,
             importance: None,
             durand: None,
@@ -101,6 +108,7 @@ impl SampleValue {
             surface: self.surface_id(),
             inv_depth: inverse_depth(self.depth),
             inv_depth_grad: self.inv_depth_grad,
+            facet_normal: self.facet_normal,
         }
     }
 
@@ -320,6 +328,8 @@ pub struct SurfacePoint {
     /// 1/depth; 0 for the background (infinite depth).
     pub inv_depth: f32,
     pub inv_depth_grad: Vec2,
+    /// [`SampleValue::facet_normal`].
+    pub facet_normal: Option<Vec3>,
 }
 
 /// 1/depth, with the background (infinite or non-finite depth) at 0 and depths at or
@@ -333,8 +343,10 @@ fn inverse_depth(depth: f32) -> f32 {
 }
 
 /// True when two samples lie on different surfaces: a different [`surface id`]
-/// (object, or side of a bump map's terminator), one of them on the background, or
-/// a step in depth between them. Two background samples match.
+/// (object, or side of a bump map's terminator), one of them on the background,
+/// two facets of a flat-shaded surface whose normals differ by more than
+/// [`CREASE_COS`] (a crease), or a step in depth between them. Two background
+/// samples match.
 ///
 /// A step is read off the tangent planes. Inverse depth is affine in image position
 /// across a plane seen through a pinhole, so `1/d_a + ∇(1/d_a)·(x_b − x_a)` predicts
@@ -363,6 +375,11 @@ pub fn surfaces_differ(a: &SurfacePoint, b: &SurfacePoint, tolerance: f32) -> bo
     if qa == 0.0 || qb == 0.0 {
         return (qa == 0.0) != (qb == 0.0);
     }
+    if let (Some(na), Some(nb)) = (a.facet_normal, b.facet_normal) {
+        if na.dot(nb) < CREASE_COS {
+            return true;
+        }
+    }
     let step = b.pos - a.pos;
     // Actual minus predicted inverse depth, at b from a's plane and at a from b's.
     let miss_at_b = qb - qa - a.inv_depth_grad.dot(step);
@@ -370,3 +387,7 @@ pub fn surfaces_differ(a: &SurfacePoint, b: &SurfacePoint, tolerance: f32) -> bo
     // (A NaN miss, from a degenerate plane, makes the test false.)
     miss_at_b.abs().min(miss_at_a.abs()) > tolerance * qa.max(qb) && miss_at_b.max(miss_at_a) > 0.0
 }
+
+/// cos 1°: facet normals further apart are a crease (coplanar triangles of one face
+/// agree to rounding).
+pub const CREASE_COS: f32 = 0.999_847_7;

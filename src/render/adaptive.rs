@@ -10,7 +10,7 @@ use super::gradients::magnitude;
 use super::interaction::{interaction, Interaction};
 use super::path::PathTracer;
 use super::{camera_sample_at, RenderOptions, Setup};
-use crate::accel::Accel;
+use crate::accel::{Accel, PrimRef};
 use crate::adaptive::{self, Estimator, SampleSet, SampleValue, Settings, NO_OBJECT};
 use crate::brdf::Material;
 use crate::math::sampler::hash2;
@@ -78,6 +78,7 @@ impl Estimator for RenderEstimator<'_> {
             v.object_id = c.object_id;
             v.depth = c.depth;
             v.inv_depth_grad = c.inv_depth_grad;
+            v.facet_normal = c.facet_normal;
             v.durand = Some(c.durand);
             v.back_facing = first
                 .and_then(|r| r.first_hit)
@@ -95,12 +96,14 @@ struct CentreHit {
     object_id: u32,
     depth: f32,
     inv_depth_grad: Vec2,
+    facet_normal: Option<Vec3>,
     durand: f32,
 }
 
 impl RenderEstimator<'_> {
-    /// Object id, depth and tangent plane of the first hit of the ray through `p`,
-    /// and the Durand metric there; `None` for the background.
+    /// Object id, depth, tangent plane and (where flat-shaded) facet normal of the
+    /// first hit of the ray through `p`, and the Durand metric there; `None` for the
+    /// background.
     ///
     /// The plane is returned as ∇(1/t) per pixel. On the plane through the hit point
     /// `x` with geometric normal `n`, the ray of unit direction `d(p)` from the eye
@@ -120,6 +123,7 @@ impl RenderEstimator<'_> {
             object_id: si.object_id,
             depth: hit.t,
             inv_depth_grad: if g.is_finite() { g } else { Vec2::ZERO },
+            facet_normal: flat_shaded(scene, &si).then_some(si.ng),
             durand: self.durand(&si, hit.t, d),
         })
     }
@@ -148,6 +152,15 @@ impl RenderEstimator<'_> {
         } else {
             0.0
         }
+    }
+}
+
+/// Whether the hit's shading normal is its facet's (a triangle of a mesh without
+/// vertex normals: quads, cubes, OBJs without `vn`), so that a crease shows.
+fn flat_shaded(scene: &Scene, si: &Interaction) -> bool {
+    match si.prim {
+        PrimRef::Triangle { mesh, .. } => scene.meshes[mesh as usize].normals.is_empty(),
+        PrimRef::Sphere(_) => false,
     }
 }
 
@@ -308,5 +321,77 @@ mod tests {
         assert!(n > 200, "only {n} points on one surface");
         // With the unnormalised ∂D in place of ∂d the median is 0.14.
         assert!(median < 1e-3 && p99 < 1e-2, "median {median}, p99 {p99}");
+    }
+
+    /// Facet normals come from flat-shaded surfaces only: in the Cornell box (quads
+    /// and cubes, no vertex normals) every hit has one, and each cube shows more than
+    /// one facet; on objects_bumpy's smoothed meshes and spheres none has one, while
+    /// its floor quad does.
+    #[test]
+    fn facet_normals_mark_flat_shaded_surfaces() {
+        let hits = |path: &str| {
+            let scene = crate::scene::load(Path::new(path)).unwrap();
+            let accel = Accel::build(&scene.meshes, &scene.spheres);
+            let opts = RenderOptions {
+                resolution: Some((64, 64)),
+                ..Default::default()
+            };
+            let setup = Setup::new(&scene, &opts).unwrap();
+            let est = RenderEstimator {
+                tracer: setup.tracer(&scene, &accel),
+                camera: &setup.camera,
+                spp: 1,
+                gradient_spp: 1,
+                seed: 1,
+            };
+            let mut out = Vec::new();
+            for j in 0..64 {
+                for i in 0..64 {
+                    let p = Vec2::new(0.5 + i as f32, 0.5 + j as f32);
+                    if let Some(c) = est.centre_hit(p) {
+                        let sphere = matches!(
+                            accel
+                                .intersect(&setup.camera.generate_ray(p))
+                                .map(|h| h.prim),
+                            Some(PrimRef::Sphere(_))
+                        );
+                        out.push((c.object_id, c.facet_normal, sphere));
+                    }
+                }
+            }
+            (scene, out)
+        };
+        let (cornell, box_hits) = hits("scenes/cornell.toml");
+        assert!(
+            box_hits.iter().all(|h| h.1.is_some()),
+            "a Cornell box hit without a facet"
+        );
+        // Object ids start at 1 (`Scene::object_names` is indexed by id − 1).
+        let name = |id: u32| cornell.object_names[id as usize - 1].as_str();
+        let cubes: Vec<u32> = (1..=cornell.object_names.len() as u32)
+            .filter(|&id| name(id).contains("box"))
+            .collect();
+        assert!(!cubes.is_empty());
+        for id in cubes {
+            let mut normals: Vec<Vec3> = Vec::new();
+            for n in box_hits.iter().filter(|h| h.0 == id).filter_map(|h| h.1) {
+                if normals
+                    .iter()
+                    .all(|m| m.dot(n) < crate::adaptive::CREASE_COS)
+                {
+                    normals.push(n);
+                }
+            }
+            println!("{}: {} facets in view", name(id), normals.len());
+            assert!(normals.len() >= 2, "{} shows one facet", name(id));
+        }
+        let (_, bumpy_hits) = hits("scenes/objects_bumpy.toml");
+        let flat = bumpy_hits.iter().filter(|h| h.1.is_some()).count();
+        assert!(
+            flat > 0 && flat < bumpy_hits.len(),
+            "{flat} of {}",
+            bumpy_hits.len()
+        );
+        assert!(bumpy_hits.iter().filter(|h| h.2).all(|h| h.1.is_none()));
     }
 }
