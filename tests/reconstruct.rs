@@ -2,6 +2,9 @@
 //! agreement with spade's own Sibson C1 interpolant, C1 beating linear on a smooth image,
 //! no blending across silhouettes, and the density plane.
 
+mod common;
+
+use common::perspective_floor;
 use glam::{Vec2, Vec3};
 use gradtrace::adaptive::{refine, Sample, SampleSet, SampleValue, Settings, Strategy};
 use gradtrace::reconstruct::{reconstruct, reconstruct_with, Interpolation, Options};
@@ -187,9 +190,8 @@ fn never_interpolates_across_silhouettes() {
                 "object id" => v.object_id = inside as u32,
                 "depth" if inside => v.depth = 0.2,
                 "fold" => {
-                    let lift = if inside { 1.03 } else { 1.0 };
-                    v.depth = 1.0 / (0.02 * (1.0 + 0.006 * p.y) * lift);
-                    v.inv_depth_grad = Vec2::new(0.0, 0.02 * 0.006 * lift);
+                    let lift = if inside { 0.03 } else { 0.0 };
+                    (v.depth, v.inv_depth_grad) = perspective_floor(p, lift);
                 }
                 "crease" => {
                     let tilt = if inside { 10f32.to_radians() } else { 0.0 };

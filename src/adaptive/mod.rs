@@ -37,7 +37,8 @@ pub struct SampleValue {
     /// neighbouring samples see different ids are always refined to pixel size, and the
     /// reconstruction never interpolates across different ids.
     pub object_id: u32,
-    /// Distance along the camera ray (positive); `INFINITY` for the background. A
+    /// Depth along the camera's view axis (planar depth, positive: its inverse is
+    /// affine in the image across a plane); `INFINITY` for the background. A
     /// depth step between neighbouring samples (read off their tangent planes,
     /// [`inv_depth_grad`](Self::inv_depth_grad); see [`surfaces_differ`]) counts as an
     /// object boundary (folds, self-occlusion silhouettes), for refinement and for
@@ -46,12 +47,12 @@ pub struct SampleValue {
     /// ∇(1/depth) per pixel: the visible surface's tangent plane, in the form that is
     /// affine in image position under perspective. Lets the boundary test tell a
     /// surface seen at a slant (large but predicted depth change) from a fold or a
-    /// self-occlusion silhouette whose depth step is small. Zero when unknown, which
-    /// predicts a constant depth.
+    /// self-occlusion silhouette whose depth step is small. Zero when unknown (or
+    /// not finite), which predicts a constant depth.
     pub inv_depth_grad: Vec2,
     /// The geometric normal where the visible surface is flat-shaded (a cube's face,
-    /// a mesh without vertex normals), `None` where its shading normal varies
-    /// smoothly. Two samples on facets with different normals lie across a crease,
+    /// a mesh without vertex normals, bump-mapped or not), `None` where its shading
+    /// normal is interpolated (smooth meshes, spheres). Two samples on facets with different normals lie across a crease,
     /// which such a surface shows as a jump in shading (a box's top and front) but no
     /// depth step or gradient reveals.
     pub facet_normal: Option<Vec3>,
@@ -107,7 +108,12 @@ impl SampleValue {
             pos,
             surface: self.surface_id(),
             inv_depth: inverse_depth(self.depth),
-            inv_depth_grad: self.inv_depth_grad,
+            // A non-finite plane predicts nothing: zero predicts a constant depth.
+            inv_depth_grad: if self.inv_depth_grad.is_finite() {
+                self.inv_depth_grad
+            } else {
+                Vec2::ZERO
+            },
             facet_normal: self.facet_normal,
         }
     }
@@ -360,7 +366,8 @@ fn inverse_depth(depth: f32) -> f32 {
 ///   misses of opposite sign;
 /// * a self-occlusion silhouette whose near side is seen edge-on: that plane
 ///   recedes steeply, so both samples lie in front of the other's plane — two
-///   positive misses (as on a concave surface, where refining does no harm).
+///   positive misses. A concave surface seen at a grazing angle gives the same, and
+///   is then refined and kept apart like a step: budget spent, nothing blended.
 ///
 /// With zero gradients this is the plain relative jump
 /// `|d_a − d_b| > tolerance · max(d_a, d_b)`.
@@ -384,7 +391,6 @@ pub fn surfaces_differ(a: &SurfacePoint, b: &SurfacePoint, tolerance: f32) -> bo
     // Actual minus predicted inverse depth, at b from a's plane and at a from b's.
     let miss_at_b = qb - qa - a.inv_depth_grad.dot(step);
     let miss_at_a = qa - qb + b.inv_depth_grad.dot(step);
-    // (A NaN miss, from a degenerate plane, makes the test false.)
     miss_at_b.abs().min(miss_at_a.abs()) > tolerance * qa.max(qb) && miss_at_b.max(miss_at_a) > 0.0
 }
 

@@ -10,9 +10,10 @@
 //!
 //! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
 //! the same surface when they have the same object id, lie on the same side of a bump
-//! map's terminator (`SampleValue::surface_id`) and no depth step lies between them
-//! (`surfaces_differ`, which reads steps off the samples' tangent planes with
-//! `SampleSet::depth_tolerance`): the same test the quadtree uses to force
+//! map's terminator (`SampleValue::surface_id`), are both background or both not, do
+//! not lie on two facets of a flat-shaded surface (a crease) and have no depth step
+//! between them (read off their tangent planes with `SampleSet::depth_tolerance`):
+//! `adaptive::surfaces_differ`, the same test the quadtree uses to force
 //! refinement. Of the samples that would contribute (the triangle's corners, or
 //! the natural neighbours), the pixel takes the surface that carries the largest share
 //! of the interpolation weight (each contributing sample is tried as the anchor of a
@@ -146,7 +147,8 @@ struct Data {
     value: Vec<DVec3>,
     grad_u: Vec<DVec3>,
     grad_v: Vec<DVec3>,
-    /// Surface id, depth and tangent plane of each sample, for [`surfaces_differ`].
+    /// Surface id, inverse depth, tangent plane and facet normal of each sample, for
+    /// [`surfaces_differ`].
     surface: Vec<SurfacePoint>,
     /// `SampleSet::depth_tolerance` (see `surfaces_differ`).
     tolerance: f32,
