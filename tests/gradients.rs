@@ -15,7 +15,6 @@ use gradtrace::render::gradients::geometry::{hit_duals, unit_direction_derivativ
 use gradtrace::render::gradients::shading::{direct_sample, LightPoint};
 use gradtrace::render::gradients::{GVec3, CAM, CDV, DV, LANES, SV};
 use gradtrace::render::interaction::interaction;
-use gradtrace::render::lights::LightSet;
 use gradtrace::render::path::PathTracer;
 use gradtrace::render::{camera_sample, render, RenderOptions};
 use gradtrace::scene::{Camera, Environment, Integrator, Rect, Scene};
@@ -285,17 +284,8 @@ fn integrand_terms_match_partial_differences() {
 fn per_sample_gradient_matches_shifted_estimator() {
     let mut summary = Vec::new();
     for (name, s) in scenes() {
-        let accel = Accel::build(&s.meshes, &s.spheres);
-        let lights = LightSet::build(&s);
-        let tracer = PathTracer {
-            scene: &s,
-            accel: &accel,
-            lights: &lights,
-            max_depth: 2,
-            rr_depth: 5,
-            lines: None,
-            far_light: None,
-        };
+        let traced = Traceable::new(&s);
+        let tracer = traced.tracer(&s, 2, 5);
         let c = &s.camera;
         let h = 1e-2f32;
         let mut errs = Vec::new();
@@ -386,27 +376,18 @@ fn converged_gradient_matches_image_differences() {
         Vec3::splat(20.0),
     );
     s.settings.integrator = Integrator::Direct;
-    let accel = Accel::build(&s.meshes, &s.spheres);
+    let traced = Traceable::new(&s);
     let spp = 4096;
     let opts = RenderOptions {
         spp: Some(spp),
         gradients: true,
         ..Default::default()
     };
-    let base = render(&s, &accel, &opts, &|_, _| {}).unwrap();
+    let base = render(&s, &traced.accel, &opts, &|_, _| {}).unwrap();
     let g = base.gradients.as_ref().unwrap();
     // Image differences: re-render with the camera moved by ±h pixels along u.
     let h = 0.25f32;
-    let lights = LightSet::build(&s);
-    let tracer = PathTracer {
-        scene: &s,
-        accel: &accel,
-        lights: &lights,
-        max_depth: 2,
-        rr_depth: 5,
-        lines: None,
-        far_light: None,
-    };
+    let tracer = traced.tracer(&s, 2, 5);
     let mut checked = 0;
     for (px, py) in [(12u32, 9u32), (10, 8), (14, 11), (11, 12)] {
         let pixel = py * s.camera.width + px;
@@ -516,19 +497,13 @@ fn converged_soft_shadow_gradient_matches_image_differences() {
         .unwrap(),
     );
     add_sphere_under_square_light(&mut s, 0.8, 0.6, 0.35, 0.6, 6.0);
-    let accel = Accel::build(&s.meshes, &s.spheres);
-    let lights = LightSet::build(&s);
+    let traced = Traceable::new(&s);
     let tracer = PathTracer {
-        scene: &s,
-        accel: &accel,
-        lights: &lights,
-        max_depth: 2,
-        rr_depth: 5,
         lines: Some(LineConfig {
             n_theta: 64,
             refine: 4,
         }),
-        far_light: None,
+        ..traced.tracer(&s, 2, 5)
     };
     let spp = 2048;
     let h = 0.5f32;
@@ -699,17 +674,8 @@ fn indirect_gradient_errors(bumpy: bool) -> (Vec<f32>, Vec<f32>) {
         s.spheres[0].bump = Some(b);
     }
     let sphere_id = s.spheres[0].object_id;
-    let accel = Accel::build(&s.meshes, &s.spheres);
-    let lights = LightSet::build(&s);
-    let tracer = PathTracer {
-        scene: &s,
-        accel: &accel,
-        lights: &lights,
-        max_depth: 3,
-        rr_depth: 5,
-        lines: None,
-        far_light: None,
-    };
+    let traced = Traceable::new(&s);
+    let tracer = traced.tracer(&s, 3, 5);
     let spp = 16384;
     let h = 0.25f32;
     let (mut errors, mut without) = (Vec::new(), Vec::new());
@@ -760,20 +726,14 @@ fn glossy_indirect_gradient_matches_image_differences() {
     };
     // Facing down: lights the sphere directly and the dome's lower half.
     let s = sphere_in_dome(glossy, false, 50.0);
-    let accel = Accel::build(&s.meshes, &s.spheres);
-    let lights = LightSet::build(&s);
+    let traced = Traceable::new(&s);
     let lines = Some(LineConfig {
         n_theta: 4,
         refine: 0,
     });
     let tracer = |max_depth: u32| PathTracer {
-        scene: &s,
-        accel: &accel,
-        lights: &lights,
-        max_depth,
-        rr_depth: 1,
         lines,
-        far_light: None,
+        ..traced.tracer(&s, max_depth, 1)
     };
     let (three, two) = (tracer(3), tracer(2));
     let (spp, h) = (8192, 0.25f32);

@@ -309,17 +309,8 @@ fn hard_scene() -> Scene {
 #[test]
 fn estimator_is_finite_on_hard_configurations() {
     let s = hard_scene();
-    let accel = Accel::build(&s.meshes, &s.spheres);
-    let lights = LightSet::build(&s);
-    let tracer = PathTracer {
-        scene: &s,
-        accel: &accel,
-        lights: &lights,
-        max_depth: 8,
-        rr_depth: 3,
-        lines: None,
-        far_light: None,
-    };
+    let traced = Traceable::new(&s);
+    let tracer = traced.tracer(&s, 8, 3);
     let (w, h) = (s.camera.width, s.camera.height);
     let mut bad = 0;
     let mut nonzero = 0;
@@ -426,20 +417,15 @@ fn gradients_are_finite_on_hard_configurations() {
     use gradtrace::render::camera_sample;
     use gradtrace::render::path::LineConfig;
     let s = hard_scene();
-    let accel = Accel::build(&s.meshes, &s.spheres);
-    let lights = LightSet::build(&s);
+    let traced = Traceable::new(&s);
     for refine in [0, 6] {
         let tracer = PathTracer {
-            scene: &s,
-            accel: &accel,
-            lights: &lights,
-            max_depth: 4,
-            rr_depth: 3,
             lines: Some(LineConfig {
                 n_theta: 16,
                 refine,
             }),
             far_light: Some(4.0),
+            ..traced.tracer(&s, 4, 3)
         };
         let (mut bad, mut with_vis) = (0, 0);
         for pixel in 0..s.camera.width * s.camera.height {
@@ -535,17 +521,8 @@ fn back_facing_shading_normals_are_flagged_and_black() {
     s.environment = Some(Environment::Constant {
         radiance: Vec3::ONE,
     });
-    let accel = Accel::build(&s.meshes, &s.spheres);
-    let lights = LightSet::build(&s);
-    let tracer = PathTracer {
-        scene: &s,
-        accel: &accel,
-        lights: &lights,
-        max_depth: 4,
-        rr_depth: 5,
-        lines: None,
-        far_light: None,
-    };
+    let traced = Traceable::new(&s);
+    let tracer = traced.tracer(&s, 4, 5);
     let (mut back, mut front) = (0, 0);
     for pixel in 0..s.camera.width * s.camera.height {
         for i in 0..4 {

@@ -52,9 +52,9 @@ pub struct SampleValue {
     pub inv_depth_grad: Vec2,
     /// The geometric normal where the visible surface is flat-shaded (a cube's face,
     /// a mesh without vertex normals, bump-mapped or not), `None` where its shading
-    /// normal is interpolated (smooth meshes, spheres). Two samples on facets with different normals lie across a crease,
-    /// which such a surface shows as a jump in shading (a box's top and front) but no
-    /// depth step or gradient reveals.
+    /// normal is interpolated (smooth meshes, spheres). Two samples on facets with
+    /// different normals lie across a crease, which such a surface shows as a jump
+    /// in shading (a box's top and front) but no depth step or gradient reveals.
     pub facet_normal: Option<Vec3>,
     /// The shading normal at the visible point faces away from the camera, so the
     /// path ends there and the radiance drops to the emitted light: the black dots

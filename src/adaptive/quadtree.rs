@@ -637,10 +637,12 @@ impl Tree {
         self.neighbours(id, &mut nb);
         let mut out = Comparisons::default();
         let tol = self.settings.depth_tolerance;
+        let va = &self.values[id as usize];
+        let here = va.surface_point(self.cells[id as usize].pos);
         for &n in &nb {
-            let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
-            let (pa, pb) = (self.cells[id as usize].pos, self.cells[n as usize].pos);
-            let link = if surfaces_differ(&va.surface_point(pa), &vb.surface_point(pb), tol) {
+            let vb = &self.values[n as usize];
+            let there = vb.surface_point(self.cells[n as usize].pos);
+            let link = if surfaces_differ(&here, &there, tol) {
                 Link::Boundary((va.radiance - vb.radiance).length())
             } else if pairs {
                 Link::Pair(self.pair_metric(id, n))

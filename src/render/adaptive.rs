@@ -378,10 +378,11 @@ mod tests {
             errors.sort_by(f32::total_cmp);
             let n = errors.len();
             let (median, p99) = (errors[n / 2], errors[n * 99 / 100]);
+            let max = errors[n - 1];
             println!(
-            "∇(1/depth) at {n} points: relative error median {median:.1e}, 99th percentile {p99:.1e}, max {:.1e}",
-            errors[n - 1]
-        );
+                "∇(1/depth) at {n} points: relative error median {median:.1e}, \
+                 99th percentile {p99:.1e}, max {max:.1e}"
+            );
             assert!(n > 200, "only {n} points on one surface");
             assert!(median < 1e-3 && p99 < 1e-2, "median {median}, p99 {p99}");
         });
@@ -393,46 +394,35 @@ mod tests {
     /// its floor quad does.
     #[test]
     fn facet_normals_mark_flat_shaded_surfaces() {
+        // Object id, facet normal and whether a sphere was hit, on a 64×64 grid;
+        // with the scene's object names.
         let hits = |path: &str| {
-            let scene = crate::scene::load(Path::new(path)).unwrap();
-            let accel = Accel::build(&scene.meshes, &scene.spheres);
-            let opts = RenderOptions {
-                resolution: Some((64, 64)),
-                ..Default::default()
-            };
-            let setup = Setup::new(&scene, &opts).unwrap();
-            let est = RenderEstimator {
-                tracer: setup.tracer(&scene, &accel),
-                camera: &setup.camera,
-                spp: 1,
-                gradient_spp: 1,
-                seed: 1,
-            };
-            let mut out = Vec::new();
-            for j in 0..64 {
-                for i in 0..64 {
-                    let p = Vec2::new(0.5 + i as f32, 0.5 + j as f32);
-                    if let Some(c) = est.centre_hit(p) {
-                        let sphere = matches!(
-                            accel
-                                .intersect(&setup.camera.generate_ray(p))
-                                .map(|h| h.prim),
-                            Some(PrimRef::Sphere(_))
-                        );
-                        out.push((c.object_id, c.facet_normal, sphere));
+            with_estimator(path, (64, 64), |scene, setup, est| {
+                let mut out = Vec::new();
+                for j in 0..64 {
+                    for i in 0..64 {
+                        let p = Vec2::new(0.5 + i as f32, 0.5 + j as f32);
+                        if let Some(c) = est.centre_hit(p) {
+                            let ray = setup.camera.generate_ray(p);
+                            let sphere = matches!(
+                                est.tracer.accel.intersect(&ray).map(|h| h.prim),
+                                Some(PrimRef::Sphere(_))
+                            );
+                            out.push((c.object_id, c.facet_normal, sphere));
+                        }
                     }
                 }
-            }
-            (scene, out)
+                (scene.object_names.clone(), out)
+            })
         };
-        let (cornell, box_hits) = hits("scenes/cornell.toml");
+        let (names, box_hits) = hits("scenes/cornell.toml");
         assert!(
             box_hits.iter().all(|h| h.1.is_some()),
             "a Cornell box hit without a facet"
         );
         // Object ids start at 1 (`Scene::object_names` is indexed by id − 1).
-        let name = |id: u32| cornell.object_names[id as usize - 1].as_str();
-        let cubes: Vec<u32> = (1..=cornell.object_names.len() as u32)
+        let name = |id: u32| names[id as usize - 1].as_str();
+        let cubes: Vec<u32> = (1..=names.len() as u32)
             .filter(|&id| name(id).contains("box"))
             .collect();
         assert!(!cubes.is_empty());

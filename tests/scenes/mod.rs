@@ -1,9 +1,41 @@
 //! Scenes built in code for the integration tests (no scene file needed).
 #![allow(dead_code)]
 
+use gradtrace::accel::Accel;
 use gradtrace::brdf::Material;
 use gradtrace::math::Vec3;
+use gradtrace::render::lights::LightSet;
+use gradtrace::render::path::PathTracer;
 use gradtrace::scene::{Camera, Mesh, Rect, RenderSettings, Scene, SceneStats, Sphere};
+
+/// What tracing a scene needs besides the scene: its BVH and its light set.
+pub struct Traceable {
+    pub accel: Accel,
+    pub lights: LightSet,
+}
+
+impl Traceable {
+    pub fn new(s: &Scene) -> Self {
+        Self {
+            accel: Accel::build(&s.meshes, &s.spheres),
+            lights: LightSet::build(s),
+        }
+    }
+
+    /// A path tracer with point light sampling and no far-light approximation;
+    /// tests that need lines set them with struct-update syntax.
+    pub fn tracer<'a>(&'a self, s: &'a Scene, max_depth: u32, rr_depth: u32) -> PathTracer<'a> {
+        PathTracer {
+            scene: s,
+            accel: &self.accel,
+            lights: &self.lights,
+            max_depth,
+            rr_depth,
+            lines: None,
+            far_light: None,
+        }
+    }
+}
 
 pub fn empty_scene(camera: Camera) -> Scene {
     Scene {
