@@ -1,13 +1,13 @@
 //! A spade hint generator whose hint is set explicitly by the caller, per thread.
 //!
-//! spade's natural-neighbour and nearest-neighbour queries locate their point through
-//! the triangulation's hint generator and offer no `_with_hint` variant. The stock
-//! generators are either shared between threads (`LastUsedVertexHintGenerator`: the walk,
-//! and so the floating-point order of the natural-neighbour weights, would depend on
-//! thread scheduling) or pay a hierarchy descent per query. This one returns whatever
-//! the current thread last stored with [`ScanlineHint::set`]; the reconstruction stores
-//! the previous pixel's vertex, which keeps every walk short and a pure function of the
-//! row being processed.
+//! spade's nearest-neighbour query and its insertion locate their point through the
+//! triangulation's hint generator and offer no `_with_hint` variant. The stock
+//! generators are either shared between threads (`LastUsedVertexHintGenerator`: the
+//! walk, and so the answer among equidistant neighbours, would depend on thread
+//! scheduling) or pay a hierarchy descent per query. This one returns whatever the
+//! current thread last stored with [`ScanlineHint::set`]; the reconstruction stores the
+//! previous pixel's vertex (or a ghost's source sample), which keeps every walk short
+//! and a pure function of the row being processed.
 
 use spade::handles::FixedVertexHandle;
 use spade::{HasPosition, HintGenerator, Point2, Triangulation};

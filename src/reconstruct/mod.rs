@@ -34,19 +34,27 @@
 //! weights `1/|p − p_k|²`. Both are exact on linear images.
 //!
 //! **Determinism and speed.** Rows run in parallel; inside a row the pixels are located
-//! in scanline order, each walk starting at a vertex of the previous pixel's answer, and
-//! each row starts from a hint computed sequentially beforehand. A walk then depends
-//! only on the row, never on which thread ran it, so the image is bit-identical for
-//! any thread count.
+//! in scanline order (first in the previous pixel's triangle, else by a walk from a
+//! vertex of the previous pixel's answer), and each row starts from a hint computed
+//! sequentially beforehand. A walk then depends only on the row, never on which thread
+//! ran it, so the image is bit-identical for any thread count. The triangulation's
+//! vertices are nudged by at most 2⁻²⁰ px ([`Node::new`]) so that the lattice of
+//! quadtree samples has no cocircular quadruples for the in-circle test to resolve
+//! exactly; natural-neighbour weights come from [`natural`] (spade's algorithm with
+//! each triangle's circumcircle computed once); a pixel centre that carries a sample
+//! takes its value directly.
 
 mod hint;
+mod natural;
 
 use crate::adaptive::{surfaces_differ, SampleSet, SurfacePoint};
+use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
 use crate::output::{Channel, OutputImage};
 use crate::{Error, Result};
 use glam::{DVec2, DVec3};
 use hint::ScanlineHint;
+use natural::Circumcentres;
 use rayon::prelude::*;
 use spade::handles::{
     FixedFaceHandle, FixedUndirectedEdgeHandle, FixedVertexHandle, InnerTag, VertexHandle,
@@ -129,6 +137,30 @@ impl Reconstruction {
 struct Node {
     pos: Point2<f64>,
     idx: u32,
+}
+
+impl Node {
+    /// The vertex of sample `idx` at `p`, moved by at most 2⁻²⁰ px (the same way for
+    /// the same position, so duplicates stay duplicates).
+    ///
+    /// Quadtree samples sit on regular lattices, so four of them are often exactly
+    /// cocircular; spade's robust in-circle test then cannot decide in floating point
+    /// and falls back to exact arithmetic, which was two thirds of the triangulation's
+    /// cost. A perturbation far below any pixel feature makes every such test
+    /// decidable at once; the triangulation is then one of the equally valid choices
+    /// for the degenerate input, and natural-neighbour weights, which are continuous
+    /// in the positions, move by ~1e-6. Interpolation itself reads the exact
+    /// positions (`Data::pos`).
+    fn new(p: DVec2, idx: u32) -> Self {
+        let (x, y) = ((p.x as f32).to_bits(), (p.y as f32).to_bits());
+        let h = hash2(x, y.rotate_left(7) ^ 0x5bd1_e995);
+        // Two signed bytes, in units of 2⁻²⁷ px: at most 2⁻²⁰ in each axis.
+        let step = |b: u32| f64::from(b as u8 as i8) * (1.0 / (1u64 << 27) as f64);
+        Self {
+            pos: Point2::new(p.x + step(h), p.y + step(h >> 8)),
+            idx,
+        }
+    }
 }
 
 impl HasPosition for Node {
@@ -228,10 +260,7 @@ pub fn reconstruct_with(
         .pos
         .iter()
         .enumerate()
-        .map(|(i, p)| Node {
-            pos: Point2::new(p.x, p.y),
-            idx: i as u32,
-        })
+        .map(|(i, &p)| Node::new(p, i as u32))
         .collect();
     // `bulk_load_stable` keeps the first of duplicate positions, so a duplicated
     // sample simply does not take part.
@@ -254,13 +283,34 @@ pub fn reconstruct_with(
         row_start.push(hint);
     }
 
+    let centres = Circumcentres::new(&dt);
+    // Samples exactly at a pixel centre (every sample of a one-pixel quadtree cell)
+    // give that pixel their value in either mode; no query needed.
+    let mut at_centre = vec![None; w * h];
+    for v in dt.vertices() {
+        let p = data.pos[v.data().idx as usize];
+        let (x, y) = (p.x.floor(), p.y.floor());
+        if p.x - x == 0.5 && p.y - y == 0.5 && x >= 0.0 && y >= 0.0 {
+            let (x, y) = (x as usize, y as usize);
+            if x < w && y < h {
+                at_centre[y * w + x] = Some(v.fix());
+            }
+        }
+    }
+
     let mut image = vec![Vec3::ZERO; w * h];
     image.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let mut ctx = Ctx::new(&dt, &data);
+        let mut ctx = Ctx::new(&dt, &data, &centres);
         let mut hint = row_start[y];
         for (x, out) in row.iter_mut().enumerate() {
-            let (value, next) = ctx.pixel(centre(x, y), hint, mode);
-            hint = next.unwrap_or(hint);
+            let (value, next) = match at_centre[y * w + x] {
+                Some(v) => (data.value[ctx.sample(v)], v),
+                None => {
+                    let (value, next) = ctx.pixel(centre(x, y), hint, mode);
+                    (value, next.unwrap_or(hint))
+                }
+            };
+            hint = next;
             *out = value.as_vec3();
         }
     });
@@ -362,7 +412,9 @@ fn add_border_ghosts(
     let (w, h) = (set.width as f64, set.height as f64);
     let mut ghosts: Vec<(usize, FixedVertexHandle, DVec2, DVec3)> = Vec::new();
     {
-        let ctx = Ctx::new(dt, data);
+        // Ghost values are extrapolations: no natural-neighbour query, no table.
+        let none = Circumcentres::default();
+        let ctx = Ctx::new(dt, data, &none);
         for v in dt.vertices() {
             let i = v.data().idx as usize;
             let s = &set.samples[i];
@@ -412,10 +464,7 @@ fn add_border_ghosts(
             },
             ..source
         });
-        dt.insert(Node {
-            pos: Point2::new(q.x, q.y),
-            idx,
-        })?;
+        dt.insert(Node::new(q, idx))?;
     }
     Ok(())
 }
@@ -441,23 +490,26 @@ fn vertex_of(dt: &Dt, loc: PositionInTriangulation) -> Option<FixedVertexHandle>
     }
 }
 
-/// Per-row scratch state (spade's natural-neighbour helper is not `Sync`).
+/// Per-row scratch state.
 struct Ctx<'a> {
     dt: &'a Dt,
     data: &'a Data,
-    nn: spade::NaturalNeighbor<'a, Dt>,
+    centres: &'a Circumcentres,
+    scratch: natural::Scratch,
     weights: Vec<(FixedVertexHandle, f64)>,
     kept: Vec<(usize, f64)>,
-    /// The triangle of the previous pixel (linear mode), tried before walking.
+    /// The triangle of the previous pixel, tried before walking.
     last_face: Option<FixedFaceHandle<InnerTag>>,
 }
 
 impl<'a> Ctx<'a> {
-    fn new(dt: &'a Dt, data: &'a Data) -> Self {
+    /// `centres` must be `dt`'s (or empty where no natural-neighbour query is made).
+    fn new(dt: &'a Dt, data: &'a Data, centres: &'a Circumcentres) -> Self {
         Self {
             dt,
             data,
-            nn: dt.natural_neighbor(),
+            centres,
+            scratch: natural::Scratch::default(),
             weights: Vec::with_capacity(16),
             kept: Vec::with_capacity(16),
             last_face: None,
@@ -476,30 +528,13 @@ impl<'a> Ctx<'a> {
         mode: Interpolation,
     ) -> (DVec3, Option<FixedVertexHandle>) {
         self.weights.clear();
-        let mut next = None;
+        let loc = self.locate(p, hint);
+        let next = vertex_of(self.dt, loc);
         match mode {
-            Interpolation::Linear => {
-                // Neighbouring pixels mostly fall in the same triangle: test it first
-                // (strictly inside, so the answer is the one `locate` would give).
-                if !self.in_last_face(p) {
-                    let loc = self.dt.locate_with_hint(p, hint);
-                    next = vertex_of(self.dt, loc);
-                    self.last_face = match loc {
-                        PositionInTriangulation::OnFace(f) => Some(f),
-                        _ => None,
-                    };
-                    self.barycentric(p, loc);
-                }
-            }
+            Interpolation::Linear => self.barycentric(p, loc),
             Interpolation::Gradient => {
-                // spade's natural-neighbour query locates `p` through the hint
-                // generator; point it at the previous pixel's neighbourhood so the
-                // walk is short and depends only on the row, not on the thread.
-                ScanlineHint::set(hint);
-                let mut weights = std::mem::take(&mut self.weights);
-                self.nn.get_weights(p, &mut weights);
-                self.weights = weights;
-                next = self.weights.first().map(|w| w.0);
+                let (dt, centres) = (self.dt, self.centres);
+                natural::weights(dt, centres, &mut self.scratch, p, loc, &mut self.weights);
             }
         }
         if self.weights.is_empty() {
@@ -517,22 +552,24 @@ impl<'a> Ctx<'a> {
         (value, next)
     }
 
-    /// Fills the barycentric weights when `p` lies strictly inside the previous
-    /// pixel's triangle.
-    fn in_last_face(&mut self, p: Point2<f64>) -> bool {
-        let Some(f) = self.last_face else {
-            return false;
-        };
-        let face = self.dt.face(f);
-        let c = face.barycentric_interpolation(p);
-        if c.iter().all(|&w| w > 1e-9) {
-            let v = face.vertices();
-            self.weights
-                .extend([(v[0].fix(), c[0]), (v[1].fix(), c[1]), (v[2].fix(), c[2])]);
-            true
-        } else {
-            false
+    /// Where `p` lies. Neighbouring pixels mostly fall in the same triangle, so the
+    /// previous pixel's is tried first (strictly inside, so the answer is the one
+    /// the walk would give); otherwise the walk starts at `hint`, the previous
+    /// pixel's neighbourhood, so it is short and depends only on the row, not on
+    /// the thread.
+    fn locate(&mut self, p: Point2<f64>, hint: FixedVertexHandle) -> PositionInTriangulation {
+        if let Some(f) = self.last_face {
+            let c = self.dt.face(f).barycentric_interpolation(p);
+            if c.iter().all(|&w| w > 1e-9) {
+                return PositionInTriangulation::OnFace(f);
+            }
         }
+        let loc = self.dt.locate_with_hint(p, hint);
+        self.last_face = match loc {
+            PositionInTriangulation::OnFace(f) => Some(f),
+            _ => None,
+        };
+        loc
     }
 
     /// Barycentric weights of `p` in the located element.
