@@ -23,6 +23,7 @@
 
 use super::{
     quadrant, surfaces_differ, Estimator, Sample, SampleSet, SampleValue, Settings, Strategy,
+    SurfacePoint,
 };
 use crate::math::Vec2;
 use crate::{Error, Result};
@@ -351,6 +352,9 @@ struct Tree {
     values: Vec<SampleValue>,
     /// `own_metric` of every evaluated sample, computed once.
     own: Vec<f32>,
+    /// What the boundary test reads of every evaluated sample, built once: each is
+    /// compared with up to nine neighbours, and this is a third of a `SampleValue`.
+    surface: Vec<SurfacePoint>,
     heap: BinaryHeap<Entry>,
     leaves: usize,
     dirty: Vec<u32>,
@@ -379,6 +383,7 @@ impl Tree {
             cells: Vec::with_capacity(target),
             values: Vec::with_capacity(target),
             own: Vec::with_capacity(target),
+            surface: Vec::with_capacity(target),
             heap: BinaryHeap::new(),
             leaves: 0,
             dirty: Vec::new(),
@@ -637,12 +642,10 @@ impl Tree {
         self.neighbours(id, &mut nb);
         let mut out = Comparisons::default();
         let tol = self.settings.depth_tolerance;
-        let va = &self.values[id as usize];
-        let here = va.surface_point(self.cells[id as usize].pos);
+        let here = &self.surface[id as usize];
         for &n in &nb {
-            let vb = &self.values[n as usize];
-            let there = vb.surface_point(self.cells[n as usize].pos);
-            let link = if surfaces_differ(&here, &there, tol) {
+            let link = if surfaces_differ(here, &self.surface[n as usize], tol) {
+                let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
                 Link::Boundary((va.radiance - vb.radiance).length())
             } else if pairs {
                 Link::Pair(self.pair_metric(id, n))
@@ -663,6 +666,8 @@ impl Tree {
         for id in first..end {
             let own = self.own_metric(&self.values[id]);
             self.own.push(own);
+            let surface = self.values[id].surface_point(self.cells[id].pos);
+            self.surface.push(surface);
             self.cells[id].metric = own.max(0.0);
             self.mark_dirty(id as u32);
         }
