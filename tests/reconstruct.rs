@@ -94,6 +94,65 @@ fn linear_and_c1_are_exact_on_linear_images() {
     }
 }
 
+/// Samples all on one line (a row, a diagonal) span no triangle; the pixels on that
+/// line lie on the hull and are interpolated along it, exactly on a linear image.
+/// (The triangulation nudges its vertices off exact cocircularity, which turns the
+/// line into slivers; a pixel on the line must still count as on it.)
+#[test]
+fn collinear_samples_interpolate_along_their_line() {
+    let lines: [(&str, Vec<Vec2>); 2] = [
+        (
+            "row",
+            (0..6)
+                .map(|k| Vec2::new(2.0 * k as f32 + 0.5, 4.5))
+                .collect(),
+        ),
+        (
+            "diagonal",
+            (0..6).map(|k| Vec2::splat(2.0 * k as f32 + 0.5)).collect(),
+        ),
+    ];
+    for (name, points) in lines {
+        let samples = points
+            .iter()
+            .map(|&pos| Sample {
+                pos,
+                cell_min: pos,
+                cell_max: pos,
+                split: 0,
+                value: linear(pos),
+            })
+            .collect();
+        let set = SampleSet {
+            width: 14,
+            height: 12,
+            samples,
+            depth_tolerance: 0.1,
+        };
+        let (first, last) = (points[0], points[points.len() - 1]);
+        for mode in [Interpolation::Linear, Interpolation::Gradient] {
+            let r = reconstruct(&set, mode).unwrap();
+            let mut on_line = 0;
+            for y in 0..r.height {
+                for x in 0..r.width {
+                    let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let t = (p - first).dot(last - first) / (last - first).length_squared();
+                    if !(0.0..=1.0).contains(&t) || (first + (last - first) * t).distance(p) > 1e-4
+                    {
+                        continue;
+                    }
+                    on_line += 1;
+                    let err = (r.image[y * r.width + x] - linear(p).radiance)
+                        .abs()
+                        .max_element();
+                    assert!(err < 1e-4, "{name} {mode:?}: error {err} at ({x}, {y})");
+                }
+            }
+            assert_eq!(on_line, 11, "{name}: pixels on the line");
+        }
+    }
+}
+
 struct Pt {
     pos: Point2<f64>,
     h: f64,

@@ -5,7 +5,7 @@
 //!   contains the pixel centre — the paper's "simple linear interpolation" baseline.
 //! * [`Interpolation::Gradient`]: Sibson's C1 natural-neighbour interpolant (flatness
 //!   0.5) fed with the samples' analytic gradients ∂I/∂u, ∂I/∂v. It reproduces linear
-//!   functions exactly and follows the first-order Taylor expansion near every sample,
+//!   functions (exactly but for the vertex nudge below) and follows the first-order Taylor expansion near every sample,
 //!   which is what makes sparse gradient samples worth more than plain values (Fig. 13).
 //!
 //! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
@@ -31,7 +31,8 @@
 //! lie on `s`'s surface (the one whose smallest barycentric weight is largest), or
 //! takes `s`'s value if there is none; `Gradient` blends the first-order Taylor
 //! expansions `I_k + J_k (p − p_k)` of `s` and its same-surface Delaunay neighbours with
-//! weights `1/|p − p_k|²`. Both are exact on linear images.
+//! weights `1/|p − p_k|²`. Both are exact on linear images (up to the vertex nudge
+//! below: |∇I|·2⁻²⁰ px).
 //!
 //! **Determinism and speed.** Rows run in parallel; inside a row the pixels are located
 //! in scanline order (first in the previous pixel's triangle, else by a walk from a
@@ -132,6 +133,9 @@ impl Reconstruction {
     }
 }
 
+/// The largest shift of a triangulation vertex along each axis, in pixels (2⁻²⁰).
+const NUDGE: f64 = 1.0 / (1u64 << 20) as f64;
+
 /// A triangulation vertex: a sample position and the sample's index.
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -149,13 +153,15 @@ impl Node {
     /// cost. A perturbation far below any pixel feature makes every such test
     /// decidable at once; the triangulation is then one of the equally valid choices
     /// for the degenerate input, and natural-neighbour weights, which are continuous
-    /// in the positions, move by ~1e-6. Interpolation itself reads the exact
-    /// positions (`Data::pos`).
+    /// in the positions, move by ~1e-6. The C1 formula and the extrapolations read
+    /// the exact positions (`Data::pos`); barycentric and natural-neighbour weights
+    /// come from the nudged ones, so linear mode reproduces a linear image to
+    /// |∇I|·2⁻²⁰·√2 rather than to rounding.
     fn new(p: DVec2, idx: u32) -> Self {
         let (x, y) = ((p.x as f32).to_bits(), (p.y as f32).to_bits());
         let h = hash2(x, y.rotate_left(7) ^ 0x5bd1_e995);
-        // Two signed bytes, in units of 2⁻²⁷ px: at most 2⁻²⁰ in each axis.
-        let step = |b: u32| f64::from(b as u8 as i8) * (1.0 / (1u64 << 27) as f64);
+        // Two signed bytes, in units of NUDGE / 128.
+        let step = |b: u32| f64::from(b as u8 as i8) * (NUDGE / 128.0);
         Self {
             pos: Point2::new(p.x + step(h), p.y + step(h >> 8)),
             idx,
@@ -564,7 +570,22 @@ impl<'a> Ctx<'a> {
                 return PositionInTriangulation::OnFace(f);
             }
         }
-        let loc = self.dt.locate_with_hint(p, hint);
+        let mut loc = self.dt.locate_with_hint(p, hint);
+        if let PositionInTriangulation::OutsideOfConvexHull(e) = loc {
+            // A point on the hull of the exact positions (all samples on one line:
+            // the nudge turns the line into slivers) can fall just outside the
+            // nudged hull; it is on that edge, as before the nudge.
+            let [a, b] = self
+                .dt
+                .directed_edge(e)
+                .positions()
+                .map(|q| DVec2::new(q.x, q.y));
+            let (ab, ap) = (b - a, DVec2::new(p.x, p.y) - a);
+            let t = ap.dot(ab) / ab.length_squared();
+            if (0.0..=1.0).contains(&t) && (ap - ab * t).length() <= NUDGE * 4.0 {
+                loc = PositionInTriangulation::OnEdge(e);
+            }
+        }
         self.last_face = match loc {
             PositionInTriangulation::OnFace(f) => Some(f),
             _ => None,
