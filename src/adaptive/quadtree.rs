@@ -596,11 +596,13 @@ impl Tree {
                 .sqrt()
                     / d
             }
-            // The analytic gradient is a point value; a cell's gradient magnitude is
-            // estimated as the largest over its sample and its neighbours', so that a
-            // bump whose slope vanishes exactly at a sample still counts.
+            // The analytic gradient is a point value: a cell's gradient magnitude is
+            // estimated as the largest, over the segments to its neighbours, of the
+            // mean of the two ends' |∇I| (the trapezoid rule along the segment), so
+            // that a bump whose slope vanishes exactly at a sample still counts, and a
+            // single noisy gradient lends its neighbours half its value, not all of it.
             Strategy::Gradient | Strategy::GradientVis => {
-                self.own[a as usize].max(self.own[b as usize])
+                0.5 * (self.own[a as usize] + self.own[b as usize])
             }
             _ => 0.0,
         }
