@@ -282,27 +282,31 @@ pub fn reconstruct_with(
     mark_boundaries(&dt, &mut data);
 
     let centre = |x: usize, y: usize| Point2::new(x as f64 + 0.5, y as f64 + 0.5);
-    let mut row_start = Vec::with_capacity(h);
-    let mut hint = FixedVertexHandle::from_index(0);
-    for y in 0..h {
-        hint = vertex_of(&dt, dt.locate_with_hint(centre(0, y), hint)).unwrap_or(hint);
-        row_start.push(hint);
-    }
-
-    let centres = Circumcentres::new(&dt);
-    // Samples exactly at a pixel centre (every sample of a one-pixel quadtree cell)
-    // give that pixel their value in either mode; no query needed.
-    let mut at_centre = vec![None; w * h];
-    for v in dt.vertices() {
-        let p = data.pos[v.data().idx as usize];
-        let (x, y) = (p.x.floor(), p.y.floor());
-        if p.x - x == 0.5 && p.y - y == 0.5 && x >= 0.0 && y >= 0.0 {
-            let (x, y) = (x as usize, y as usize);
-            if x < w && y < h {
-                at_centre[y * w + x] = Some(v.fix());
+    let (centres, (row_start, at_centre)) = rayon::join(
+        || Circumcentres::new(&dt),
+        || {
+            let mut row_start = Vec::with_capacity(h);
+            let mut hint = FixedVertexHandle::from_index(0);
+            for y in 0..h {
+                hint = vertex_of(&dt, dt.locate_with_hint(centre(0, y), hint)).unwrap_or(hint);
+                row_start.push(hint);
             }
-        }
-    }
+            // Samples exactly at a pixel centre (every sample of a one-pixel quadtree
+            // cell) give that pixel their value in either mode; no query needed.
+            let mut at_centre = vec![None; w * h];
+            for v in dt.vertices() {
+                let p = data.pos[v.data().idx as usize];
+                let (x, y) = (p.x.floor(), p.y.floor());
+                if p.x - x == 0.5 && p.y - y == 0.5 && x >= 0.0 && y >= 0.0 {
+                    let (x, y) = (x as usize, y as usize);
+                    if x < w && y < h {
+                        at_centre[y * w + x] = Some(v.fix());
+                    }
+                }
+            }
+            (row_start, at_centre)
+        },
+    );
 
     let mut image = vec![Vec3::ZERO; w * h];
     image.par_chunks_mut(w).enumerate().for_each(|(y, row)| {

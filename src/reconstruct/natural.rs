@@ -11,7 +11,10 @@
 
 use super::{Dt, Node};
 use glam::DVec2;
-use spade::handles::{DirectedEdgeHandle, FixedDirectedEdgeHandle, FixedVertexHandle};
+use rayon::prelude::*;
+use spade::handles::{
+    DirectedEdgeHandle, FixedDirectedEdgeHandle, FixedFaceHandle, FixedVertexHandle, InnerTag,
+};
 use spade::{Point2, PositionInTriangulation, Triangulation};
 
 type Edge<'a> = DirectedEdgeHandle<'a, Node, (), (), ()>;
@@ -28,29 +31,40 @@ struct Circle {
     r2: f64,
 }
 
+impl Circle {
+    fn of([a, b, c]: [DVec2; 3]) -> Self {
+        // From the corner opposite the longest edge: its angle is the largest, so
+        // once the radius is bounded below its sine is too, and the centre is
+        // accurate (from a needle's sharp corner it is not).
+        let (o, u, v) = [(a, b, c), (b, c, a), (c, a, b)]
+            .into_iter()
+            .max_by(|x, y| {
+                x.1.distance_squared(x.2)
+                    .total_cmp(&y.1.distance_squared(y.2))
+            })
+            .expect("three corners");
+        let longest = u.distance_squared(v);
+        let rel = circumcentre(u - o, v - o);
+        let r2 = rel.length_squared();
+        Self {
+            centre: o + rel,
+            // R = longest / (2 sin O): this keeps sin O ≥ 1/20.
+            r2: if r2 <= 100.0 * longest { r2 } else { f64::NAN },
+        }
+    }
+}
+
 impl Circumcentres {
+    /// The table of `dt`'s triangles (computed in parallel).
     pub(super) fn new(dt: &Dt) -> Self {
+        let faces: Vec<FixedFaceHandle<InnerTag>> = dt.fixed_inner_faces().collect();
+        let computed: Vec<Circle> = faces
+            .par_iter()
+            .map(|&f| Circle::of(dt.face(f).positions().map(dvec)))
+            .collect();
         let mut circles = vec![Circle::default(); dt.num_all_faces()];
-        for face in dt.inner_faces() {
-            // From the corner opposite the longest edge: its angle is the largest, so
-            // once the radius is bounded below its sine is too, and the centre is
-            // accurate (from a needle's sharp corner it is not).
-            let [a, b, c] = face.positions().map(dvec);
-            let (o, u, v) = [(a, b, c), (b, c, a), (c, a, b)]
-                .into_iter()
-                .max_by(|x, y| {
-                    x.1.distance_squared(x.2)
-                        .total_cmp(&y.1.distance_squared(y.2))
-                })
-                .expect("three corners");
-            let longest = u.distance_squared(v);
-            let rel = circumcentre(u - o, v - o);
-            let r2 = rel.length_squared();
-            circles[face.fix().index()] = Circle {
-                centre: o + rel,
-                // R = longest / (2 sin O): this keeps sin O ≥ 1/20.
-                r2: if r2 <= 100.0 * longest { r2 } else { f64::NAN },
-            };
+        for (f, c) in faces.iter().zip(computed) {
+            circles[f.index()] = c;
         }
         Self(circles)
     }
