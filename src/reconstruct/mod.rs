@@ -190,8 +190,8 @@ struct Data {
     surface: Vec<SurfacePoint>,
     /// `SampleSet::depth_tolerance` (see `surfaces_differ`).
     tolerance: f32,
-    /// Whether a sample has a Delaunay neighbour on another surface (filled before the
-    /// slope limiter and again once the ghosts are in). A pixel whose contributing
+    /// Whether a sample has a Delaunay neighbour on another surface (filled by the
+    /// slope limiter, or after the ghosts are in where it does not run). A pixel whose contributing
     /// samples all have none lies away from every boundary and keeps them all.
     near_boundary: Vec<bool>,
 }
@@ -272,14 +272,18 @@ pub fn reconstruct_with(
     // sample simply does not take part.
     let mut dt =
         Dt::bulk_load_stable(nodes).map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
-    if mode == Interpolation::Gradient && options.slope_limiter {
-        mark_boundaries(&dt, &mut data);
+    let limited = mode == Interpolation::Gradient && options.slope_limiter;
+    if limited {
         limit_gradients(&dt, &mut data);
     }
+    let first_ghost = dt.num_vertices();
     add_border_ghosts(set, &mut dt, &mut data, mode)
         .map_err(|e| bad(format!("triangulation failed: {e:?}")))?;
-    // Again: the ghosts add edges along the border.
-    mark_boundaries(&dt, &mut data);
+    if limited {
+        mark_ghost_edges(&dt, &mut data, first_ghost);
+    } else {
+        mark_boundaries(&dt, &mut data);
+    }
 
     let centre = |x: usize, y: usize| Point2::new(x as f64 + 0.5, y as f64 + 0.5);
     let (centres, (row_start, at_centre)) = rayon::join(
@@ -343,26 +347,33 @@ pub fn reconstruct_with(
 /// neighbour, stays within the range of the values of the sample and those
 /// neighbours. Linear images pass unchanged (φ = 1), as do smooth slopes; only
 /// expansions that overshoot every neighbour are cut back.
+///
+/// It reads every Delaunay edge of every sample anyway, so it also fills
+/// `Data::near_boundary` for the samples.
 fn limit_gradients(dt: &Dt, data: &mut Data) {
     let d = &*data;
-    // Away from boundaries every Delaunay neighbour is on the sample's surface.
-    let differ = |i: usize, j: usize| d.near_boundary[i] && d.differ(i, j);
     // Independent per sample, so it runs in parallel (and stays deterministic).
-    let factors: Vec<(usize, DVec3)> = (0..dt.num_vertices())
+    let limited: Vec<(usize, bool, DVec3)> = (0..dt.num_vertices())
         .into_par_iter()
-        .map(|k| {
+        .map_init(Vec::new, |same, k| {
             let v = dt.vertex(FixedVertexHandle::from_index(k));
             let i = v.data().idx as usize;
-            let same = || {
-                v.out_edges()
-                    .map(|e| e.to().data().idx as usize)
-                    .filter(move |&j| !differ(i, j))
-            };
-            let (lo, hi) = same().fold((d.value[i], d.value[i]), |(lo, hi), j| {
+            // The neighbours on the sample's surface, read once.
+            same.clear();
+            let mut near = false;
+            for e in v.out_edges() {
+                let j = e.to().data().idx as usize;
+                if d.differ(i, j) {
+                    near = true;
+                } else {
+                    same.push(j);
+                }
+            }
+            let (lo, hi) = same.iter().fold((d.value[i], d.value[i]), |(lo, hi), &j| {
                 (lo.min(d.value[j]), hi.max(d.value[j]))
             });
             let mut f = DVec3::ONE;
-            for j in same() {
+            for &j in same.iter() {
                 let half = (d.pos[j] - d.pos[i]) * 0.5;
                 let delta = d.grad_u[i] * half.x + d.grad_v[i] * half.y;
                 for c in 0..3 {
@@ -372,12 +383,33 @@ fn limit_gradients(dt: &Dt, data: &mut Data) {
                     }
                 }
             }
-            (i, f)
+            (i, near, f)
         })
         .collect();
-    for (i, f) in factors {
+    let mut near_boundary = vec![false; d.pos.len()];
+    for (i, near, f) in limited {
+        near_boundary[i] = near;
         data.grad_u[i] *= f;
         data.grad_v[i] *= f;
+    }
+    data.near_boundary = near_boundary;
+}
+
+/// Extends `Data::near_boundary` over the ghosts (vertices from `first_ghost` on):
+/// every edge their insertion made touches one of them. Edges it removed may leave
+/// a flag behind, which only sends a pixel through the full surface test.
+fn mark_ghost_edges(dt: &Dt, data: &mut Data, first_ghost: usize) {
+    data.near_boundary.resize(data.pos.len(), false);
+    for k in first_ghost..dt.num_vertices() {
+        let v = dt.vertex(FixedVertexHandle::from_index(k));
+        let g = v.data().idx as usize;
+        for e in v.out_edges() {
+            let j = e.to().data().idx as usize;
+            if data.differ(g, j) {
+                data.near_boundary[g] = true;
+                data.near_boundary[j] = true;
+            }
+        }
     }
 }
 
