@@ -352,28 +352,20 @@ pub fn reconstruct_with(
 /// `Data::near_boundary` for the samples.
 fn limit_gradients(dt: &Dt, data: &mut Data) {
     let d = &*data;
-    // Independent per sample, so it runs in parallel (and stays deterministic).
-    let limited: Vec<(usize, bool, DVec3)> = (0..dt.num_vertices())
+    let adjacency = Adjacency::new(dt, d);
+    // Independent per sample, so it runs in parallel (and stays deterministic: the
+    // range and the factor are a minimum and maximum, whatever the order).
+    let limited: Vec<(bool, DVec3)> = (0..d.pos.len())
         .into_par_iter()
-        .map_init(Vec::new, |same, k| {
-            let v = dt.vertex(FixedVertexHandle::from_index(k));
-            let i = v.data().idx as usize;
-            // The neighbours on the sample's surface, read once.
-            same.clear();
-            let mut near = false;
-            for e in v.out_edges() {
-                let j = e.to().data().idx as usize;
-                if d.differ(i, j) {
-                    near = true;
-                } else {
-                    same.push(j);
-                }
-            }
-            let (lo, hi) = same.iter().fold((d.value[i], d.value[i]), |(lo, hi), &j| {
+        .map(|i| {
+            let links = adjacency.of(i);
+            let near = links.iter().any(|&(_, cross)| cross);
+            let same = || links.iter().filter(|l| !l.1).map(|&(j, _)| j as usize);
+            let (lo, hi) = same().fold((d.value[i], d.value[i]), |(lo, hi), j| {
                 (lo.min(d.value[j]), hi.max(d.value[j]))
             });
             let mut f = DVec3::ONE;
-            for &j in same.iter() {
+            for j in same() {
                 let half = (d.pos[j] - d.pos[i]) * 0.5;
                 let delta = d.grad_u[i] * half.x + d.grad_v[i] * half.y;
                 for c in 0..3 {
@@ -383,16 +375,58 @@ fn limit_gradients(dt: &Dt, data: &mut Data) {
                     }
                 }
             }
-            (i, near, f)
+            (near, f)
         })
         .collect();
-    let mut near_boundary = vec![false; d.pos.len()];
-    for (i, near, f) in limited {
-        near_boundary[i] = near;
+    let mut near_boundary = Vec::with_capacity(limited.len());
+    for (i, (near, f)) in limited.into_iter().enumerate() {
+        near_boundary.push(near);
         data.grad_u[i] *= f;
         data.grad_v[i] *= f;
     }
     data.near_boundary = near_boundary;
+}
+
+/// The Delaunay neighbours of every sample, each with whether the edge to it
+/// crosses a surface boundary: read once from spade's edge list (contiguous), each
+/// edge tested once, then laid out per sample (compressed rows).
+struct Adjacency {
+    start: Vec<u32>,
+    links: Vec<(u32, bool)>,
+}
+
+impl Adjacency {
+    fn new(dt: &Dt, d: &Data) -> Self {
+        let edges: Vec<[u32; 2]> = dt
+            .undirected_edges()
+            .map(|e| e.vertices().map(|v| v.data().idx))
+            .collect();
+        let cross: Vec<bool> = edges
+            .par_iter()
+            .map(|&[a, b]| d.differ(a as usize, b as usize))
+            .collect();
+        let mut start = vec![0u32; d.pos.len() + 1];
+        for &[a, b] in &edges {
+            start[a as usize + 1] += 1;
+            start[b as usize + 1] += 1;
+        }
+        for k in 1..start.len() {
+            start[k] += start[k - 1];
+        }
+        let mut next = start.clone();
+        let mut links = vec![(0, false); 2 * edges.len()];
+        for (&[a, b], &x) in edges.iter().zip(&cross) {
+            for (from, to) in [(a, b), (b, a)] {
+                links[next[from as usize] as usize] = (to, x);
+                next[from as usize] += 1;
+            }
+        }
+        Self { start, links }
+    }
+
+    fn of(&self, i: usize) -> &[(u32, bool)] {
+        &self.links[self.start[i] as usize..self.start[i + 1] as usize]
+    }
 }
 
 /// Extends `Data::near_boundary` over the ghosts (vertices from `first_ghost` on):
@@ -595,15 +629,25 @@ impl<'a> Ctx<'a> {
     }
 
     /// Where `p` lies. Neighbouring pixels mostly fall in the same triangle, so the
-    /// previous pixel's is tried first (strictly inside, so the answer is the one
-    /// the walk would give); otherwise the walk starts at `hint`, the previous
+    /// previous pixel's is tried first, then its three neighbours (strictly inside,
+    /// so the answer is the one the walk would give); otherwise the walk starts at `hint`, the previous
     /// pixel's neighbourhood, so it is short and depends only on the row, not on
     /// the thread.
     fn locate(&mut self, p: Point2<f64>, hint: FixedVertexHandle) -> PositionInTriangulation {
+        let inside = |c: [f64; 3]| c.iter().all(|&w| w > 1e-9);
         if let Some(f) = self.last_face {
-            let c = self.dt.face(f).barycentric_interpolation(p);
-            if c.iter().all(|&w| w > 1e-9) {
+            let face = self.dt.face(f);
+            if inside(face.barycentric_interpolation(p)) {
                 return PositionInTriangulation::OnFace(f);
+            }
+            // Else `p` has mostly crossed one edge into the next triangle.
+            for e in face.adjacent_edges() {
+                if let Some(g) = e.rev().face().as_inner() {
+                    if inside(g.barycentric_interpolation(p)) {
+                        self.last_face = Some(g.fix());
+                        return PositionInTriangulation::OnFace(g.fix());
+                    }
+                }
             }
         }
         let mut loc = self.dt.locate_with_hint(p, hint);
