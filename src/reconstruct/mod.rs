@@ -5,8 +5,9 @@
 //!   contains the pixel centre — the paper's "simple linear interpolation" baseline.
 //! * [`Interpolation::Gradient`]: Sibson's C1 natural-neighbour interpolant (flatness
 //!   0.5) fed with the samples' analytic gradients ∂I/∂u, ∂I/∂v. It reproduces linear
-//!   functions (exactly but for the vertex nudge below) and follows the first-order Taylor expansion near every sample,
-//!   which is what makes sparse gradient samples worth more than plain values (Fig. 13).
+//!   functions (exactly but for the vertex nudge below) and follows the first-order
+//!   Taylor expansion near every sample, which is what makes sparse gradient samples
+//!   worth more than plain values (Fig. 13).
 //!
 //! **Silhouettes.** A pixel is never interpolated across surfaces. Two samples are on
 //! the same surface when they have the same object id, lie on the same side of a bump
@@ -191,8 +192,9 @@ struct Data {
     /// `SampleSet::depth_tolerance` (see `surfaces_differ`).
     tolerance: f32,
     /// Whether a sample has a Delaunay neighbour on another surface (filled by the
-    /// slope limiter, or after the ghosts are in where it does not run). A pixel whose contributing
-    /// samples all have none lies away from every boundary and keeps them all.
+    /// slope limiter, or after the ghosts are in where it does not run). A pixel
+    /// whose contributing samples all have none lies away from every boundary and
+    /// keeps them all.
     near_boundary: Vec<bool>,
 }
 
@@ -630,9 +632,9 @@ impl<'a> Ctx<'a> {
 
     /// Where `p` lies. Neighbouring pixels mostly fall in the same triangle, so the
     /// previous pixel's is tried first, then its three neighbours (strictly inside,
-    /// so the answer is the one the walk would give); otherwise the walk starts at `hint`, the previous
-    /// pixel's neighbourhood, so it is short and depends only on the row, not on
-    /// the thread.
+    /// so the answer is the one the walk would give); otherwise the walk starts at
+    /// `hint`, the previous pixel's neighbourhood, so it is short and depends only
+    /// on the row, not on the thread.
     fn locate(&mut self, p: Point2<f64>, hint: FixedVertexHandle) -> PositionInTriangulation {
         let inside = |c: [f64; 3]| c.iter().all(|&w| w > 1e-9);
         if let Some(f) = self.last_face {
