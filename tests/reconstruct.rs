@@ -45,21 +45,21 @@ fn rmse(set: &SampleSet, mode: Interpolation, truth: impl Fn(Vec2) -> SampleValu
     (sum / (r.width * r.height) as f64).sqrt()
 }
 
-/// Samples at arbitrary positions (no quadtree), e.g. a jittered lattice.
-fn scattered(width: u32, height: u32, n: usize, f: impl Fn(Vec2) -> SampleValue) -> SampleSet {
-    let samples = (0..n)
-        .map(|k| {
-            // Rank-1 lattice (Fibonacci-like), deterministic and well spread.
-            let u = (k as f32 + 0.5) / n as f32;
-            let v = (k as f32 * 0.618_034).fract();
-            let pos = Vec2::new(u * width as f32, v * height as f32);
-            Sample {
-                pos,
-                cell_min: pos,
-                cell_max: pos,
-                split: 0,
-                value: f(pos),
-            }
+/// Point-sized samples of `f` at `positions` (no quadtree cells, so no border ghosts).
+fn point_samples(
+    width: u32,
+    height: u32,
+    positions: impl IntoIterator<Item = Vec2>,
+    f: impl Fn(Vec2) -> SampleValue,
+) -> SampleSet {
+    let samples = positions
+        .into_iter()
+        .map(|pos| Sample {
+            pos,
+            cell_min: pos,
+            cell_max: pos,
+            split: 0,
+            value: f(pos),
         })
         .collect();
     SampleSet {
@@ -68,6 +68,17 @@ fn scattered(width: u32, height: u32, n: usize, f: impl Fn(Vec2) -> SampleValue)
         samples,
         depth_tolerance: 0.1,
     }
+}
+
+/// Samples at arbitrary positions (no quadtree), e.g. a jittered lattice.
+fn scattered(width: u32, height: u32, n: usize, f: impl Fn(Vec2) -> SampleValue) -> SampleSet {
+    // Rank-1 lattice (Fibonacci-like), deterministic and well spread.
+    let positions = (0..n).map(|k| {
+        let u = (k as f32 + 0.5) / n as f32;
+        let v = (k as f32 * 0.618_034).fract();
+        Vec2::new(u * width as f32, v * height as f32)
+    });
+    point_samples(width, height, positions, f)
 }
 
 #[test]
@@ -113,22 +124,7 @@ fn collinear_samples_interpolate_along_their_line() {
         ),
     ];
     for (name, points) in lines {
-        let samples = points
-            .iter()
-            .map(|&pos| Sample {
-                pos,
-                cell_min: pos,
-                cell_max: pos,
-                split: 0,
-                value: linear(pos),
-            })
-            .collect();
-        let set = SampleSet {
-            width: 14,
-            height: 12,
-            samples,
-            depth_tolerance: 0.1,
-        };
+        let set = point_samples(14, 12, points.iter().copied(), linear);
         let (first, last) = (points[0], points[points.len() - 1]);
         for mode in [Interpolation::Linear, Interpolation::Gradient] {
             let r = reconstruct(&set, mode).unwrap();
@@ -315,24 +311,8 @@ fn degenerate_inputs() {
     assert!(reconstruct(&empty, Interpolation::Linear).is_err());
     // One sample, or collinear samples: constant / Taylor extrapolation everywhere.
     for n in [1usize, 5] {
-        let samples = (0..n)
-            .map(|k| {
-                let pos = Vec2::new(2.0 + 3.0 * k as f32, 4.0);
-                Sample {
-                    pos,
-                    cell_min: pos,
-                    cell_max: pos,
-                    split: 0,
-                    value: linear(pos),
-                }
-            })
-            .collect();
-        let set = SampleSet {
-            width: 20,
-            height: 9,
-            samples,
-            depth_tolerance: 0.1,
-        };
+        let positions = (0..n).map(|k| Vec2::new(2.0 + 3.0 * k as f32, 4.0));
+        let set = point_samples(20, 9, positions, linear);
         for mode in [Interpolation::Linear, Interpolation::Gradient] {
             let r = reconstruct(&set, mode).unwrap();
             assert!(

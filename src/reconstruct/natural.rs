@@ -233,15 +233,20 @@ mod tests {
         f64::from(hash2(i, k)) / f64::from(u32::MAX)
     }
 
-    /// Largest difference from spade's natural-neighbour weights over `queries`
-    /// (same neighbours in the same order), and how many queries had neighbours.
-    fn compare(points: &[DVec2], queries: &[DVec2]) -> (f64, usize) {
+    /// The reconstruction's triangulation of `points` (nudged vertices).
+    fn triangulate(points: &[DVec2]) -> Dt {
         let nodes = points
             .iter()
             .enumerate()
             .map(|(i, &p)| Node::new(p, i as u32))
             .collect();
-        let dt = Dt::bulk_load_stable(nodes).unwrap();
+        Dt::bulk_load_stable(nodes).unwrap()
+    }
+
+    /// Largest difference from spade's natural-neighbour weights over `queries`
+    /// (same neighbours in the same order), and how many queries had neighbours.
+    fn compare(points: &[DVec2], queries: &[DVec2]) -> (f64, usize) {
+        let dt = triangulate(points);
         let centres = Circumcentres::new(&dt);
         let nn = dt.natural_neighbor();
         let (mut scratch, mut ours, mut theirs) = (Scratch::default(), vec![], vec![]);
@@ -320,12 +325,7 @@ mod tests {
                 let a = f64::from(k) * 0.9 + unit(cfg, 10 + k) * 0.5;
                 points.push(base + DVec2::from_angle(a) * (3.0 + 20.0 * unit(cfg, 30 + k)));
             }
-            let nodes = points
-                .iter()
-                .enumerate()
-                .map(|(i, &p)| Node::new(p, i as u32))
-                .collect();
-            let dt = Dt::bulk_load_stable(nodes).unwrap();
+            let dt = triangulate(&points);
             let centres = Circumcentres::new(&dt);
             for face in dt.inner_faces() {
                 let [a, b, c] = face.positions().map(dvec);
