@@ -13,6 +13,8 @@ pub mod error;
 pub mod flatland;
 pub mod math;
 pub mod output;
+pub mod pipeline;
+pub mod preview;
 pub mod reconstruct;
 pub mod render;
 pub mod scene;

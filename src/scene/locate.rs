@@ -117,6 +117,9 @@ pub(super) struct Ctx<'a> {
     base: PathBuf,
     text: &'a str,
     doc: Option<toml_edit::ImDocument<&'a str>>,
+    /// Every asset resolved so far, in the order the file names them: the scene's
+    /// inputs besides the file itself ([`super::Scene::sources`]).
+    pub(super) assets: std::cell::RefCell<Vec<PathBuf>>,
 }
 
 impl<'a> Ctx<'a> {
@@ -127,6 +130,7 @@ impl<'a> Ctx<'a> {
             base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
             text,
             doc: toml_edit::ImDocument::parse(text).ok(),
+            assets: Default::default(),
         }
     }
 
@@ -231,6 +235,7 @@ impl<'a> Ctx<'a> {
     pub(super) fn asset(&self, at: &KeyPath, file: &str) -> crate::Result<PathBuf> {
         let p = self.base.join(file);
         if p.is_file() {
+            self.assets.borrow_mut().push(p.clone());
             Ok(p)
         } else {
             Err(self.err(at, format!("file not found: {}", p.display())))

@@ -30,6 +30,23 @@ pub fn load_from_str(text: &str, path: &Path) -> crate::Result<Scene> {
     parse::scene_from_str(text, path)
 }
 
+/// The MTL files an OBJ names with `mtllib` that exist beside it (tobj reads
+/// them itself, so the parser never sees their paths).
+fn mtl_libraries(obj: &Path) -> crate::Result<Vec<PathBuf>> {
+    let text = std::fs::read(obj).map_err(|source| crate::Error::Io {
+        path: obj.to_path_buf(),
+        source,
+    })?;
+    let dir = obj.parent().unwrap_or(Path::new(""));
+    Ok(String::from_utf8_lossy(&text)
+        .lines()
+        .filter_map(|l| l.trim_start().strip_prefix("mtllib"))
+        .flat_map(|rest| rest.split_whitespace())
+        .map(|name| dir.join(name))
+        .filter(|p| p.is_file())
+        .collect())
+}
+
 /// Which estimator the renderer runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integrator {
@@ -133,6 +150,10 @@ pub struct SceneStats {
 pub struct Scene {
     /// The scene file, for messages and for naming outputs.
     pub path: PathBuf,
+    /// Every file the scene file references (meshes, environment maps), in the
+    /// order it names them; with `path` and the OBJs' MTL libraries these are the
+    /// inputs [`Scene::content_hash`] covers.
+    pub assets: Vec<PathBuf>,
     pub camera: Camera,
     pub settings: RenderSettings,
     pub materials: Vec<Material>,
@@ -153,6 +174,37 @@ impl Scene {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "scene".into())
+    }
+
+    /// SHA-256 (hex) of everything the image depends on that lives in files: the
+    /// scene file's bytes and those of every asset it references, including the
+    /// MTL libraries of its OBJs. Keys caches (references, precomputed fields) so
+    /// that an edited input is never answered from a stale file. Paths enter only
+    /// relative to the scene's folder, so a moved project keeps its caches.
+    pub fn content_hash(&self) -> crate::Result<String> {
+        use sha2::{Digest, Sha256};
+        let base = self.path.parent().unwrap_or(Path::new(""));
+        let mut files = vec![self.path.clone()];
+        for a in &self.assets {
+            files.push(a.clone());
+            if a.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+                files.extend(mtl_libraries(a)?);
+            }
+        }
+        let mut h = Sha256::new();
+        for f in &files {
+            let bytes = std::fs::read(f).map_err(|source| crate::Error::Io {
+                path: f.clone(),
+                source,
+            })?;
+            let name = f.strip_prefix(base).unwrap_or(f).to_string_lossy();
+            // Length-prefixed fields: no two different file lists hash alike.
+            for field in [name.as_bytes(), &bytes] {
+                h.update((field.len() as u64).to_le_bytes());
+                h.update(field);
+            }
+        }
+        Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
     }
 
     pub fn emitter_count(&self) -> usize {

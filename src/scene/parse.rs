@@ -554,6 +554,7 @@ impl<'a> Builder<'a> {
         };
         Ok(Scene {
             path: ctx.file.to_path_buf(),
+            assets: ctx.assets.take(),
             camera,
             settings,
             materials: self.materials,

@@ -40,6 +40,7 @@ impl Traceable {
 pub fn empty_scene(camera: Camera) -> Scene {
     Scene {
         path: "test.toml".into(),
+        assets: vec![],
         camera,
         settings: RenderSettings::default(),
         materials: vec![],

@@ -1,0 +1,2 @@
+//! Preview layers against the path-traced reference: precompute and shade with
+//! `preview`, render the reference with `render`, score and write with `output`.
