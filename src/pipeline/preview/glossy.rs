@@ -1,0 +1,1 @@
+//! `gradtrace preview glossy`: precompute transfer (cached) → render views → reference → preview.json.

@@ -1,0 +1,1 @@
+//! `gradtrace preview shadow-field`: precompute (cached) → shade → reference → preview.json.
