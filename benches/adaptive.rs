@@ -60,7 +60,7 @@ fn adaptive(c: &mut Criterion) {
         ..Default::default()
     };
     let settings = Settings::new(Strategy::Gradient, budget);
-    let run = gradtrace::render::adaptive::render_adaptive(
+    let run = gradtrace::pipeline::adaptive::render_adaptive(
         &scene,
         &accel,
         &opts,

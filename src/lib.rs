@@ -8,7 +8,6 @@
 pub mod accel;
 pub mod adaptive;
 pub mod brdf;
-pub mod compare;
 pub mod error;
 pub mod flatland;
 pub mod math;

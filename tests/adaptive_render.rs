@@ -4,8 +4,8 @@
 
 use gradtrace::accel::Accel;
 use gradtrace::adaptive::{Settings, Strategy};
+use gradtrace::pipeline::adaptive::render_adaptive;
 use gradtrace::reconstruct::Interpolation;
-use gradtrace::render::adaptive::render_adaptive;
 use gradtrace::render::RenderOptions;
 use std::path::Path;
 
@@ -135,7 +135,7 @@ fn cli_writes_sample_layers() {
 /// strategy × budget run, the equal-time and 1%-grid runs, and the report files.
 #[test]
 fn compare_writes_the_report_and_caches_the_reference() {
-    use gradtrace::compare::{compare, CompareOptions};
+    use gradtrace::pipeline::compare::{compare, CompareOptions};
     let dir = std::env::temp_dir().join(format!("gradtrace-compare-{}", std::process::id()));
     let scene = gradtrace::scene::load(Path::new("scenes/three_spheres_env.toml")).unwrap();
     let accel = Accel::build(&scene.meshes, &scene.spheres);

@@ -4,9 +4,10 @@
 
 use gradtrace::math::Vec3;
 use gradtrace::output::{
-    self, image_from_render, read_exr, srgb_oetf, to_srgb8, write_atomic, write_exr, write_png,
-    write_png_exposure, Channel, OutputImage,
+    self, read_exr, srgb_oetf, to_srgb8, write_atomic, write_exr, write_png, write_png_exposure,
+    Channel, OutputImage,
 };
+use gradtrace::pipeline::output_set::image_of_render;
 use gradtrace::render::{GradientPlanes, RenderOutput, RenderStats};
 use gradtrace::Error;
 use std::path::{Path, PathBuf};
@@ -116,7 +117,7 @@ fn exr_round_trip_is_exact() {
 }
 
 #[test]
-fn image_from_render_names_every_plane() {
+fn image_of_render_names_every_plane() {
     let (w, h) = (3, 2);
     let n = w * h;
     let v = |s: f32| {
@@ -137,7 +138,7 @@ fn image_from_render_names_every_plane() {
         gradients: None,
         stats: RenderStats::default(),
     };
-    let img = image_from_render(&r);
+    let img = image_of_render(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(
         names,
@@ -173,7 +174,7 @@ fn image_from_render_names_every_plane() {
     r.depth = None;
     r.albedo = None;
     r.object_id = None;
-    let img = image_from_render(&r);
+    let img = image_of_render(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["R", "G", "B"]);
 
@@ -189,7 +190,7 @@ fn image_from_render_names_every_plane() {
         indirect: s(15.0),
         ratio: s(14.0),
     });
-    let img = image_from_render(&r);
+    let img = image_of_render(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(
         names,

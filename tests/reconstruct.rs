@@ -294,9 +294,9 @@ fn density_plane_counts_samples() {
     let total: f32 = r.density.iter().sum();
     assert_eq!(total as usize, set.samples.len());
     assert_eq!(r.density.len(), 70 * 45);
-    let img = r.to_output_image();
+    let img = gradtrace::pipeline::output_set::image_of_reconstruction(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();
-    assert_eq!(names, ["R", "G", "B", "samples.density"]);
+    assert_eq!(names, ["R", "G", "B", "samples.density", "samples.Y"]);
 }
 
 #[test]

@@ -552,14 +552,13 @@ fn back_facing_shading_normals_are_flagged_and_black() {
     assert!(back > 10 && front > 3 * back);
     // The adaptive sampler's estimator passes the flag on (one camera sample per
     // estimate, so a flagged estimate is black too).
-    let est = gradtrace::render::adaptive::RenderEstimator {
+    let est = gradtrace::render::point::PointEstimator {
         tracer,
         camera: &s.camera,
         spp: 1,
         gradient_spp: 1,
         seed: 0,
     };
-    use gradtrace::adaptive::Estimator;
     let mut flagged = 0;
     for j in 0..72 {
         for i in 0..96 {

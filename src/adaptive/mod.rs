@@ -192,6 +192,16 @@ impl Strategy {
         }
     }
 
+    /// The other spellings [`Strategy::from_name`] accepts (earlier versions'
+    /// and the issue tracker's).
+    pub fn aliases(self) -> &'static [&'static str] {
+        match self {
+            Strategy::GradientVis => &["gradient+vis", "gradient-vis"],
+            Strategy::SecondOrder => &["second-order", "second+order"],
+            _ => &[],
+        }
+    }
+
     /// Parses [`Strategy::name`] (`+` and `-` may stand for `_`: `gradient+vis`,
     /// `second-order`); the error lists the valid choices.
     pub fn from_name(name: &str) -> Result<Self> {

@@ -44,6 +44,7 @@
 //! below the horizon are returned as `None` (their mass is missing from `pdf`, which
 //! is therefore exactly the density of the returned directions).
 
+pub(crate) mod display;
 mod glossy;
 mod lambert;
 mod mirror;

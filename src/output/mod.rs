@@ -11,7 +11,6 @@ mod png;
 pub mod report;
 
 use crate::math::Vec3;
-use crate::render::RenderOutput;
 
 pub use self::exr::{read_exr, stage_exr, write_exr};
 pub use self::png::{srgb_oetf, stage_png, to_srgb8, write_png, write_png_exposure};
@@ -91,8 +90,10 @@ pub mod names {
     pub const VARIANCE: &str = "variance.";
     pub const GRAD_U: &str = "grad.u.";
     pub const GRAD_V: &str = "grad.v.";
-    /// Scalar gradient-term planes, in the order of `render::GradientPlanes`'
-    /// fields sv, dv, cv, cdv, vis, indirect, ratio.
+    pub const SAMPLES_DENSITY: &str = "samples.density";
+    pub const SAMPLES_Y: &str = "samples.Y";
+    /// Scalar gradient-term planes: SV, DV, CV, CDV, visibility, indirect and the
+    /// CDV/SV ratio.
     pub const GRAD_TERMS: [&str; 7] = [
         "grad.sv.Y",
         "grad.dv.Y",
@@ -102,38 +103,4 @@ pub mod names {
         "grad.indirect.Y",
         "grad.ratio.Y",
     ];
-}
-
-/// Collects the beauty (`R,G,B`) and every AOV plane the render produced
-/// (`normal.X/Y/Z`, `depth.Z`, `albedo.R/G/B`, `object.id`, `variance.R/G/B`, and
-/// for gradient renders `grad.u.R/G/B`, `grad.v.R/G/B` and the term magnitudes
-/// `grad.{sv,dv,cv,cdv,vis,indirect,ratio}.Y`).
-pub fn image_from_render(render: &RenderOutput) -> OutputImage {
-    use names::*;
-    let mut img = OutputImage::new(render.width, render.height);
-    img.push_vec3("", RGB, &render.beauty);
-    if let Some(n) = &render.normal {
-        img.push_vec3(NORMAL, XYZ, n);
-    }
-    if let Some(d) = &render.depth {
-        img.push_scalar(DEPTH, d.clone());
-    }
-    if let Some(a) = &render.albedo {
-        img.push_vec3(ALBEDO, RGB, a);
-    }
-    if let Some(id) = &render.object_id {
-        img.push_scalar(OBJECT_ID, id.clone());
-    }
-    if let Some(v) = &render.variance {
-        img.push_vec3(VARIANCE, RGB, v);
-    }
-    if let Some(g) = &render.gradients {
-        img.push_vec3(GRAD_U, RGB, &g.grad_u);
-        img.push_vec3(GRAD_V, RGB, &g.grad_v);
-        let terms = [&g.sv, &g.dv, &g.cv, &g.cdv, &g.vis, &g.indirect, &g.ratio];
-        for (name, plane) in GRAD_TERMS.iter().zip(terms) {
-            img.push_scalar(name, plane.clone());
-        }
-    }
-    img
 }

@@ -1,5 +1,65 @@
 //! scene file + settings → output sets: the one place that joins the stages
 //! (`scene`, `accel`, `render`, `adaptive`, `reconstruct`, `preview`, `output`).
-//! Each entry point is a short function that calls the stages in order.
+//! Each command is a short function that calls the stages in order:
+//! [`render::run`] (full or adaptive render), [`compare::compare`], [`info`], and
+//! the previews in [`preview`].
 
+pub mod adaptive;
+pub mod compare;
+pub mod output_set;
 pub mod preview;
+pub mod progress;
+pub mod render;
+
+use crate::accel::Accel;
+use crate::scene::{self, Scene};
+use crate::{Error, Result};
+use std::path::Path;
+use std::time::Instant;
+
+/// The most worker threads a run starts: a few per core is enough to hide any
+/// imbalance, and far more only costs start-up time and memory.
+pub const MAX_THREADS_PER_CORE: usize = 8;
+
+/// Loads the scene and builds its BVH: what every command starts from.
+pub fn load(path: &Path) -> Result<(Scene, Accel)> {
+    let scene = scene::load(path)?;
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    Ok((scene, accel))
+}
+
+/// Runs `f` on a pool of `threads` workers (default: rayon's global pool, one per
+/// core), capped at [`MAX_THREADS_PER_CORE`] per core. The thread count never
+/// changes an image.
+pub fn with_threads<R: Send>(threads: Option<u32>, f: impl FnOnce() -> R + Send) -> Result<R> {
+    let Some(t) = threads else {
+        return Ok(f());
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let t = (t as usize).clamp(1, cores * MAX_THREADS_PER_CORE);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(t)
+        .build()
+        .map_err(|e| Error::Option {
+            option: "--threads".into(),
+            message: format!("cannot start {t} worker threads: {e}"),
+        })?;
+    Ok(pool.install(f))
+}
+
+/// The `info` report: what the scene holds, what the renderer builds for it and
+/// how long the BVH takes to build.
+pub fn info(path: &Path) -> Result<String> {
+    let scene = scene::load(path)?;
+    let t0 = Instant::now();
+    // Kept alive until after the timing so that its drop is not measured.
+    let _accel = Accel::build(&scene.meshes, &scene.spheres);
+    let build = t0.elapsed();
+    let primitives = scene.stats.triangles + scene.spheres.len();
+    Ok(format!(
+        "{}renderer: {}\nbvh: built in {:.3} ms ({primitives} primitives)\n",
+        scene.describe(),
+        crate::render::describe(&scene),
+        build.as_secs_f64() * 1e3,
+    ))
+}

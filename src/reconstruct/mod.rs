@@ -52,7 +52,6 @@ mod natural;
 use crate::adaptive::{surfaces_differ, SampleSet, SurfacePoint};
 use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
-use crate::output::{Channel, OutputImage};
 use crate::{Error, Result};
 use glam::{DVec2, DVec3};
 use hint::ScanlineHint;
@@ -73,6 +72,8 @@ pub enum Interpolation {
 }
 
 impl Interpolation {
+    pub const ALL: [Interpolation; 2] = [Interpolation::Linear, Interpolation::Gradient];
+
     pub fn name(self) -> &'static str {
         match self {
             Interpolation::Linear => "linear",
@@ -103,35 +104,6 @@ pub struct Reconstruction {
     pub image: Vec<Vec3>,
     /// Samples per pixel (`SampleSet::density`): the `samples.density` EXR plane.
     pub density: Vec<f32>,
-}
-
-impl Reconstruction {
-    /// The planes as output channels: `R`, `G`, `B` and `samples.density`.
-    pub fn to_output_image(&self) -> OutputImage {
-        let plane = |f: fn(&Vec3) -> f32| self.image.iter().map(f).collect::<Vec<f32>>();
-        OutputImage {
-            width: self.width,
-            height: self.height,
-            channels: vec![
-                Channel {
-                    name: "R".into(),
-                    data: plane(|c| c.x),
-                },
-                Channel {
-                    name: "G".into(),
-                    data: plane(|c| c.y),
-                },
-                Channel {
-                    name: "B".into(),
-                    data: plane(|c| c.z),
-                },
-                Channel {
-                    name: "samples.density".into(),
-                    data: self.density.clone(),
-                },
-            ],
-        }
-    }
 }
 
 /// The largest shift of a triangulation vertex along each axis, in pixels (2⁻²⁰).

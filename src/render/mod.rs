@@ -1,11 +1,12 @@
 //! scene + BVH → per-pixel estimates (radiance, AOVs, analytic gradients) by
-//! path tracing; `adaptive` evaluates the same estimator at quadtree samples.
+//! path tracing; `point` evaluates the same estimator at arbitrary image points
+//! (the pipeline's adaptive renders ask it for their samples).
 
-pub mod adaptive;
 pub mod gradients;
 pub mod interaction;
 pub mod lights;
 pub mod path;
+pub mod point;
 
 use crate::accel::Accel;
 use crate::math::sampler::PixelSampler;
@@ -49,6 +50,14 @@ pub struct RenderOptions {
     /// steers placement and interpolation and needs far fewer samples than a
     /// converged radiance, so this bounds its cost (default: all of them, up to 16).
     pub gradient_spp: Option<u32>,
+}
+
+impl RenderOptions {
+    /// The image size this render will have: the override, else the camera's.
+    pub fn resolution_of(&self, scene: &Scene) -> (u32, u32) {
+        self.resolution
+            .unwrap_or((scene.camera.width, scene.camera.height))
+    }
 }
 
 /// What a render produced: row-major planes, top row first.
@@ -135,7 +144,8 @@ pub struct RenderStats {
     pub rays: u64,
 }
 
-/// Progress callback: called with (tiles done, tiles total) from worker threads.
+/// Progress callback: called with (pixels done, pixels total) from worker threads
+/// (full renders), or (samples evaluated, samples in the budget) (adaptive renders).
 pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
 /// Side length of the square tiles that rayon distributes.
@@ -258,6 +268,10 @@ pub fn render(
     let tiles_y = h.div_ceil(TILE);
     let total = tiles_x * tiles_y;
     let done = AtomicUsize::new(0);
+    // Tiles are rendered in a scrambled order so that the pixels done so far are a
+    // fair sample of the image's cost (in index order the cheap sky rows come first
+    // and the ETA is 2–3× optimistic). The image does not depend on the order.
+    let order = scrambled_order(total);
     let render_tile = |tile: usize| -> TileResult {
         let (tx, ty) = (tile % tiles_x, tile / tiles_x);
         let x0 = tx * TILE;
@@ -277,11 +291,11 @@ pub fn render(
                 res.store(x - x0, y - y0, &acc, spp);
             }
         }
-        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-        progress(n, total);
+        let n = done.fetch_add((x1 - x0) * (y1 - y0), Ordering::Relaxed) + (x1 - x0) * (y1 - y0);
+        progress(n, w * h);
         res
     };
-    let tiles: Vec<TileResult> = (0..total).into_par_iter().map(render_tile).collect();
+    let tiles: Vec<TileResult> = order.into_par_iter().map(render_tile).collect();
 
     let mut out = RenderOutput {
         width: w,
@@ -306,6 +320,13 @@ pub fn render(
         rays,
     };
     Ok(out)
+}
+
+/// The indices `0..n` in a fixed pseudo-random order (sorted by a hash).
+fn scrambled_order(n: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&i| crate::math::sampler::hash2(i as u32, 0x7469_6c65));
+    order
 }
 
 /// One camera sample of pixel `pixel` (linear index): jittered position inside

@@ -4,6 +4,7 @@
 
 pub mod bump;
 pub mod camera;
+mod describe;
 pub mod environment;
 mod geometry;
 mod locate;
@@ -55,6 +56,18 @@ pub enum Integrator {
     /// Direct lighting only (one bounce of emitted light, with MIS); later stages
     /// analyse exactly this quantity.
     Direct,
+}
+
+impl Integrator {
+    pub const ALL: [Integrator; 2] = [Integrator::Path, Integrator::Direct];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Path => "path",
+            Integrator::Direct => "direct",
+        }
+    }
 }
 
 /// The `[render]` table: defaults that command-line options may override.

@@ -10,11 +10,11 @@
 //! against linear interpolation, at the reference's samples per point and also scored
 //! on the largest surface away from silhouettes (the ground plane of Fig. 13).
 
+use super::adaptive::{render_adaptive, AdaptiveRender};
 use crate::accel::Accel;
 use crate::adaptive::{Settings, Strategy};
 use crate::output::report::{self, ReportInput, ReportRow, Run, RunKind};
 use crate::reconstruct::Interpolation;
-use crate::render::adaptive::{render_adaptive, AdaptiveRender};
 use crate::render::{render, RenderOptions, RenderOutput};
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -58,6 +58,24 @@ impl CompareOptions {
             out_dir,
         }
     }
+}
+
+/// `gradtrace compare`: loads the scene, runs [`compare`] with one progress line
+/// per step, and returns the report's rows.
+pub fn run(
+    scene_path: &Path,
+    threads: Option<u32>,
+    opts: &CompareOptions,
+    mode: super::progress::ProgressMode,
+) -> Result<Vec<ReportRow>> {
+    let (scene, accel) = super::load(scene_path)?;
+    let steps = 3 + opts.strategies.len() * opts.budgets.len() + 2 + opts.budgets.len();
+    let phase = super::progress::Phase::new(mode, "compare", steps as u64, "steps");
+    let progress = |msg: &str| {
+        phase.inc(1);
+        phase.message(msg);
+    };
+    super::with_threads(threads, || compare(&scene, &accel, opts, &progress))?
 }
 
 /// Runs the comparison and writes the report; returns its table rows.
@@ -363,7 +381,7 @@ fn cached_reference(
         path: dir.to_path_buf(),
         source,
     })?;
-    crate::output::write_exr(&exr, &crate::output::image_from_render(&out))?;
+    crate::output::write_exr(&exr, &super::output_set::image_of_render(&out))?;
     crate::output::write_atomic(&meta, |f| {
         use std::io::Write;
         writeln!(f, "{secs}").map_err(|e| e.to_string())

@@ -1,26 +1,57 @@
-//! scene + BVH + strategy + budget → adaptively sampled, reconstructed image.
-//!
-//! The renderer as an [`adaptive::Estimator`]: each quadtree sample is a converged
-//! estimate at one image point (radiance, analytic gradient, object id, depth and
-//! the extra scalars the Durand and gradient+visibility strategies need), and the
-//! reconstruction fills the pixels in between.
+//! scene + BVH + image point → a converged estimate there: radiance, analytic
+//! gradient, and the surface seen at the point (object, planar depth and its
+//! tangent plane, facet normal, the Durand metric). The pipeline turns it into the
+//! quadtree's samples; `render` does not know who asks.
 
 use super::gradients::geometry::base_curvature;
 use super::gradients::magnitude;
 use super::interaction::{interaction, Interaction};
 use super::path::PathTracer;
-use super::{camera_sample_at, RenderOptions, Setup};
+use super::{camera_sample_at, Setup};
 use crate::accel::{Accel, PrimRef};
-use crate::adaptive::{self, Estimator, SampleSet, SampleValue, Settings, NO_OBJECT};
 use crate::brdf::Material;
 use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
-use crate::reconstruct::{self, Interpolation, Reconstruction};
 use crate::scene::{Camera, Scene};
-use std::time::Instant;
+
+/// One estimate at an image point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointEstimate {
+    /// Mean radiance of all `spp` camera samples.
+    pub radiance: Vec3,
+    /// Mean ∂I/∂u, ∂I/∂v of the first `gradient_spp` samples (pixel units).
+    pub grad_u: Vec3,
+    pub grad_v: Vec3,
+    /// Mean magnitude of their visibility (soft-shadow) term.
+    pub vis_gradient: f32,
+    /// Variance of the mean gradient (summed over components), from the samples'
+    /// spread; `None` with a single gradient sample.
+    pub gradient_variance: Option<f32>,
+    /// The surface exactly at the point; `None` for the background.
+    pub surface: Option<SurfaceAt>,
+    /// The first camera sample's path ended on the far side of a bump map's
+    /// terminator (black), on the same object as `surface`.
+    pub back_facing: bool,
+}
+
+/// The surface seen exactly at an estimate's position (the camera samples are
+/// jittered over a pixel around it): what the boundary tests and the Durand metric
+/// read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceAt {
+    pub object_id: u32,
+    /// Planar depth along the view axis (its inverse is affine across a plane).
+    pub depth: f32,
+    /// ∇(1/depth) in pixel units: the tangent plane.
+    pub inv_depth_grad: Vec2,
+    /// The geometric normal where the surface is flat shaded (a crease can show).
+    pub facet_normal: Option<Vec3>,
+    /// The Durand et al. 2005 bandwidth metric (Sec. 9.1).
+    pub durand: f32,
+}
 
 /// The path tracer evaluated at arbitrary image points.
-pub struct RenderEstimator<'a> {
+pub struct PointEstimator<'a> {
     pub tracer: PathTracer<'a>,
     pub camera: &'a Camera,
     /// Camera samples averaged per estimate.
@@ -30,8 +61,26 @@ pub struct RenderEstimator<'a> {
     pub seed: u32,
 }
 
-impl Estimator for RenderEstimator<'_> {
-    fn estimate(&self, p: Vec2) -> SampleValue {
+impl<'a> PointEstimator<'a> {
+    /// The estimator of a render setup: `spp` camera samples per estimate, the first
+    /// `gradient_spp` of them (clamped to 1..=spp) carrying the gradient.
+    pub(crate) fn new(
+        setup: &'a Setup,
+        scene: &'a Scene,
+        accel: &'a Accel,
+        gradient_spp: u32,
+    ) -> Self {
+        Self {
+            tracer: setup.tracer(scene, accel),
+            camera: &setup.camera,
+            spp: setup.spp,
+            gradient_spp: gradient_spp.clamp(1, setup.spp),
+            seed: setup.seed,
+        }
+    }
+
+    /// The estimate at image point `p` (continuous pixel coordinates).
+    pub fn estimate(&self, p: Vec2) -> PointEstimate {
         // Random numbers are addressed by the sample position, so the estimate is
         // the same whatever order or thread evaluates it.
         let key = hash2(p.x.to_bits(), p.y.to_bits());
@@ -63,44 +112,29 @@ impl Estimator for RenderEstimator<'_> {
         }
         let n = self.spp as f32;
         let ng = self.gradient_spp as f32;
-        let mut v = SampleValue::new(radiance / n, gu / ng, gv / ng);
-        v.vis_gradient = Some(vis / ng);
+        let (grad_u, grad_v) = (gu / ng, gv / ng);
         // Variance of the mean gradient from the per-sample spread (summed over
         // components): (E|g|² − |E g|²) / (n − 1) with the unbiased n/(n − 1) factor.
-        if self.gradient_spp > 1 {
-            let mean_sq = v.grad_u.length_squared() + v.grad_v.length_squared();
-            v.gradient_variance = Some(((sq / ng - mean_sq) / (ng - 1.0)).max(0.0));
-        }
-        v.object_id = NO_OBJECT;
-        v.depth = f32::INFINITY;
-        v.durand = Some(0.0);
-        if let Some(c) = self.centre_hit(p) {
-            v.object_id = c.object_id;
-            v.depth = c.depth;
-            v.inv_depth_grad = c.inv_depth_grad;
-            v.facet_normal = c.facet_normal;
-            v.durand = Some(c.durand);
-            v.back_facing = first
+        let gradient_variance = (self.gradient_spp > 1).then(|| {
+            let mean_sq = grad_u.length_squared() + grad_v.length_squared();
+            ((sq / ng - mean_sq) / (ng - 1.0)).max(0.0)
+        });
+        let surface = self.surface_at(p);
+        let back_facing = surface.is_some_and(|c| {
+            first
                 .and_then(|r| r.first_hit)
-                .is_some_and(|fh| fh.back_facing && fh.object_id == c.object_id);
+                .is_some_and(|fh| fh.back_facing && fh.object_id == c.object_id)
+        });
+        PointEstimate {
+            radiance: radiance / n,
+            grad_u,
+            grad_v,
+            vis_gradient: vis / ng,
+            gradient_variance,
+            surface,
+            back_facing,
         }
-        v
     }
-}
-
-/// The surface seen exactly at a sample's position (the camera samples are jittered
-/// over a pixel around it): what the boundary tests and the Durand metric read. The
-/// terminator side (`back_facing`) is the first camera sample's instead, as it says
-/// whether that sample's path ended black (and only where it hit the same object).
-struct CentreHit {
-    object_id: u32,
-    depth: f32,
-    inv_depth_grad: Vec2,
-    facet_normal: Option<Vec3>,
-    durand: f32,
-}
-
-impl RenderEstimator<'_> {
     /// Object id, planar depth, tangent plane and (where flat-shaded) facet normal of
     /// the first hit of the ray through `p`, and the Durand metric there; `None` for
     /// the background.
@@ -111,7 +145,7 @@ impl RenderEstimator<'_> {
     /// `1/z` is affine in the image and `∇(1/z) = (n·∂D/∂u, n·∂D/∂v) / n·(x − o)`
     /// with `n·(x − o) = t n·d`. (The distance `t` along the unit ray has no affine
     /// inverse: `1/t` carries a factor `1/|D|`.)
-    fn centre_hit(&self, p: Vec2) -> Option<CentreHit> {
+    pub fn surface_at(&self, p: Vec2) -> Option<SurfaceAt> {
         let scene = self.tracer.scene;
         let ray = self.camera.generate_ray(p);
         let hit = self.tracer.accel.intersect(&ray)?;
@@ -119,7 +153,7 @@ impl RenderEstimator<'_> {
         let d = ray.dir;
         let [du, dv] = self.camera.direction_derivatives();
         let g = Vec2::new(si.ng.dot(du), si.ng.dot(dv)) / (hit.t * si.ng.dot(d));
-        Some(CentreHit {
+        Some(SurfaceAt {
             object_id: si.object_id,
             depth: hit.t * d.dot(self.camera.forward()),
             inv_depth_grad: if g.is_finite() { g } else { Vec2::ZERO },
@@ -164,72 +198,10 @@ fn flat_shaded(scene: &Scene, si: &Interaction) -> bool {
     }
 }
 
-/// Timings of one adaptive render, in seconds.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct AdaptiveStats {
-    pub wall_s: f64,
-    /// The quadtree's own work, excluding the estimate batches it asked for (idle
-    /// threads at a batch's end count as estimating, as a full render's last tile does).
-    pub quadtree_s: f64,
-    pub reconstruct_s: f64,
-    /// Wall time of the estimate batches (the rendering itself).
-    pub estimate_s: f64,
-}
-
-/// What an adaptive render produced.
-pub struct AdaptiveRender {
-    pub reconstruction: Reconstruction,
-    pub samples: SampleSet,
-    pub stats: AdaptiveStats,
-}
-
-/// Renders with `settings.strategy` at `settings.budget` samples per pixel, each a
-/// `spp`-sample estimate with analytic gradients, then reconstructs every pixel.
-pub fn render_adaptive(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    settings: &Settings,
-    interpolation: Interpolation,
-    progress: super::Progress,
-) -> crate::Result<AdaptiveRender> {
-    let start = Instant::now();
-    // Gradients are what the strategies and the C1 reconstruction feed on. Many
-    // short lines (16 camera samples × 4 shadow rays) give a less noisy gradient
-    // than few long ones for the same rays.
-    let opts = RenderOptions {
-        gradients: true,
-        vis_samples: opts.vis_samples.or(Some(4)),
-        ..opts.clone()
-    };
-    let setup = Setup::new(scene, &opts)?;
-    let est = RenderEstimator {
-        tracer: setup.tracer(scene, accel),
-        camera: &setup.camera,
-        spp: setup.spp,
-        gradient_spp: opts.gradient_spp.unwrap_or(16).clamp(1, setup.spp),
-        seed: setup.seed,
-    };
-    let (w, h) = (setup.camera.width, setup.camera.height);
-    let (samples, refine) = adaptive::refine_with_stats(&est, w, h, settings, progress)?;
-    let t = Instant::now();
-    let reconstruction = reconstruct::reconstruct(&samples, interpolation)?;
-    let reconstruct_s = t.elapsed().as_secs_f64();
-    Ok(AdaptiveRender {
-        reconstruction,
-        samples,
-        stats: AdaptiveStats {
-            wall_s: start.elapsed().as_secs_f64(),
-            quadtree_s: refine.quadtree_s,
-            reconstruct_s,
-            estimate_s: refine.evaluate_s,
-        },
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::RenderOptions;
     use std::path::Path;
 
     /// Only the first `gradient_spp` camera samples carry the gradient: with the same
@@ -246,7 +218,7 @@ mod tests {
             ..Default::default()
         };
         let setup = Setup::new(&scene, &opts).unwrap();
-        let est = |spp: u32, gradient_spp: u32| RenderEstimator {
+        let est = |spp: u32, gradient_spp: u32| PointEstimator {
             tracer: setup.tracer(&scene, &accel),
             camera: &setup.camera,
             spp,
@@ -274,7 +246,7 @@ mod tests {
     fn with_estimator<R>(
         path: &str,
         resolution: (u32, u32),
-        f: impl FnOnce(&Scene, &Setup, RenderEstimator) -> R,
+        f: impl FnOnce(&Scene, &Setup, PointEstimator) -> R,
     ) -> R {
         let scene = crate::scene::load(Path::new(path)).unwrap();
         let accel = Accel::build(&scene.meshes, &scene.spheres);
@@ -283,7 +255,7 @@ mod tests {
             ..Default::default()
         };
         let setup = Setup::new(&scene, &opts).unwrap();
-        let est = RenderEstimator {
+        let est = PointEstimator {
             tracer: setup.tracer(&scene, &accel),
             camera: &setup.camera,
             spp: 1,
@@ -291,59 +263,6 @@ mod tests {
             seed: 1,
         };
         f(&scene, &setup, est)
-    }
-
-    /// A plane seen at a 90° field of view is one surface for the step test, at the
-    /// sample spacings of coarse budgets (16 and 32 px): the planar depth's inverse is
-    /// affine in the image. (With the distance along the unit ray, whose inverse is
-    /// not, 2–3% misses read as steps across the ground.)
-    #[test]
-    fn a_plane_at_a_wide_field_of_view_is_one_surface() {
-        with_estimator(
-            "scenes/three_spheres_env.toml",
-            (480, 320),
-            |scene, setup, est| {
-                let c = &setup.camera;
-                let wide = crate::scene::Camera::new(c.from, c.to, c.up, 90.0, 480, 320).unwrap();
-                let est = RenderEstimator {
-                    camera: &wide,
-                    ..est
-                };
-                let ground = scene
-                    .object_names
-                    .iter()
-                    .position(|n| n == "ground")
-                    .unwrap() as u32
-                    + 1;
-                let tol = crate::adaptive::Settings::new(crate::adaptive::Strategy::Gradient, 0.1)
-                    .depth_tolerance;
-                let on_ground = |p: Vec2| {
-                    let c = est.centre_hit(p)?;
-                    let mut v = SampleValue::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
-                    (v.object_id, v.depth, v.inv_depth_grad) =
-                        (c.object_id, c.depth, c.inv_depth_grad);
-                    (c.object_id == ground).then(|| v.surface_point(p))
-                };
-                let (mut pairs, mut split) = (0, 0);
-                for j in 0..80 {
-                    for i in 0..120 {
-                        let p = Vec2::new(2.0 + 4.0 * i as f32, 2.0 + 4.0 * j as f32);
-                        let Some(a) = on_ground(p) else { continue };
-                        for s in [16.0, 32.0] {
-                            for step in [Vec2::new(s, 0.0), Vec2::new(0.0, s), Vec2::splat(s)] {
-                                if let Some(b) = on_ground(p + step) {
-                                    pairs += 1;
-                                    split += crate::adaptive::surfaces_differ(&a, &b, tol) as u32;
-                                }
-                            }
-                        }
-                    }
-                }
-                println!("ground at 90°: {split} of {pairs} pairs 16–32 px apart read as a step");
-                assert!(pairs > 10_000);
-                assert_eq!(split, 0);
-            },
-        );
     }
 
     /// The tangent plane the estimator reports, ∇(1/depth), against central
@@ -357,9 +276,9 @@ mod tests {
             for j in 0..16 {
                 for i in 0..24 {
                     let p = Vec2::new(5.13 + 10.0 * i as f32, 5.37 + 10.0 * j as f32);
-                    let Some(c) = est.centre_hit(p) else { continue };
+                    let Some(c) = est.surface_at(p) else { continue };
                     let side = |e: Vec2| {
-                        let (a, b) = (est.centre_hit(p + e * h)?, est.centre_hit(p - e * h)?);
+                        let (a, b) = (est.surface_at(p + e * h)?, est.surface_at(p - e * h)?);
                         (a.object_id == c.object_id && b.object_id == c.object_id)
                             .then(|| (1.0 / a.depth - 1.0 / b.depth) / (2.0 * h))
                     };
@@ -402,7 +321,7 @@ mod tests {
                 for j in 0..64 {
                     for i in 0..64 {
                         let p = Vec2::new(0.5 + i as f32, 0.5 + j as f32);
-                        if let Some(c) = est.centre_hit(p) {
+                        if let Some(c) = est.surface_at(p) {
                             let ray = setup.camera.generate_ray(p);
                             let sphere = matches!(
                                 est.tracer.accel.intersect(&ray).map(|h| h.prim),
@@ -431,7 +350,8 @@ mod tests {
             for n in box_hits.iter().filter(|h| h.0 == id).filter_map(|h| h.1) {
                 if normals
                     .iter()
-                    .all(|m| m.dot(n) < crate::adaptive::CREASE_COS)
+                    // A cube's facets are 90° apart.
+                    .all(|m| m.dot(n) < 0.5)
                 {
                     normals.push(n);
                 }

@@ -1,0 +1,145 @@
+//! `gradtrace render`: scene file → BVH → full or adaptive render → EXR + PNG.
+
+use super::adaptive::render_adaptive;
+use super::output_set::{image_of_reconstruction, image_of_render, output_paths, write_output_set};
+use super::progress::{Phase, ProgressMode};
+use super::{load, with_threads};
+use crate::adaptive::Settings;
+use crate::reconstruct::Interpolation;
+use crate::render::{self, RenderOptions};
+use crate::Result;
+use std::fmt;
+use std::path::PathBuf;
+
+/// One `render` run as the command line describes it.
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    pub scene: PathBuf,
+    /// The EXR path; the PNG shares its stem (default `out/<scene-stem>.exr`).
+    pub out: Option<PathBuf>,
+    pub options: RenderOptions,
+    /// Adaptive sampling: where the samples go and how pixels are rebuilt.
+    pub adaptive: Option<(Settings, Interpolation)>,
+    /// Worker threads (default: all cores); never changes the image.
+    pub threads: Option<u32>,
+    pub progress: ProgressMode,
+}
+
+/// What a run did, for the one summary line.
+#[derive(Clone, Debug)]
+pub struct RenderSummary {
+    pub width: usize,
+    pub height: usize,
+    pub exr: PathBuf,
+    pub png: PathBuf,
+    pub kind: SummaryKind,
+}
+
+#[derive(Clone, Debug)]
+pub enum SummaryKind {
+    Full {
+        spp: u32,
+        seconds: f64,
+        rays: u64,
+    },
+    Adaptive {
+        settings: Settings,
+        samples: usize,
+        seconds: f64,
+        quadtree_s: f64,
+        reconstruct_s: f64,
+    },
+}
+
+impl fmt::Display for RenderSummary {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{}x{}, ", self.width, self.height)?;
+        match &self.kind {
+            SummaryKind::Full { spp, seconds, rays } => {
+                let rate = if *seconds > 0.0 {
+                    format!("{:.2} Mrays/s", *rays as f64 / seconds / 1e6)
+                } else {
+                    "- Mrays/s".into()
+                };
+                write!(f, "{spp} spp, {seconds:.3} s, {rate}")?;
+            }
+            SummaryKind::Adaptive {
+                settings,
+                samples,
+                seconds,
+                quadtree_s,
+                reconstruct_s,
+            } => write!(
+                f,
+                "{} at budget {}: {samples} samples, {seconds:.3} s (quadtree {quadtree_s:.3} s, reconstruction {reconstruct_s:.3} s)",
+                settings.strategy.name(),
+                settings.budget
+            )?,
+        }
+        write!(
+            f,
+            ", wrote {} and {}",
+            self.exr.display(),
+            self.png.display()
+        )
+    }
+}
+
+/// Renders `job.scene` and writes the EXR + PNG set. The output paths are settled
+/// before any work, so a bad `--out` costs nothing.
+pub fn run(job: &RenderJob) -> Result<RenderSummary> {
+    let stem = job
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let (exr, png) = output_paths(job.out.as_deref(), &stem)?;
+    let (scene, accel) = load(&job.scene)?;
+    with_threads(job.threads, || match &job.adaptive {
+        None => {
+            let (w, h) = job.options.resolution_of(&scene);
+            let phase = Phase::new(job.progress, "render", w as u64 * h as u64, "pixels");
+            let out = render::render(&scene, &accel, &job.options, &phase.callback())?;
+            drop(phase);
+            write_output_set(&image_of_render(&out), &out.beauty, &exr, &png)?;
+            Ok(RenderSummary {
+                width: out.width,
+                height: out.height,
+                exr,
+                png,
+                kind: SummaryKind::Full {
+                    spp: out.spp,
+                    seconds: out.stats.wall_time.as_secs_f64(),
+                    rays: out.stats.rays,
+                },
+            })
+        }
+        Some((settings, interpolation)) => {
+            let phase = Phase::new(job.progress, settings.strategy.name(), 0, "samples");
+            let out = render_adaptive(
+                &scene,
+                &accel,
+                &job.options,
+                settings,
+                *interpolation,
+                &phase.callback(),
+            )?;
+            drop(phase);
+            let rec = &out.reconstruction;
+            write_output_set(&image_of_reconstruction(rec), &rec.image, &exr, &png)?;
+            Ok(RenderSummary {
+                width: rec.width,
+                height: rec.height,
+                exr,
+                png,
+                kind: SummaryKind::Adaptive {
+                    settings: *settings,
+                    samples: out.samples.samples.len(),
+                    seconds: out.stats.wall_s,
+                    quadtree_s: out.stats.quadtree_s,
+                    reconstruct_s: out.stats.reconstruct_s,
+                },
+            })
+        }
+    })?
+}
