@@ -7,11 +7,12 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use gradtrace::adaptive::{Settings, Strategy};
 use gradtrace::error::{error_line, one_line};
-use gradtrace::pipeline::{self, compare::CompareOptions, progress::ProgressMode};
+use gradtrace::pipeline::compare::{self, CompareOptions};
+use gradtrace::pipeline::{self, progress::ProgressMode};
 use gradtrace::reconstruct::Interpolation;
 use gradtrace::render::RenderOptions;
 use gradtrace::scene::Integrator;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser, Debug)]
@@ -50,7 +51,8 @@ struct CompareArgs {
         long,
         value_name = "LIST",
         value_delimiter = ',',
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        value_parser = budget
     )]
     budgets: Vec<f32>,
     /// Samples per pixel of the reference (cached in the output folder) [default: 8 × spp].
@@ -64,7 +66,17 @@ struct CompareArgs {
     /// gradient; the rest only refine its radiance [default: min(spp, 16)].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     gradient_spp: Option<u32>,
-    /// Output folder [default: out/<scene-stem>].
+    /// Repeat every run with this many independent seeds; the report gives means
+    /// and 95% intervals (use 4 or more for conclusions) [default: 1].
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    seeds: u32,
+    /// Keep every run's image as an EXR under <out>/runs/.
+    #[arg(long)]
+    keep_exr: bool,
+    /// Show the images of every budget in the report (default: the headline budget's).
+    #[arg(long)]
+    all_images: bool,
+    /// Output folder [default: out/ and the scene's path, e.g. out/validation-cornell].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     #[command(flatten)]
@@ -77,7 +89,7 @@ struct RenderArgs {
     scene: PathBuf,
     /// Longest path in segments from the camera; 1 = only directly visible
     /// emitters [default: the scene's `[render] max_depth`].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     max_depth: Option<u32>,
     /// Output EXR path; the PNG is written next to it with the same stem
     /// [default: out/<scene-stem>.exr].
@@ -107,7 +119,7 @@ struct RenderArgs {
     vis_refine: Option<u32>,
     /// With --gradients: treat a near light as distant (no SV term) where
     /// 2|n_x|·d exceeds F, the far-light criterion of the first-order paper, Sec. 5.2.
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", value_parser = positive)]
     far_light: Option<f32>,
     /// With --strategy: how many of each sample's --spp camera samples carry the
     /// analytic gradient; the rest only refine its radiance [default: min(spp, 16)].
@@ -123,7 +135,8 @@ struct RenderArgs {
         long,
         value_name = "F",
         requires = "strategy",
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        value_parser = budget
     )]
     budget: Option<f32>,
     /// With --strategy: how every pixel is rebuilt from the samples [default: gradient].
@@ -153,6 +166,10 @@ struct CommonArgs {
     /// Worker threads; never changes an image [default: all cores].
     #[arg(long, value_name = "T", value_parser = clap::value_parser!(u32).range(1..))]
     threads: Option<u32>,
+    /// Refuse a run estimated to need more memory than this many GiB
+    /// [default: 90% of the memory available].
+    #[arg(long, value_name = "GIB", value_parser = positive)]
+    max_memory: Option<f32>,
     /// No progress output and no summary.
     #[arg(long, short)]
     quiet: bool,
@@ -162,6 +179,24 @@ struct CommonArgs {
 struct InfoArgs {
     /// Scene file (TOML).
     scene: PathBuf,
+}
+
+/// A finite number > 0 (NaN, infinities and negatives are refused by name).
+fn positive(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a finite number > 0, got {s:?}")),
+    }
+}
+
+/// A budget: samples per pixel in (0, 16], e.g. 0.17 for 17% of the pixels.
+fn budget(s: &str) -> Result<f32, String> {
+    match positive(s) {
+        Ok(v) if v <= 16.0 => Ok(v),
+        _ => Err(format!(
+            "expected samples per pixel in (0, 16], e.g. 0.17, got {s:?}"
+        )),
+    }
 }
 
 /// A closed set of the library's (`Strategy`, `Interpolation`, `Integrator`) as a
@@ -243,7 +278,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Info(args) => print!("{}", pipeline::info(&args.scene)?),
         Command::Compare(args) => {
-            let dir = args.out.clone().unwrap_or_else(|| default_dir(&args.scene));
+            let dir = args
+                .out
+                .clone()
+                .unwrap_or_else(|| compare::default_dir(&args.scene));
             let opts = args.options(dir.clone());
             let mode = ProgressMode::detect(args.common.quiet);
             let rows = pipeline::compare::run(&args.scene, args.common.threads, &opts, mode)?;
@@ -254,14 +292,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// `out/<scene-stem>`: where a command writes when not told.
-fn default_dir(scene: &Path) -> PathBuf {
-    let stem = scene
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy());
-    Path::new("out").join(stem.as_ref())
 }
 
 impl RenderArgs {
@@ -288,6 +318,9 @@ impl RenderArgs {
             },
             adaptive,
             threads: c.threads,
+            max_memory: c
+                .max_memory
+                .map(|g| (f64::from(g) * (1u64 << 30) as f64) as u64),
             progress: ProgressMode::detect(c.quiet),
             out: self.out,
             scene: self.scene,
@@ -313,6 +346,10 @@ impl CompareArgs {
         }
         opts.gradient_spp = self.gradient_spp;
         opts.seed = c.seed;
+        opts.seeds = self.seeds;
+        opts.keep_exr = self.keep_exr;
+        opts.all_images = self.all_images;
+        opts.command = std::env::args().collect::<Vec<_>>().join(" ");
         opts
     }
 }

@@ -131,8 +131,9 @@ fn cli_writes_sample_layers() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `compare` end to end on a tiny image: the reference is cached, every
-/// strategy × budget run, the equal-time and 1%-grid runs, and the report files.
+/// `compare` end to end on a tiny image: the reference is cached under its content
+/// key, every strategy × budget runs, the baselines and 1%-grid runs, the report
+/// files; a second run reuses the reference.
 #[test]
 fn compare_writes_the_report_and_caches_the_reference() {
     use gradtrace::pipeline::compare::{compare, CompareOptions};
@@ -147,22 +148,23 @@ fn compare_writes_the_report_and_caches_the_reference() {
     opts.resolution = Some((96, 72));
     opts.vis_samples = Some(4);
     let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
-    // full + 2×2 adaptive + 2 equal-time + 2 interpolation runs.
+    // full + 2×2 adaptive + 2 baselines + 2 interpolation runs.
     assert_eq!(rows.len(), 1 + 4 + 2 + 2);
     assert!(rows
         .iter()
-        .all(|r| r.rmse.is_finite() && r.flip.is_finite()));
+        .all(|r| r.rmse.is_finite() && r.flip.is_finite() && r.relmse_trimmed <= r.relmse));
     for f in ["report.html", "report.json", "report.md"] {
         assert!(dir.join(f).exists(), "{f}");
     }
-    let cached = std::fs::read_dir(&dir)
+    let json = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+    };
+    assert_eq!(json()["reference"]["reused"], false);
+    let key = json()["reference"]["cache_key"]
+        .as_str()
         .unwrap()
-        .filter_map(|e| e.ok())
-        .any(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            name.starts_with("reference-8spp-96x72-seed") && name.ends_with(".exr")
-        });
-    assert!(cached, "cached reference");
+        .to_string();
+    assert!(dir.join(format!("reference-{}.exr", &key[..16])).exists());
     // Sec. 8 is also scored on the ground plane, away from the silhouettes.
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(
@@ -172,15 +174,93 @@ fn compare_writes_the_report_and_caches_the_reference() {
     // A second run reuses the cached reference (same rows for the same seeds).
     let again = compare(&scene, &accel, &opts, &|_| {}).unwrap();
     assert_eq!(rows[1].rmse, again[1].rmse);
+    assert_eq!(json()["reference"]["reused"], true);
     // The reference has random numbers of its own: at the runs' own spp it is a
     // second, independent render, not a copy of the full render (RMSE 0).
     opts.reference_spp = Some(2);
     opts.strategies = vec![Strategy::Uniform];
     opts.budgets = vec![0.25];
     let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
-    assert_eq!(rows[0].label, "full");
+    assert_eq!(rows[0].name, "full");
     assert!(rows[0].rmse > 1e-3, "full vs reference: {}", rows[0].rmse);
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A changed scene is never scored against a stale reference: doubling the
+/// environment's radiance changes the cache key, so the reference is rendered
+/// anew and the full render's error stays that of noise, not of the edit.
+#[test]
+fn an_edited_scene_is_never_scored_against_a_stale_reference() {
+    use gradtrace::pipeline::compare::{compare, CompareOptions};
+    let dir = std::env::temp_dir().join(format!("gradtrace-stale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string("scenes/validation/env_constant.toml").unwrap();
+    // Its meshes, beside it as in the repository.
+    std::fs::create_dir_all(dir.join("models")).unwrap();
+    for e in std::fs::read_dir("scenes/validation/models").unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, dir.join("models").join(p.file_name().unwrap())).unwrap();
+    }
+    let scene_path = dir.join("scene.toml");
+    let mut opts = CompareOptions::new(dir.join("report"));
+    opts.strategies = vec![Strategy::Gradient];
+    opts.budgets = vec![0.25];
+    opts.spp = Some(2);
+    opts.reference_spp = Some(16);
+    opts.resolution = Some((48, 36));
+    let run = |text: &str| {
+        std::fs::write(&scene_path, text).unwrap();
+        let scene = gradtrace::scene::load(&scene_path).unwrap();
+        let accel = Accel::build(&scene.meshes, &scene.spheres);
+        let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("report/report.json")).unwrap())
+                .unwrap();
+        (rows[0].rmse, json["reference"]["reused"].as_bool().unwrap())
+    };
+    let (rmse0, reused0) = run(&text);
+    assert!(!reused0);
+    assert!(run(&text).1, "unchanged inputs reuse the reference");
+    // Double every radiance value of the environment table.
+    let edited = double_environment(&text);
+    assert_ne!(
+        edited, text,
+        "the scene has an [environment] radiance to edit"
+    );
+    let (rmse1, reused1) = run(&edited);
+    println!("full-render RMSE: original {rmse0:.3e}, edited {rmse1:.3e}");
+    assert!(!reused1, "an edited scene must re-render its reference");
+    // Against the stale reference the error would be that of the edit (the whole
+    // image's brightness); against the new one it is the noise of the same samples
+    // at twice the radiance: exactly twice the original's (rendering is linear in
+    // the emitted radiance).
+    assert!((rmse1 / rmse0 - 2.0).abs() < 1e-3, "{rmse1} vs {rmse0}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The scene text with the `[environment]` table's `radiance` doubled.
+fn double_environment(text: &str) -> String {
+    let mut in_env = false;
+    text.lines()
+        .map(|l| {
+            if l.trim_start().starts_with('[') {
+                in_env = l.trim() == "[environment]";
+            }
+            match (in_env, l.split_once('=')) {
+                (true, Some((k, v))) if k.trim() == "radiance" => {
+                    let nums: Vec<f32> = v
+                        .trim()
+                        .trim_matches(|c| c == '[' || c == ']')
+                        .split(',')
+                        .map(|x| x.trim().parse::<f32>().unwrap() * 2.0)
+                        .collect();
+                    format!("radiance = {nums:?}")
+                }
+                _ => l.to_string(),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// `vis_samples = 0` keeps the shading terms but samples lights by points and

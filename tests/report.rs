@@ -1,13 +1,16 @@
-//! Comparison report: metric known answers (RMSE, relMSE, FLIP), the colour map,
-//! base64, and `write_report`'s files (self-contained HTML, parseable JSON with the
-//! right rows, Markdown table, sample maps) and its all-or-nothing behaviour.
+//! Comparison report: metric known answers (RMSE, relMSE and its trimmed form,
+//! FLIP, the 95 % interval), the colour map, and `write_report`'s files (HTML with
+//! a headline and linked assets, `report.json` in its documented schema, one
+//! Markdown table per budget, sample maps) and its all-or-nothing behaviour.
 
 use gradtrace::math::{Vec2, Vec3};
 use gradtrace::output::colormap::viridis;
-use gradtrace::output::metrics::{flip, flip_exposure, relmse, rmse, tone_map_srgb8, RELMSE_EPS};
+use gradtrace::output::metrics::{
+    flip, flip_exposure, relmse, relmse_trimmed, rmse, tone_map_srgb8, RELMSE_EPS, TRIM_FRACTION,
+};
 use gradtrace::output::report::{
-    base64, compute_rows, equal_time_spp, markdown_table, write_report, ReportInput, Run, RunKind,
-    ASSET_DIR,
+    compute_rows, markdown_table, mean_ci95, write_report, ReferenceInfo, ReportInput, ReportRow,
+    Run, RunKind, ASSET_DIR,
 };
 use std::path::PathBuf;
 
@@ -212,26 +215,43 @@ fn viridis_endpoints_and_monotone_lightness() {
 }
 
 #[test]
-fn base64_matches_rfc4648_vectors() {
-    for (input, out) in [
-        ("", ""),
-        ("f", "Zg=="),
-        ("fo", "Zm8="),
-        ("foo", "Zm9v"),
-        ("foob", "Zm9vYg=="),
-        ("fooba", "Zm9vYmE="),
-        ("foobar", "Zm9vYmFy"),
-    ] {
-        assert_eq!(base64(input.as_bytes()), out);
-    }
-    assert_eq!(base64(&[0xfb, 0xff, 0xbf]), "+/+/");
+fn trimmed_relmse_drops_only_the_worst_pixels() {
+    let r = texture(100, 100);
+    let mut x = r.clone();
+    // One firefly among 10,000 pixels: 0.01 % of them.
+    x[4321] = Vec3::splat(500.0);
+    let full = relmse(&x, &r).unwrap();
+    let trimmed = relmse_trimmed(&x, &r, TRIM_FRACTION).unwrap();
+    println!("relMSE with one firefly {full:.3e}, trimmed {trimmed:.3e}");
+    assert!(full > 1.0, "the firefly dominates: {full}");
+    assert_eq!(trimmed, 0.0, "without it the images are equal");
+    // No trimming is plain relMSE; trimming never drops an ordinary pixel.
+    assert!((relmse_trimmed(&x, &r, 0.0).unwrap() - full).abs() <= 1e-6 * full);
+    let noisy = add_noise(&r, 0.05, 3);
+    let (a, b) = (
+        relmse(&noisy, &r).unwrap(),
+        relmse_trimmed(&noisy, &r, TRIM_FRACTION).unwrap(),
+    );
+    assert!(b < a && b > 0.99 * a, "{a} vs {b}");
+    assert!(relmse_trimmed(&x, &r, 1.0).is_err());
+}
+
+#[test]
+fn mean_ci95_matches_student_t() {
+    let (m, ci) = mean_ci95(&[1.0, 2.0, 3.0, 4.0]);
+    // s = sqrt(5/3), t(3 dof) = 3.182: 3.182 · s / 2.
+    assert_eq!(m, 2.5);
+    let expected = 3.182 * (5.0f64 / 3.0).sqrt() / 2.0;
+    assert!((ci.unwrap() - expected).abs() < 1e-9);
+    assert_eq!(mean_ci95(&[7.0]), (7.0, None));
 }
 
 const W: usize = 32;
 const H: usize = 24;
 
-/// A reference and six runs: two adaptive strategies at two budgets, one
-/// equal-time baseline and the Sec. 8 interpolation pair.
+/// A reference and runs: two adaptive strategies at two budgets, each with two
+/// seeds, a full render, the uniform baselines at each budget's time, and the
+/// Sec. 8 interpolation pair.
 fn sample_input() -> ReportInput {
     let reference = texture(W, H);
     let positions = |n: usize| -> Vec<Vec2> {
@@ -239,72 +259,81 @@ fn sample_input() -> ReportInput {
             .map(|k| Vec2::new((k * 7 % W) as f32 + 0.5, (k * 5 % H) as f32 + 0.5))
             .collect()
     };
-    let run = |label: &str, kind: RunKind, noise: f32, time: f64, samples: usize| Run {
-        label: label.into(),
+    let run = |name: &str, kind: RunKind, seed: u32, noise: f32, time: f64, samples: usize| Run {
+        name: name.into(),
         kind,
+        seed,
         samples,
         wall_time_s: time,
         overhead_s: time * 0.1,
-        image: add_noise(&reference, noise, samples as u64),
-        sample_positions: if matches!(kind, RunKind::EqualTime { .. }) {
+        image: add_noise(&reference, noise, samples as u64 + 97 * seed as u64),
+        sample_positions: if matches!(kind, RunKind::Baseline { .. } | RunKind::Full { .. }) {
             vec![]
         } else {
             positions(samples)
         },
     };
+    let mut runs = Vec::new();
+    for seed in 0..2 {
+        runs.push(run(
+            "full",
+            RunKind::Full { spp: 4 },
+            seed,
+            0.04,
+            2.0,
+            W * H * 4,
+        ));
+        for (budget, noise, time, n) in [(0.05, 0.08, 0.5, 38), (0.25, 0.03, 1.5, 192)] {
+            let b = RunKind::Adaptive { budget };
+            runs.push(run("gradient", b, seed, noise, time, n));
+            runs.push(run("uniform", b, seed, noise * 1.5, time * 0.8, n));
+            let spp = (4.0 * time / 2.0).round().max(1.0) as u32;
+            let kind = RunKind::Baseline { budget, spp };
+            runs.push(run(
+                "uniform-all-pixels",
+                kind,
+                seed,
+                noise * 1.2,
+                time,
+                W * H * spp as usize,
+            ));
+        }
+    }
+    let interp = RunKind::Interpolation { budget: 0.01 };
+    runs.push(run(
+        "1% grid, gradient interpolation",
+        interp,
+        0,
+        0.05,
+        0.2,
+        8,
+    ));
+    runs.push(run(
+        "1% grid, linear interpolation",
+        interp,
+        0,
+        0.09,
+        0.2,
+        8,
+    ));
     ReportInput {
         scene: "test <scene>".into(),
+        scene_hash: "ab".repeat(32),
+        command: "gradtrace compare test.toml".into(),
+        version: "0.1.0 (test)".into(),
+        threads: 2,
         width: W,
         height: H,
         reference: reference.clone(),
-        reference_time_s: 10.0,
-        reference_spp: 1024,
+        reference_info: ReferenceInfo {
+            spp: 1024,
+            time_s: 10.0,
+            cache_key: "cd".repeat(32),
+            reused: false,
+        },
         exposure: 0.0,
-        runs: vec![
-            run(
-                "gradient",
-                RunKind::Adaptive { budget: 0.05 },
-                0.08,
-                0.5,
-                38,
-            ),
-            run(
-                "gradient",
-                RunKind::Adaptive { budget: 0.25 },
-                0.03,
-                1.5,
-                192,
-            ),
-            run("uniform", RunKind::Adaptive { budget: 0.05 }, 0.12, 0.4, 38),
-            run(
-                "uniform",
-                RunKind::Adaptive { budget: 0.25 },
-                0.06,
-                1.2,
-                192,
-            ),
-            run(
-                "uniform-full",
-                RunKind::EqualTime { spp: 2 },
-                0.1,
-                0.6,
-                W * H * 2,
-            ),
-            run(
-                "gradient-interp",
-                RunKind::Interpolation { budget: 0.01 },
-                0.05,
-                0.2,
-                8,
-            ),
-            run(
-                "linear-interp",
-                RunKind::Interpolation { budget: 0.01 },
-                0.09,
-                0.2,
-                8,
-            ),
-        ],
+        runs,
+        all_images: false,
         notes: vec!["a note with <markup> & symbols".into()],
     }
 }
@@ -314,90 +343,152 @@ fn report_writes_three_files_and_assets() {
     let dir = temp_dir("full");
     let input = sample_input();
     let rows = write_report(&dir, &input).unwrap();
-    assert_eq!(rows.len(), input.runs.len());
-    for r in &rows {
-        println!(
-            "{:16} {:13} {:>6} RMSE {:.4} relMSE {:.4} FLIP {:.4} speed-up {:?}",
-            r.label,
-            r.kind,
-            r.budget.map_or(String::new(), |b| b.to_string()),
-            r.rmse,
-            r.relmse,
-            r.flip,
-            r.speedup_vs_reference
-        );
-    }
-    // Rows carry the metrics of the images.
-    for (row, run) in rows.iter().zip(&input.runs) {
-        assert_eq!(row.rmse, rmse(&run.image, &input.reference).unwrap());
-        assert_eq!(row.flip, flip(&run.image, &input.reference, W, H).unwrap());
-        assert_eq!(row.speedup_vs_reference, Some(10.0 / run.wall_time_s));
+    println!("{}", markdown_table(&rows));
+    // One row per (method, setting): 1 full + 2 budgets × 3 + 2 interpolation.
+    assert_eq!(rows.len(), 1 + 6 + 2);
+    // Rows carry the mean over the seeds of each run's figures, and its interval.
+    for row in &rows {
+        let members: Vec<&Run> = input
+            .runs
+            .iter()
+            .filter(|r| {
+                r.name == row.name && r.kind.name() == row.kind && {
+                    let b = match r.kind {
+                        RunKind::Adaptive { budget } | RunKind::Baseline { budget, .. } => {
+                            Some(budget)
+                        }
+                        _ => None,
+                    };
+                    b == row.equal_time_budget
+                }
+            })
+            .collect();
+        assert_eq!(members.len() as u32, row.seeds, "{}", row.name);
+        let rmses: Vec<f64> = members
+            .iter()
+            .map(|r| f64::from(rmse(&r.image, &input.reference).unwrap()))
+            .collect();
+        let (m, ci) = mean_ci95(&rmses);
+        assert!((f64::from(row.rmse) - m).abs() < 1e-7, "{}", row.name);
+        assert_eq!(row.rmse_ci95.is_some(), members.len() > 1);
+        if let Some(c) = ci {
+            assert!((f64::from(row.rmse_ci95.unwrap()) - c).abs() < 1e-7);
+        }
+        let flips: Vec<f64> = members
+            .iter()
+            .map(|r| f64::from(flip(&r.image, &input.reference, W, H).unwrap()))
+            .collect();
+        assert!((f64::from(row.flip) - mean_ci95(&flips).0).abs() < 1e-6);
     }
     assert_eq!(compute_rows(&input).unwrap(), rows);
 
-    // JSON parses and holds the same rows.
+    // report.json: the documented schema.
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
-    assert_eq!(json["scene"], "test <scene>");
-    assert_eq!(json["width"], W);
-    assert_eq!(json["reference_spp"], 1024);
-    let jrows = json["rows"].as_array().unwrap();
-    assert_eq!(jrows.len(), rows.len());
-    for (j, r) in jrows.iter().zip(&rows) {
-        assert_eq!(j["label"], r.label.as_str());
-        assert_eq!(j["kind"], r.kind.as_str());
-        assert_eq!(j["samples"], r.samples);
-        assert!((j["rmse"].as_f64().unwrap() - f64::from(r.rmse)).abs() < 1e-7);
-        assert!((j["flip"].as_f64().unwrap() - f64::from(r.flip)).abs() < 1e-7);
+    for key in [
+        "scene",
+        "scene_hash",
+        "command",
+        "version",
+        "threads",
+        "reference",
+        "runs",
+    ] {
+        assert!(!json[key].is_null(), "report.json lacks {key}");
     }
-    assert_eq!(jrows[4]["spp"], 2);
-    assert!(jrows[4]["budget"].is_null());
-    assert_eq!(jrows[0]["budget"].as_f64().unwrap() as f32, 0.05);
+    assert_eq!(json["scene"], "test <scene>");
+    assert_eq!(json["reference"]["spp"], 1024);
+    assert_eq!(json["reference"]["reused"], false);
+    assert_eq!(json["reference"]["cache_key"], "cd".repeat(32));
+    let jruns = json["runs"].as_array().unwrap();
+    assert_eq!(jruns.len(), rows.len());
+    for (j, r) in jruns.iter().zip(&rows) {
+        for key in [
+            "name",
+            "kind",
+            "budget",
+            "seeds",
+            "spp",
+            "wall_s",
+            "rmse",
+            "rmse_ci95",
+            "relmse",
+            "relmse_trimmed",
+            "flip",
+        ] {
+            assert!(j.get(key).is_some(), "run lacks {key}");
+        }
+        assert_eq!(j["name"], r.name.as_str());
+        assert!((j["rmse"].as_f64().unwrap() - f64::from(r.rmse)).abs() < 1e-7);
+    }
+    let baseline = jruns.iter().find(|j| j["kind"] == "baseline").unwrap();
+    assert!(baseline["budget"].is_null());
+    assert!(baseline["spp"].as_u64().unwrap() >= 1);
+    let adaptive = jruns.iter().find(|j| j["kind"] == "adaptive").unwrap();
+    assert!(adaptive["spp"].is_null());
+    assert_eq!(adaptive["seeds"], 2);
 
-    // Markdown: a header, a separator and one line per run.
-    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    let table: Vec<&str> = md.lines().filter(|l| l.starts_with('|')).collect();
-    assert_eq!(table.len(), 2 + rows.len(), "{md}");
-    assert!(
-        table[2].starts_with("| gradient | adaptive | 5% | 38 |"),
-        "{}",
-        table[2]
-    );
-    assert!(table[6].contains("| 2 spp |"), "{}", table[6]);
-
-    // HTML: self-contained, every image a data URI.
+    // The headline names the lowest equal-time RMSE at the budget nearest 17%.
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let head = json["headline"].as_str().unwrap();
+    println!("{head}");
+    let contenders: Vec<&ReportRow> = rows
+        .iter()
+        .filter(|r| r.equal_time_budget == Some(0.25) && r.name != "uniform")
+        .collect();
+    let best = contenders
+        .iter()
+        .min_by(|a, b| a.rmse.total_cmp(&b.rmse))
+        .unwrap();
+    assert!(
+        head.contains("budget 25%") && head.contains(&format!("{} has the lowest RMSE", best.name)),
+        "{head}"
+    );
+    assert!(html.contains("class=\"headline\""));
+
+    // Markdown: one table per budget, plus the full and interpolation tables.
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert_eq!(md.matches("| method |").count(), 4, "{md}");
+
+    // HTML: nothing external; images are the asset files, each written once.
     for bad in [
-        "http:", "https:", "src=\"/", "<link", "<script", "@import", "url(http",
+        "http:",
+        "https:",
+        "src=\"/",
+        "<link",
+        "<script",
+        "@import",
+        "url(http",
+        "data:image",
     ] {
         assert!(!html.contains(bad), "HTML contains {bad:?}");
     }
-    let srcs: Vec<&str> = html.split("src=\"").skip(1).collect();
-    assert!(srcs.iter().all(|s| s.starts_with("data:image/png;base64,")));
-    let with_samples = input
-        .runs
-        .iter()
-        .filter(|r| !r.sample_positions.is_empty())
-        .count();
-    let expected_images = 1 + 2 * input.runs.len() + with_samples;
-    println!("HTML {} bytes, {} embedded images", html.len(), srcs.len());
-    assert_eq!(srcs.len(), expected_images);
-    assert_eq!(html.matches("<svg").count(), 3, "two plots and the legend");
-    assert!(html.contains("Equal-time baselines"));
-    assert!(html.contains("Gradient vs linear interpolation (Sec. 8)"));
+    let srcs: Vec<&str> = html
+        .split("src=\"")
+        .skip(1)
+        .map(|s| &s[..s.find('"').unwrap()])
+        .collect();
+    assert!(srcs.iter().all(|s| s.starts_with(ASSET_DIR)));
+    for src in &srcs {
+        assert!(dir.join(src).exists(), "{src}");
+    }
+    // Images of the first seed at the headline budget (25%, the nearest to 17%),
+    // of the full render and of the interpolation runs: 3 + 1 + 2 cards.
+    let cards = 3 + 1 + 2;
+    let with_samples = 2 + 2;
+    assert_eq!(srcs.len(), 1 + 2 * cards + with_samples);
+    assert_eq!(
+        html.matches("<svg").count(),
+        2 + cards,
+        "plots and a legend per map"
+    );
     assert!(html.contains("a note with &lt;markup&gt; &amp; symbols"));
     assert!(!html.contains("<scene>"), "scene name must be escaped");
-    // Plots: one line per strategy, legend names present.
-    for label in ["gradient", "uniform", "uniform-full", "linear-interp"] {
-        assert!(
-            html.contains(&format!(">{label}<")) || html.contains(&format!(">{label} <")),
-            "{label}"
-        );
+    for label in ["gradient", "uniform", "uniform-all-pixels"] {
+        assert!(html.contains(&format!(">{label}<")), "{label}");
     }
-
-    // Assets on disk: reference, image + error per run, samples where given, 2 plots.
     let assets = std::fs::read_dir(dir.join(ASSET_DIR)).unwrap().count();
-    assert_eq!(assets, expected_images + 2);
+    assert_eq!(assets, srcs.len());
     // No temporary files left behind.
     for d in [dir.clone(), dir.join(ASSET_DIR)] {
         for e in std::fs::read_dir(d).unwrap() {
@@ -412,10 +503,11 @@ fn report_writes_three_files_and_assets() {
 fn sample_map_marks_sample_pixels_over_dimmed_reference() {
     let dir = temp_dir("samples");
     let mut input = sample_input();
+    input.runs.retain(|r| r.name == "gradient" && r.seed == 0);
     input.runs.truncate(1);
     input.runs[0].sample_positions = vec![Vec2::new(3.5, 2.5), Vec2::new(W as f32, H as f32)];
     write_report(&dir, &input).unwrap();
-    let path = dir.join(ASSET_DIR).join("run-00-gradient-samples.png");
+    let path = dir.join(ASSET_DIR).join("run-000-gradient-samples.png");
     let img = image::open(&path).unwrap().to_rgb8();
     assert_eq!((img.width() as usize, img.height() as usize), (W, H));
     let marker = [255, 96, 32];
@@ -439,14 +531,17 @@ fn sample_map_marks_sample_pixels_over_dimmed_reference() {
             dim(reference8[3 * i + 2])
         ]
     );
-    // Error map: a run equal to the reference maps to viridis(0) everywhere.
+    // Error map: a run equal to the reference maps to viridis(0) everywhere (up
+    // to JPEG's rounding of a flat colour).
     input.runs[0].image = input.reference.clone();
     write_report(&dir, &input).unwrap();
-    let err = image::open(dir.join(ASSET_DIR).join("run-00-gradient-error.png"))
+    let err = image::open(dir.join(ASSET_DIR).join("run-000-gradient-error.jpg"))
         .unwrap()
         .to_rgb8();
-    let v0 = viridis(0.0).to_array().map(|v| (v * 255.0).round() as u8);
-    assert!(err.pixels().all(|p| p.0 == v0));
+    let v0 = viridis(0.0).to_array().map(|v| (v * 255.0).round() as i32);
+    assert!(err
+        .pixels()
+        .all(|p| (0..3).all(|k| (p.0[k] as i32 - v0[k]).abs() <= 3)));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -465,12 +560,12 @@ fn bad_input_writes_nothing() {
         ("nan pixel", Box::new(|i| i.runs[1].image[7].x = f32::NAN)),
         (
             "sample outside",
-            Box::new(|i| i.runs[0].sample_positions.push(Vec2::new(-1.0, 3.0))),
+            Box::new(|i| i.runs[1].sample_positions.push(Vec2::new(-1.0, 3.0))),
         ),
         ("negative time", Box::new(|i| i.runs[3].wall_time_s = -1.0)),
         (
             "zero budget",
-            Box::new(|i| i.runs[0].kind = RunKind::Adaptive { budget: 0.0 }),
+            Box::new(|i| i.runs[1].kind = RunKind::Adaptive { budget: 0.0 }),
         ),
         ("exposure", Box::new(|i| i.exposure = f32::INFINITY)),
     ];
@@ -505,34 +600,9 @@ fn report_with_no_runs_or_zero_error_still_writes() {
     input.runs[0].wall_time_s = 0.0;
     let rows = write_report(&dir, &input).unwrap();
     assert_eq!(rows[0].rmse, 0.0);
-    assert_eq!(rows[0].speedup_vs_reference, None);
     input.runs.clear();
     assert!(write_report(&dir, &input).unwrap().is_empty());
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     assert!(html.contains("no positive data to plot"));
     std::fs::remove_dir_all(&dir).unwrap();
-}
-
-#[test]
-fn equal_time_spp_scales_with_time() {
-    assert_eq!(equal_time_spp(1.0, 10.0, 1024), 102);
-    assert_eq!(
-        equal_time_spp(0.001, 10.0, 1024),
-        1,
-        "never below one sample"
-    );
-    assert_eq!(equal_time_spp(0.0, 10.0, 1024), 1);
-    assert_eq!(
-        equal_time_spp(5.0, 0.0, 1024),
-        1,
-        "no reference time: no basis"
-    );
-    assert_eq!(equal_time_spp(20.0, 10.0, 64), 128);
-    let rows = compute_rows(&sample_input()).unwrap();
-    let table = markdown_table(&rows);
-    assert_eq!(table.lines().count(), rows.len() + 2);
-    assert!(
-        table.contains("| linear-interp | interpolation | 1% | 8 |"),
-        "{table}"
-    );
 }

@@ -8,11 +8,14 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-/// One line of a plot: a strategy's points `(x, y, point label)`.
+/// One line of a plot: a strategy's points `(x, y, point label)`, and for each
+/// point optionally the interval `(y_lo, y_hi)` drawn as an error bar.
 #[derive(Clone, Debug)]
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64, String)>,
+    /// Empty, or one interval per point.
+    pub bars: Vec<Option<(f64, f64)>>,
 }
 
 /// Distinguishable line colours (Tableau 10), picked in series order.
@@ -45,16 +48,19 @@ pub fn loglog_svg(
     let series: Vec<Series> = series
         .iter()
         .map(|s| {
-            let mut points: Vec<_> = s
+            let bar = |i: usize| s.bars.get(i).copied().flatten();
+            let mut kept: Vec<_> = s
                 .points
                 .iter()
-                .filter(|p| ok(p.0) && ok(p.1))
-                .cloned()
+                .enumerate()
+                .filter(|(_, p)| ok(p.0) && ok(p.1))
+                .map(|(i, p)| (p.clone(), bar(i).filter(|b| ok(b.0) && ok(b.1))))
                 .collect();
-            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            kept.sort_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
             Series {
                 name: s.name.clone(),
-                points,
+                points: kept.iter().map(|k| k.0.clone()).collect(),
+                bars: kept.iter().map(|k| k.1).collect(),
             }
         })
         .filter(|s| !s.points.is_empty())
@@ -77,7 +83,10 @@ pub fn loglog_svg(
             // spanning less than a decade without any number; so the chart is linear
             // in log10 space and the 1-2-5 ticks are drawn here.
             let (x0, x1) = padded_log_range(all().map(|p| p.0));
-            let (y0, y1) = padded_log_range(all().map(|p| p.1));
+            let bar_ends = series
+                .iter()
+                .flat_map(|s| s.bars.iter().flatten().flat_map(|b| [b.0, b.1]));
+            let (y0, y1) = padded_log_range(all().map(|p| p.1).chain(bar_ends));
             let mut chart = ChartBuilder::on(&root)
                 .caption(title, ("sans-serif", 20))
                 .margin(12)
@@ -134,6 +143,17 @@ pub fn loglog_svg(
                     .legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                     });
+                for (p, b) in s.points.iter().zip(&s.bars) {
+                    if let Some((lo, hi)) = b {
+                        let x = p.0.log10();
+                        chart
+                            .draw_series(LineSeries::new(
+                                [(x, lo.log10()), (x, hi.log10())],
+                                color.stroke_width(1),
+                            ))
+                            .map_err(|e| e.to_string())?;
+                    }
+                }
                 chart
                     .draw_series(s.points.iter().map(|p| {
                         EmptyElement::at((p.0.log10(), p.1.log10()))

@@ -1,46 +1,54 @@
-//! reference + strategy runs → `report.html` (self-contained), `report.json`,
-//! `report.md` and the PNG/SVG assets they show, for `gradtrace compare`.
+//! reference + runs → `report.html`, `report.json`, `report.md` and the image
+//! assets they show, for `gradtrace compare`.
 //!
 //! Nothing here renders: the caller hands over the reference and every run's image,
-//! timings and sample positions. This module measures them (RMSE, relMSE, FLIP on
-//! one shared tone mapping, see [`super::metrics`]), draws false-colour error maps,
+//! timings and sample positions, each run possibly repeated with several seeds. This
+//! module measures them (RMSE, relMSE, relMSE without the 0.01 % worst pixels,
+//! FLIP on one shared tone mapping, see [`super::metrics`]), reports each run as the
+//! mean over its seeds with a 95 % interval, draws false-colour error maps,
 //! sample-position maps in the style of the paper's Fig. 14/15 and log-log
-//! speed-against-error plots, and writes everything atomically: all files are
-//! encoded and staged first, and only then renamed into place, so invalid input or
-//! a failed encoder leaves the directory untouched.
+//! speed-against-error plots with error bars, and writes everything atomically: all
+//! files are staged first and only then renamed into place, so invalid input or a
+//! failed encoder leaves the directory untouched.
 //!
-//! The HTML embeds its images as `data:` URIs and its plots as inline SVG, with no
-//! external CSS, scripts or fonts, so it can be mailed or opened offline. The same
-//! images are also written as files under `report-assets/` for the Markdown.
+//! The HTML links its images (JPEG files under `report-assets/`, written once) and
+//! inlines its plots as SVG, with no external CSS, scripts or fonts: the folder can
+//! be copied or mailed whole and opened offline.
 
 use super::atomic::{output_error, stage, Staged};
 use super::colormap::{viridis8, viridis_hex};
-use super::metrics::{self, luminance, FLIP_PPD, RELMSE_EPS};
+use super::metrics::{self, luminance, FLIP_PPD, RELMSE_EPS, TRIM_FRACTION};
 use super::plot::{loglog_svg, Series};
 use crate::math::{Vec2, Vec3};
 use crate::Result;
-use image::codecs::png::PngEncoder;
-use image::{ExtendedColorType, ImageEncoder};
+use image::codecs::jpeg::JpegEncoder;
+use image::ExtendedColorType;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
 
-/// Folder (inside the report directory) for the PNG and SVG files.
+/// Folder (inside the report directory) for the image files.
 pub const ASSET_DIR: &str = "report-assets";
 
-/// How a run spent its samples, which decides how it is compared.
+/// JPEG quality of the report's images: visually lossless at this size, and a
+/// report of a few dozen images stays under 5 MB.
+const JPEG_QUALITY: u8 = 90;
+
+/// How a run spent its samples, which decides what it is compared with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RunKind {
-    /// Adaptive sampling at `budget` samples per pixel (0.05 = 5 % of the pixels),
-    /// compared at equal sample count.
+    /// Adaptive sampling at `budget` samples per pixel (0.05 = 5 % of the pixels);
+    /// strategies compare at equal sample count.
     Adaptive { budget: f32 },
-    /// Uniform rendering of every pixel with `spp` samples per pixel, chosen by the
-    /// caller to take about the same wall time as an adaptive run: the honest
-    /// equal-time baseline.
-    EqualTime { spp: u32 },
+    /// What a user would run instead, every pixel rendered (uniformly, adaptively
+    /// per pixel, or denoised), at about the wall time of the `gradient` strategy
+    /// at `budget`: the equal-time comparison. `spp`: samples per pixel (mean).
+    Baseline { budget: f32, spp: u32 },
+    /// Every pixel at `spp`, the same samples per point as the adaptive runs.
+    Full { spp: u32 },
     /// An interpolation experiment at `budget` samples per pixel (Sec. 8: gradient
-    /// vs linear interpolation of soft shadows); shown in its own section.
+    /// vs linear interpolation of soft shadows).
     Interpolation { budget: f32 },
 }
 
@@ -49,15 +57,32 @@ impl RunKind {
     pub fn name(self) -> &'static str {
         match self {
             RunKind::Adaptive { .. } => "adaptive",
-            RunKind::EqualTime { .. } => "equal-time",
+            RunKind::Baseline { .. } => "baseline",
+            RunKind::Full { .. } => "full",
             RunKind::Interpolation { .. } => "interpolation",
         }
     }
 
+    /// The budget an adaptive or interpolation run spends (`null` for the others).
     fn budget(self) -> Option<f32> {
         match self {
             RunKind::Adaptive { budget } | RunKind::Interpolation { budget } => Some(budget),
-            RunKind::EqualTime { .. } => None,
+            _ => None,
+        }
+    }
+
+    /// The budget whose time a run is measured against (adaptive and baselines).
+    fn group(self) -> Option<f32> {
+        match self {
+            RunKind::Adaptive { budget } | RunKind::Baseline { budget, .. } => Some(budget),
+            _ => None,
+        }
+    }
+
+    fn spp(self) -> Option<u32> {
+        match self {
+            RunKind::Baseline { spp, .. } | RunKind::Full { spp } => Some(spp),
+            _ => None,
         }
     }
 
@@ -65,24 +90,27 @@ impl RunKind {
     fn short(self) -> String {
         match self {
             RunKind::Adaptive { budget } | RunKind::Interpolation { budget } => percent(budget),
-            RunKind::EqualTime { spp } => format!("{spp} spp"),
+            RunKind::Baseline { spp, .. } | RunKind::Full { spp } => format!("{spp} spp"),
         }
     }
 }
 
-/// One image produced by one strategy at one setting.
+/// One image produced by one method at one setting with one seed.
 #[derive(Clone, Debug)]
 pub struct Run {
-    /// Strategy name, e.g. "gradient", "uniform". Runs with the same label form
-    /// one line in the speed-against-error plots.
-    pub label: String,
+    /// Method name, e.g. "gradient", "uniform-all-pixels", "cycles-adaptive". Runs
+    /// with the same name and kind are the seeds of one report row, and one line in
+    /// the speed-against-error plots.
+    pub name: String,
     pub kind: RunKind,
+    /// Which repetition (0-based); every repetition has independent random numbers.
+    pub seed: u32,
     /// Number of image samples evaluated (for full renders: pixels × spp).
     pub samples: usize,
     /// Total wall time of the run in seconds, overhead included.
     pub wall_time_s: f64,
     /// The part of `wall_time_s` spent outside the renderer (quadtree and
-    /// reconstruction).
+    /// reconstruction, or the denoiser).
     pub overhead_s: f64,
     /// Linear RGB, row-major, top row first, `width × height` pixels.
     pub image: Vec<Vec3>,
@@ -91,115 +119,156 @@ pub struct Run {
     pub sample_positions: Vec<Vec2>,
 }
 
+/// How the reference was obtained.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReferenceInfo {
+    pub spp: u32,
+    /// Its render time when it was rendered (also when reused from the cache).
+    pub time_s: f64,
+    /// The content key of the cached file: scene, assets, settings, renderer version.
+    pub cache_key: String,
+    /// Whether this run reused the cached file.
+    pub reused: bool,
+}
+
 /// Everything the report shows.
 #[derive(Clone, Debug)]
 pub struct ReportInput {
     pub scene: String,
+    /// `Scene::content_hash`: the scene file and every file it references.
+    pub scene_hash: String,
+    /// The command line that produced the report.
+    pub command: String,
+    /// Crate version and git commit.
+    pub version: String,
+    pub threads: usize,
     pub width: usize,
     pub height: usize,
     /// The high-quality reference, linear RGB.
     pub reference: Vec<Vec3>,
-    pub reference_time_s: f64,
-    pub reference_spp: u32,
+    pub reference_info: ReferenceInfo,
     /// Display exposure in stops, used for every image *and* for FLIP (0 = none).
     pub exposure: f32,
     pub runs: Vec<Run>,
+    /// Images for every budget (default: the headline budget's, the full render's
+    /// and the interpolation runs', first seed only, so the report stays small).
+    pub all_images: bool,
     /// Free text shown at the end (setup, caveats).
     pub notes: Vec<String>,
 }
 
-/// One line of the summary table (and of `report.json`'s `rows`).
+/// One row of the tables and of `report.json`'s `runs`: a method at one setting,
+/// its figures the mean over its seeds.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ReportRow {
-    pub label: String,
-    /// "adaptive", "equal-time" or "interpolation".
+    /// Method name (strategy or baseline).
+    pub name: String,
+    /// "adaptive", "baseline", "full" or "interpolation".
     pub kind: String,
-    /// Samples per pixel of an adaptive / interpolation run (0.05 = 5 %).
+    /// Samples per pixel of an adaptive / interpolation run (0.05 = 5 %); null for
+    /// baselines and full renders.
     pub budget: Option<f32>,
-    /// Samples per pixel of an equal-time run.
+    /// For adaptive runs and baselines: the budget of the `gradient` run whose
+    /// wall time the baselines match.
+    pub equal_time_budget: Option<f32>,
+    pub seeds: u32,
+    /// Samples per pixel of a baseline or full render (the mean, for per-pixel
+    /// adaptive ones); null for adaptive and interpolation runs.
     pub spp: Option<u32>,
     pub samples: usize,
-    pub wall_time_s: f64,
+    pub wall_s: f64,
     pub overhead_s: f64,
     pub rmse: f32,
+    /// Half-width of the 95 % interval of the mean RMSE over the seeds (Student t);
+    /// null with one seed.
+    pub rmse_ci95: Option<f32>,
     pub relmse: f32,
+    /// relMSE without the [`TRIM_FRACTION`] pixels of highest error.
+    pub relmse_trimmed: f32,
     /// Mean LDR-FLIP on the shared tone mapping.
     pub flip: f32,
-    /// Reference time / run time; `None` when the run took no measurable time.
-    pub speedup_vs_reference: Option<f64>,
 }
 
-/// Samples per pixel for a uniform render that takes about `target_time_s`, given
-/// that the reference took `reference_time_s` for `reference_spp` (render time is
-/// close to linear in spp): `floor(target / reference · spp)`, at least 1. The
-/// caller should still report the *measured* time of the baseline.
-pub fn equal_time_spp(target_time_s: f64, reference_time_s: f64, reference_spp: u32) -> u32 {
-    if !(target_time_s > 0.0 && reference_time_s > 0.0) {
-        return 1;
+/// The figures of one run (one seed).
+#[derive(Clone, Copy, Debug)]
+struct Measured {
+    rmse: f32,
+    relmse: f32,
+    relmse_trimmed: f32,
+    flip: f32,
+}
+
+/// Two-sided 95 % Student-t quantiles for 1..=30 degrees of freedom (then 1.96).
+const T95: [f64; 30] = [
+    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+    2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+    2.052, 2.048, 2.045, 2.042,
+];
+
+/// Mean and the half-width of its 95 % interval (None for fewer than 2 values).
+pub fn mean_ci95(values: &[f64]) -> (f64, Option<f64>) {
+    let n = values.len();
+    let mean = values.iter().sum::<f64>() / n.max(1) as f64;
+    if n < 2 {
+        return (mean, None);
     }
-    let spp = (target_time_s / reference_time_s * f64::from(reference_spp)).floor();
-    // `as` saturates: a huge ratio gives u32::MAX, NaN cannot occur here.
-    (spp as u32).max(1)
+    let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1) as f64;
+    let t = T95.get(n - 2).copied().unwrap_or(1.96);
+    (mean, Some(t * (var / n as f64).sqrt()))
 }
 
 /// Checks the input and measures every run; nothing is written.
 pub fn compute_rows(input: &ReportInput) -> Result<Vec<ReportRow>> {
     validate(input, Path::new("report"))?;
-    rows(input, Path::new("report"))
+    let measured = measure(input, Path::new("report"))?;
+    Ok(summarise(input, &measured))
 }
 
 /// Writes `report.html`, `report.json`, `report.md` and `report-assets/` into `dir`
-/// (created if missing) and returns the table rows. On any error nothing in `dir`
-/// is created or replaced.
+/// (created if missing) and returns the rows. On any error nothing in `dir` is
+/// created or replaced.
 pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
     let html_path = dir.join("report.html");
     validate(input, &html_path)?;
-    let rows = rows(input, &html_path)?;
+    let measured = measure(input, &html_path)?;
+    let rows = summarise(input, &measured);
     let fail = |m: String| output_error(&html_path, m);
     let (w, h) = (input.width, input.height);
 
-    // Every asset as (file name, bytes); PNG bytes are also embedded in the HTML.
     let mut assets: Vec<(String, Vec<u8>)> = Vec::new();
     let reference8 = metrics::tone_map_srgb8(&input.reference, input.exposure)?;
     assets.push((
-        "reference.png".into(),
-        png_bytes(&reference8, w, h).map_err(fail)?,
+        "reference.jpg".into(),
+        jpeg_bytes(&reference8, w, h).map_err(fail)?,
     ));
-
     let ref_lum: Vec<f32> = input.reference.iter().map(|c| luminance(*c)).collect();
-    let errors: Vec<Vec<f32>> = input
-        .runs
-        .iter()
-        .map(|r| {
-            r.image
-                .iter()
-                .zip(&ref_lum)
-                .map(|(c, l)| (luminance(*c) - l).abs())
-                .collect()
-        })
-        .collect();
+    let error_of = |run: &Run| -> Vec<f32> {
+        run.image
+            .iter()
+            .zip(&ref_lum)
+            .map(|(c, l)| (luminance(*c) - l).abs())
+            .collect()
+    };
+    let shown = shown_runs(input);
+    let errors: Vec<Vec<f32>> = shown.iter().map(|&i| error_of(&input.runs[i])).collect();
     let error_scale = shared_error_scale(&errors);
-
-    let mut cards = Vec::with_capacity(input.runs.len());
-    for (i, (run, err)) in input.runs.iter().zip(&errors).enumerate() {
-        let stem = format!("run-{i:02}-{}", slug(&run.label));
+    let mut cards = Vec::with_capacity(shown.len());
+    for (&i, err) in shown.iter().zip(&errors) {
+        let run = &input.runs[i];
+        let stem = format!("run-{i:03}-{}", slug(&run.name));
         let img8 = metrics::tone_map_srgb8(&run.image, input.exposure)?;
-        let image = format!("{stem}.png");
-        assets.push((image.clone(), png_bytes(&img8, w, h).map_err(fail)?));
-        let error = format!("{stem}-error.png");
-        assets.push((
-            error.clone(),
-            png_bytes(&error_map(err, error_scale), w, h).map_err(fail)?,
-        ));
-        let samples = if run.sample_positions.is_empty() {
-            None
-        } else {
-            let name = format!("{stem}-samples.png");
+        let image = format!("{stem}.jpg");
+        assets.push((image.clone(), jpeg_bytes(&img8, w, h).map_err(fail)?));
+        let error = format!("{stem}-error.jpg");
+        let map = error_map(err, error_scale);
+        assets.push((error.clone(), jpeg_bytes(&map, w, h).map_err(fail)?));
+        let samples = (!run.sample_positions.is_empty()).then(|| format!("{stem}-samples.png"));
+        if let Some(name) = &samples {
             let map = sample_map(&reference8, w, h, &run.sample_positions);
             assets.push((name.clone(), png_bytes(&map, w, h).map_err(fail)?));
-            Some(name)
-        };
+        }
         cards.push(Card {
+            run: i,
             image,
             error,
             samples,
@@ -207,12 +276,8 @@ pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
     }
 
     let plots = speed_plots(input, &rows).map_err(fail)?;
-    for (name, svg) in &plots {
-        assets.push((name.clone(), svg.as_bytes().to_vec()));
-    }
-
-    let html = html(input, &rows, &cards, &assets, &plots, error_scale);
-    let markdown = markdown(input, &rows, &cards, &plots);
+    let html = html(input, &rows, &cards, &plots, error_scale);
+    let markdown = markdown(input, &rows, &cards);
     let json = json(input, &rows, error_scale).map_err(fail)?;
 
     // Stage everything, then commit: a failure before the first rename leaves the
@@ -234,11 +299,40 @@ pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
     Ok(rows)
 }
 
-/// File names of one run's images inside [`ASSET_DIR`].
+/// File names of one shown run's images inside [`ASSET_DIR`].
 struct Card {
+    run: usize,
     image: String,
     error: String,
     samples: Option<String>,
+}
+
+/// The budget the headline and the default images are about: the one closest to
+/// 17 % (the paper's Fig. 14/15), among those with a `gradient` run.
+fn headline_budget(input: &ReportInput) -> Option<f32> {
+    input
+        .runs
+        .iter()
+        .filter(|r| r.name == "gradient")
+        .filter_map(|r| r.kind.group())
+        .min_by(|a, b| (a - 0.17).abs().total_cmp(&(b - 0.17).abs()))
+}
+
+/// Indices of the runs whose images the report shows: the first seed of the
+/// headline budget's runs (of every budget with `all_images`), of the full render
+/// and of the interpolation runs.
+fn shown_runs(input: &ReportInput) -> Vec<usize> {
+    let head = headline_budget(input);
+    (0..input.runs.len())
+        .filter(|&i| {
+            let r = &input.runs[i];
+            r.seed == 0
+                && match r.kind.group() {
+                    Some(b) => input.all_images || Some(b) == head,
+                    None => true,
+                }
+        })
+        .collect()
 }
 
 fn validate(input: &ReportInput, path: &Path) -> Result<()> {
@@ -257,8 +351,9 @@ fn validate(input: &ReportInput, path: &Path) -> Result<()> {
     if !input.exposure.is_finite() {
         return err(format!("exposure must be finite, got {}", input.exposure));
     }
-    if !(input.reference_time_s.is_finite() && input.reference_time_s >= 0.0) {
-        return err(format!("invalid reference time {}", input.reference_time_s));
+    let t = input.reference_info.time_s;
+    if !(t.is_finite() && t >= 0.0) {
+        return err(format!("invalid reference time {t}"));
     }
     if let Some(i) = input.reference.iter().position(|p| !p.is_finite()) {
         return err(format!(
@@ -268,7 +363,7 @@ fn validate(input: &ReportInput, path: &Path) -> Result<()> {
         ));
     }
     for run in &input.runs {
-        let what = format!("run {:?} ({})", run.label, run.kind.short());
+        let what = format!("run {:?} ({})", run.name, run.kind.short());
         if run.image.len() != n {
             return err(format!(
                 "{what} has {} pixels, expected {w}x{h} = {n}",
@@ -287,7 +382,7 @@ fn validate(input: &ReportInput, path: &Path) -> Result<()> {
                 return err(format!("{what}: invalid time {t}"));
             }
         }
-        if let Some(b) = run.kind.budget() {
+        if let Some(b) = run.kind.budget().or(run.kind.group()) {
             if !(b > 0.0 && b <= 16.0) {
                 return err(format!(
                     "{what}: budget must lie in (0, 16] samples per pixel, got {b}"
@@ -306,33 +401,546 @@ fn validate(input: &ReportInput, path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn rows(input: &ReportInput, path: &Path) -> Result<Vec<ReportRow>> {
+/// Every run's figures against the reference (in parallel: FLIP dominates).
+fn measure(input: &ReportInput, path: &Path) -> Result<Vec<Measured>> {
+    use rayon::prelude::*;
     let (w, h) = (input.width, input.height);
     let wrap = |e: crate::Error| output_error(path, e.to_string());
+    let r = &input.reference;
     input
         .runs
-        .iter()
+        .par_iter()
         .map(|run| {
-            Ok(ReportRow {
-                label: run.label.clone(),
-                kind: run.kind.name().into(),
-                budget: run.kind.budget(),
-                spp: match run.kind {
-                    RunKind::EqualTime { spp } => Some(spp),
-                    _ => None,
-                },
-                samples: run.samples,
-                wall_time_s: run.wall_time_s,
-                overhead_s: run.overhead_s,
-                rmse: metrics::rmse(&run.image, &input.reference).map_err(wrap)?,
-                relmse: metrics::relmse(&run.image, &input.reference).map_err(wrap)?,
-                flip: metrics::flip_exposure(&run.image, &input.reference, w, h, input.exposure)
+            Ok(Measured {
+                rmse: metrics::rmse(&run.image, r).map_err(wrap)?,
+                relmse: metrics::relmse(&run.image, r).map_err(wrap)?,
+                relmse_trimmed: metrics::relmse_trimmed(&run.image, r, TRIM_FRACTION)
                     .map_err(wrap)?,
-                speedup_vs_reference: (run.wall_time_s > 0.0)
-                    .then(|| input.reference_time_s / run.wall_time_s),
+                flip: metrics::flip_exposure(&run.image, r, w, h, input.exposure).map_err(wrap)?,
             })
         })
         .collect()
+}
+
+/// One row per (name, kind): means over the seeds, in the order rows first appear.
+fn summarise(input: &ReportInput, measured: &[Measured]) -> Vec<ReportRow> {
+    let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+    for (i, run) in input.runs.iter().enumerate() {
+        let same = |g: &(usize, Vec<usize>)| {
+            let first = &input.runs[g.0];
+            first.name == run.name
+                && first.kind.name() == run.kind.name()
+                && first.kind.budget() == run.kind.budget()
+                && first.kind.group() == run.kind.group()
+        };
+        match groups.iter_mut().find(|g| same(g)) {
+            Some(g) => g.1.push(i),
+            None => groups.push((i, vec![i])),
+        }
+    }
+    groups
+        .iter()
+        .map(|(first, members)| {
+            let run = &input.runs[*first];
+            let stat = |f: &dyn Fn(usize) -> f64| {
+                mean_ci95(&members.iter().map(|&i| f(i)).collect::<Vec<_>>())
+            };
+            let (rmse, rmse_ci) = stat(&|i| f64::from(measured[i].rmse));
+            let mean = |f: &dyn Fn(usize) -> f64| stat(f).0;
+            let spp = match run.kind {
+                RunKind::Baseline { .. } => {
+                    Some(mean(&|i| input.runs[i].kind.spp().unwrap_or(0) as f64).round() as u32)
+                }
+                k => k.spp(),
+            };
+            ReportRow {
+                name: run.name.clone(),
+                kind: run.kind.name().into(),
+                budget: run.kind.budget(),
+                equal_time_budget: run.kind.group(),
+                seeds: members.len() as u32,
+                spp,
+                samples: mean(&|i| input.runs[i].samples as f64).round() as usize,
+                wall_s: mean(&|i| input.runs[i].wall_time_s),
+                overhead_s: mean(&|i| input.runs[i].overhead_s),
+                rmse: rmse as f32,
+                rmse_ci95: rmse_ci.map(|c| c as f32),
+                relmse: mean(&|i| f64::from(measured[i].relmse)) as f32,
+                relmse_trimmed: mean(&|i| f64::from(measured[i].relmse_trimmed)) as f32,
+                flip: mean(&|i| f64::from(measured[i].flip)) as f32,
+            }
+        })
+        .collect()
+}
+
+/// For each budget: the equal-time contenders (the `gradient` run, `gradient+oidn`
+/// and every baseline matched to it) and the one with the lowest mean RMSE.
+fn equal_time_groups(rows: &[ReportRow]) -> Vec<(f32, Vec<&ReportRow>)> {
+    let mut budgets: Vec<f32> = rows.iter().filter_map(|r| r.equal_time_budget).collect();
+    budgets.sort_by(f32::total_cmp);
+    budgets.dedup();
+    budgets
+        .into_iter()
+        .map(|b| {
+            let mut members: Vec<&ReportRow> = rows
+                .iter()
+                .filter(|r| r.equal_time_budget == Some(b))
+                .filter(|r| {
+                    r.kind == "baseline" || r.name.starts_with("gradient+") || r.name == "gradient"
+                })
+                .collect();
+            members.sort_by(|a, b| a.rmse.total_cmp(&b.rmse));
+            (b, members)
+        })
+        .filter(|(_, m)| m.len() > 1)
+        .collect()
+}
+
+/// "At equal time on X (budget 17 %, about 3.0 s), Y has the lowest RMSE: …".
+fn headline(input: &ReportInput, rows: &[ReportRow]) -> Option<String> {
+    let head = headline_budget(input)?;
+    let (b, members) = equal_time_groups(rows)
+        .into_iter()
+        .find(|(b, _)| *b == head)?;
+    let best = members[0];
+    let time = members
+        .iter()
+        .find(|r| r.name == "gradient")
+        .map_or(best.wall_s, |r| r.wall_s);
+    let others = members[1..]
+        .iter()
+        .map(|r| {
+            format!(
+                "{} {} ({:.2} s)",
+                r.name,
+                value_ci(r.rmse, r.rmse_ci95),
+                r.wall_s
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let seeds = best.seeds;
+    Some(format!(
+        "At equal time on {} (budget {}, about {time:.2} s per image, {seeds} seed{}), {} has the lowest RMSE: {} ({:.2} s); then {others}.",
+        input.scene,
+        percent(b),
+        if seeds == 1 { "" } else { "s" },
+        best.name,
+        value_ci(best.rmse, best.rmse_ci95),
+        best.wall_s,
+    ))
+}
+
+/// `2.64e-3 ± 5.1e-5` (or the value alone with one seed).
+fn value_ci(v: f32, ci: Option<f32>) -> String {
+    match ci {
+        Some(c) => format!("{v:.3e} ± {c:.1e}"),
+        None => format!("{v:.3e}"),
+    }
+}
+
+fn jpeg_bytes(rgb8: &[u8], w: usize, h: usize) -> std::result::Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
+        .encode(rgb8, w as u32, h as u32, ExtendedColorType::Rgb8)
+        .map_err(|e| format!("JPEG encoder: {e}"))?;
+    Ok(out)
+}
+
+/// Sample maps stay PNG: a JPEG would smear the one-pixel dots.
+fn png_bytes(rgb8: &[u8], w: usize, h: usize) -> std::result::Result<Vec<u8>, String> {
+    use image::codecs::png::PngEncoder;
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    PngEncoder::new(&mut out)
+        .write_image(rgb8, w as u32, h as u32, ExtendedColorType::Rgb8)
+        .map_err(|e| format!("PNG encoder: {e}"))?;
+    Ok(out)
+}
+
+/// Wall time against RMSE (with the seeds' 95 % intervals) and against FLIP, one
+/// line per method (plot file name, SVG).
+fn speed_plots(
+    input: &ReportInput,
+    rows: &[ReportRow],
+) -> std::result::Result<Vec<(String, String)>, String> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows.iter().filter(|r| r.kind != "interpolation") {
+        if !names.contains(&r.name.as_str()) {
+            names.push(&r.name);
+        }
+    }
+    let point_label = |r: &ReportRow| match (r.budget, r.spp) {
+        (Some(b), _) => percent(b),
+        (None, Some(spp)) => format!("{spp} spp"),
+        _ => String::new(),
+    };
+    let series = |metric: fn(&ReportRow) -> (f64, Option<f64>)| -> Vec<Series> {
+        names
+            .iter()
+            .map(|n| {
+                let members: Vec<&ReportRow> = rows
+                    .iter()
+                    .filter(|r| r.name == *n && r.kind != "interpolation")
+                    .collect();
+                Series {
+                    name: (*n).to_string(),
+                    points: members
+                        .iter()
+                        .map(|r| (r.wall_s, metric(r).0, point_label(r)))
+                        .collect(),
+                    bars: members
+                        .iter()
+                        .map(|r| {
+                            let (v, ci) = metric(r);
+                            ci.map(|c| (v - c, v + c))
+                        })
+                        .collect(),
+                }
+            })
+            .collect()
+    };
+    let title = |m: &str| format!("{}: wall time vs {m}", input.scene);
+    Ok(vec![
+        (
+            "speed_rmse.svg".into(),
+            loglog_svg(
+                &title("RMSE"),
+                "wall time (s)",
+                "RMSE (95% interval over seeds)",
+                &series(|r| (f64::from(r.rmse), r.rmse_ci95.map(f64::from))),
+            )?,
+        ),
+        (
+            "speed_flip.svg".into(),
+            loglog_svg(
+                &title("FLIP"),
+                "wall time (s)",
+                "mean FLIP",
+                &series(|r| (f64::from(r.flip), None)),
+            )?,
+        ),
+    ])
+}
+
+fn json(
+    input: &ReportInput,
+    rows: &[ReportRow],
+    error_scale: f32,
+) -> std::result::Result<String, String> {
+    let value = serde_json::json!({
+        "scene": input.scene,
+        "scene_hash": input.scene_hash,
+        "command": input.command,
+        "version": input.version,
+        "threads": input.threads,
+        "width": input.width,
+        "height": input.height,
+        "reference": input.reference_info,
+        "runs": rows,
+        "headline": headline(input, rows),
+        "metrics": {
+            "rmse": "sqrt of the mean squared error over pixels and RGB channels",
+            "relmse_eps": RELMSE_EPS,
+            "relmse_trimmed_fraction": TRIM_FRACTION,
+            "ci95": "half-width of the 95% Student-t interval of the mean over the seeds",
+            "flip": { "variant": "LDR-FLIP (flip-rs, FLIP v1.7)", "pixels_per_degree": FLIP_PPD,
+                      "input": "8-bit sRGB of linear x 2^exposure, as the images" },
+        },
+        "exposure": input.exposure,
+        "error_map_scale": error_scale,
+        "notes": input.notes,
+    });
+    serde_json::to_string_pretty(&value).map_err(|e| e.to_string())
+}
+
+/// The header of every table (Markdown and HTML).
+const COLUMNS: [&str; 11] = [
+    "method",
+    "kind",
+    "budget / spp",
+    "seeds",
+    "samples",
+    "wall time (s)",
+    "overhead (s)",
+    "RMSE (± 95%)",
+    "relMSE",
+    "relMSE, 0.01% trimmed",
+    "FLIP",
+];
+
+/// A row's cells, in [`COLUMNS`] order.
+fn cells(r: &ReportRow) -> [String; 11] {
+    let setting = match (r.budget, r.spp) {
+        (Some(b), _) => percent(b),
+        (None, Some(spp)) => format!("{spp} spp"),
+        _ => "–".into(),
+    };
+    [
+        r.name.clone(),
+        r.kind.clone(),
+        setting,
+        r.seeds.to_string(),
+        r.samples.to_string(),
+        format!("{:.3}", r.wall_s),
+        format!("{:.3}", r.overhead_s),
+        value_ci(r.rmse, r.rmse_ci95),
+        format!("{:.3e}", r.relmse),
+        format!("{:.3e}", r.relmse_trimmed),
+        format!("{:.4}", r.flip),
+    ]
+}
+
+/// Rows as tables: the full render, one table per budget (its strategies at equal
+/// samples, then the baselines at the `gradient` run's time), the interpolation runs.
+fn tables(rows: &[ReportRow]) -> Vec<(String, Vec<&ReportRow>)> {
+    let mut out = Vec::new();
+    let full: Vec<&ReportRow> = rows.iter().filter(|r| r.kind == "full").collect();
+    if !full.is_empty() {
+        out.push((
+            "Full render (every pixel, the adaptive runs' samples per point)".into(),
+            full,
+        ));
+    }
+    let mut budgets: Vec<f32> = rows.iter().filter_map(|r| r.equal_time_budget).collect();
+    budgets.sort_by(f32::total_cmp);
+    budgets.dedup();
+    for b in budgets {
+        let mut members: Vec<&ReportRow> = rows
+            .iter()
+            .filter(|r| r.equal_time_budget == Some(b))
+            .collect();
+        // Adaptive first, each part by RMSE.
+        members.sort_by(|x, y| {
+            (x.kind != "adaptive")
+                .cmp(&(y.kind != "adaptive"))
+                .then(x.rmse.total_cmp(&y.rmse))
+        });
+        out.push((
+            format!(
+                "Budget {}: strategies at equal samples; baselines at the gradient run's wall time",
+                percent(b)
+            ),
+            members,
+        ));
+    }
+    let interp: Vec<&ReportRow> = rows.iter().filter(|r| r.kind == "interpolation").collect();
+    if !interp.is_empty() {
+        out.push((
+            "Gradient vs linear interpolation (Sec. 8, 1% of the pixels)".into(),
+            interp,
+        ));
+    }
+    out
+}
+
+/// The tables as Markdown (the CLI prints them; closing notes quote them).
+pub fn markdown_table(rows: &[ReportRow]) -> String {
+    let mut s = String::new();
+    for (title, members) in tables(rows) {
+        let _ = writeln!(s, "**{title}**\n\n| {} |", COLUMNS.join(" | "));
+        let _ = writeln!(s, "|---|---|{}", "---:|".repeat(COLUMNS.len() - 2));
+        for r in members {
+            let c = cells(r).map(|c| c.replace('|', "\\|"));
+            let _ = writeln!(s, "| {} |", c.join(" | "));
+        }
+        s += "\n";
+    }
+    s
+}
+
+fn markdown(input: &ReportInput, rows: &[ReportRow], cards: &[Card]) -> String {
+    let mut s = format!("# Comparison: {}\n\n", input.scene);
+    if let Some(line) = headline(input, rows) {
+        let _ = writeln!(s, "**{line}**\n");
+    }
+    let _ = writeln!(s, "{}\n", meta_line(input));
+    s += &markdown_table(rows);
+    s += "![RMSE against time](report-assets/speed_rmse.svg)\n";
+    let _ = writeln!(s, "\n![reference]({ASSET_DIR}/reference.jpg)\n");
+    for card in cards {
+        let run = &input.runs[card.run];
+        let _ = write!(
+            s,
+            "- {} ({}): [image]({ASSET_DIR}/{}) · [error]({ASSET_DIR}/{})",
+            run.name,
+            run.kind.short(),
+            card.image,
+            card.error
+        );
+        if let Some(m) = &card.samples {
+            let _ = write!(s, " · [samples]({ASSET_DIR}/{m})");
+        }
+        s += "\n";
+    }
+    if !input.notes.is_empty() {
+        s += "\n## Notes\n\n";
+        for n in &input.notes {
+            let _ = writeln!(s, "- {n}");
+        }
+    }
+    s
+}
+
+fn meta_line(input: &ReportInput) -> String {
+    let r = &input.reference_info;
+    format!(
+        "{}×{} pixels; reference {} spp, rendered in {:.1} s ({}; key {}); {} threads; exposure {:+} stops; \
+         relMSE ε = {}; trimmed relMSE leaves out the {}% of pixels with the highest error; \
+         FLIP: LDR-FLIP at {:.1} pixels/degree on the displayed 8-bit sRGB; {}.",
+        input.width,
+        input.height,
+        r.spp,
+        r.time_s,
+        if r.reused { "reused from the cache" } else { "rendered for this report" },
+        &r.cache_key[..r.cache_key.len().min(16)],
+        input.threads,
+        input.exposure,
+        RELMSE_EPS,
+        TRIM_FRACTION * 100.0,
+        FLIP_PPD,
+        input.version
+    )
+}
+
+const CSS: &str = "body{font-family:sans-serif;margin:1em auto;color:#222;max-width:78em;padding:0 1em}\
+.table{overflow-x:auto}table{border-collapse:collapse;margin:.6em 0;font-size:.9em}\
+td,th{border:1px solid #bbb;padding:.2em .5em;text-align:right;white-space:nowrap}\
+td:first-child,th:first-child,td:nth-child(2){text-align:left}th{background:#eee}\
+.headline{font-size:1.15em;background:#f4f7ee;border-left:4px solid #6a3;padding:.5em .8em}\
+.grid{display:flex;flex-wrap:wrap;gap:1em}.card{flex:1 1 24em;border:1px solid #ccc;padding:.5em;border-radius:4px}\
+.imgs{display:flex;gap:.4em;flex-wrap:wrap}figure{margin:0;flex:1 1 0;min-width:9em}figcaption{font-size:.8em;color:#555}\
+img{max-width:100%;height:auto;image-rendering:auto}svg{max-width:100%;height:auto}.plots{display:flex;flex-wrap:wrap;gap:1em}";
+
+fn html(
+    input: &ReportInput,
+    rows: &[ReportRow],
+    cards: &[Card],
+    plots: &[(String, String)],
+    error_scale: f32,
+) -> String {
+    let (w, h) = (input.width, input.height);
+    // Thumbnails scale smoothly; a click opens the full-size file.
+    let img = |name: &str, alt: &str| {
+        format!(
+            "<figure><a href=\"{ASSET_DIR}/{name}\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{ASSET_DIR}/{name}\"></a><figcaption>{a}</figcaption></figure>",
+            a = esc(alt)
+        )
+    };
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><meta name=\"viewport\" content=\"width=device-width\">\
+         <title>gradtrace compare: {0}</title><style>{CSS}</style></head><body>\n<h1>Comparison: {0}</h1>\n",
+        esc(&input.scene)
+    );
+    if let Some(line) = headline(input, rows) {
+        let _ = writeln!(s, "<p class=\"headline\">{}</p>", esc(&line));
+    }
+    let _ = writeln!(s, "<p>{}</p>", esc(&meta_line(input)));
+    for (title, members) in tables(rows) {
+        let _ = write!(
+            s,
+            "<h2>{}</h2>\n<div class=\"table\"><table><tr>",
+            esc(&title)
+        );
+        for c in COLUMNS {
+            let _ = write!(s, "<th>{}</th>", esc(c));
+        }
+        s += "</tr>\n";
+        for r in members {
+            s += "<tr>";
+            for c in cells(r) {
+                let _ = write!(s, "<td>{}</td>", esc(&c));
+            }
+            s += "</tr>\n";
+        }
+        s += "</table></div>\n";
+    }
+    s += "<p>Strategies compare at equal sample count. Baselines are what a user would run instead — every pixel \
+          uniformly, a per-pixel adaptive sampler, a denoised render — at about the wall time of the gradient \
+          strategy at the same budget: the comparison any speed-up claim must win.</p>\n";
+    s += "<h2>Speed against error</h2>\n<p>Log-log; one line per method, points labelled by budget or samples per \
+          pixel; bars: 95% interval over the seeds.</p>\n<div class=\"plots\">\n";
+    for (_, svg) in plots {
+        s += &inline_svg(svg);
+        s += "\n";
+    }
+    s += "</div>\n<h2>Images</h2>\n";
+    s += &img(
+        "reference.jpg",
+        &format!("reference, {} spp", input.reference_info.spp),
+    );
+    let legend = legend_svg(error_scale);
+    s += "<p>Error maps: |luminance(run) − luminance(reference)|, linear units, one scale for all maps.</p>\n<div class=\"grid\">\n";
+    for card in cards {
+        let (run, row) = (
+            &input.runs[card.run],
+            rows.iter().find(|r| r.name == input.runs[card.run].name),
+        );
+        let name = format!("{} ({})", run.name, run.kind.short());
+        let _ = write!(s, "<div class=\"card\"><h3>{}</h3>", esc(&name));
+        if let Some(row) = row {
+            let _ = write!(
+                s,
+                "<p>{:.3} s; RMSE {}</p>",
+                run.wall_time_s,
+                value_ci(row.rmse, row.rmse_ci95)
+            );
+        }
+        s += "<div class=\"imgs\">";
+        s += &img(&card.image, &name);
+        s += &format!(
+            "<figure>{}{legend}</figure>",
+            &img(&card.error, "error map")
+                ["<figure>".len()..img(&card.error, "error map").len() - "</figure>".len()]
+        );
+        if let Some(m) = &card.samples {
+            s += &img(
+                m,
+                &format!("{} sample positions", run.sample_positions.len()),
+            );
+        }
+        s += "</div></div>\n";
+    }
+    s += "</div>\n";
+    if !input.notes.is_empty() {
+        s += "<h2>Notes</h2>\n<ul>\n";
+        for n in &input.notes {
+            let _ = writeln!(s, "<li>{}</li>", esc(n));
+        }
+        s += "</ul>\n";
+    }
+    s += "</body></html>\n";
+    s
+}
+
+/// Horizontal viridis bar from 0 to `scale` with three ticks (one under each map).
+fn legend_svg(scale: f32) -> String {
+    let mut s = String::from(
+        "<svg width=\"240\" height=\"34\" viewBox=\"0 0 240 34\"><defs><linearGradient id=\"viridis\">",
+    );
+    for k in 0..=16 {
+        let t = k as f32 / 16.0;
+        let _ = write!(
+            s,
+            "<stop offset=\"{t}\" stop-color=\"{}\"/>",
+            viridis_hex(t)
+        );
+    }
+    s += "</linearGradient></defs><rect x=\"6\" y=\"2\" width=\"228\" height=\"12\" fill=\"url(#viridis)\" stroke=\"#444\"/>";
+    for k in 0..=2 {
+        let x = 6.0 + 114.0 * k as f32;
+        let v = scale * k as f32 / 2.0;
+        let anchor = ["start", "middle", "end"][k];
+        let _ = write!(
+            s,
+            "<text x=\"{x}\" y=\"28\" font-size=\"11\" text-anchor=\"{anchor}\" font-family=\"sans-serif\">{}{v:.2e}</text>",
+            if k == 2 { "≥ " } else { "" }
+        );
+    }
+    s += "</svg>";
+    s
 }
 
 /// The luminance error that maps to the top of the colour scale, shared by all
@@ -377,316 +985,8 @@ fn sample_map(reference8: &[u8], w: usize, h: usize, positions: &[Vec2]) -> Vec<
     out
 }
 
-fn png_bytes(rgb8: &[u8], w: usize, h: usize) -> std::result::Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    PngEncoder::new(&mut out)
-        .write_image(rgb8, w as u32, h as u32, ExtendedColorType::Rgb8)
-        .map_err(|e| format!("PNG encoder: {e}"))?;
-    Ok(out)
-}
-
 fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged> {
     stage(path, |out| out.write_all(bytes).map_err(|e| e.to_string()))
-}
-
-/// Wall time against RMSE and against FLIP, one line per label (plot file name, SVG).
-fn speed_plots(
-    input: &ReportInput,
-    rows: &[ReportRow],
-) -> std::result::Result<Vec<(String, String)>, String> {
-    let mut labels: Vec<&str> = Vec::new();
-    for r in &input.runs {
-        if !labels.contains(&r.label.as_str()) {
-            labels.push(&r.label);
-        }
-    }
-    let series = |metric: fn(&ReportRow) -> f64| -> Vec<Series> {
-        labels
-            .iter()
-            .map(|l| Series {
-                name: (*l).to_string(),
-                points: input
-                    .runs
-                    .iter()
-                    .zip(rows)
-                    .filter(|(run, _)| run.label == *l)
-                    .map(|(run, row)| (row.wall_time_s, metric(row), run.kind.short()))
-                    .collect(),
-            })
-            .collect()
-    };
-    let title = |m: &str| format!("{}: wall time vs {m}", input.scene);
-    Ok(vec![
-        (
-            "speed_rmse.svg".into(),
-            loglog_svg(
-                &title("RMSE"),
-                "wall time (s)",
-                "RMSE",
-                &series(|r| f64::from(r.rmse)),
-            )?,
-        ),
-        (
-            "speed_flip.svg".into(),
-            loglog_svg(
-                &title("FLIP"),
-                "wall time (s)",
-                "mean FLIP",
-                &series(|r| f64::from(r.flip)),
-            )?,
-        ),
-    ])
-}
-
-fn json(
-    input: &ReportInput,
-    rows: &[ReportRow],
-    error_scale: f32,
-) -> std::result::Result<String, String> {
-    let value = serde_json::json!({
-        "scene": input.scene,
-        "width": input.width,
-        "height": input.height,
-        "reference_spp": input.reference_spp,
-        "reference_time_s": input.reference_time_s,
-        "exposure": input.exposure,
-        "relmse_eps": RELMSE_EPS,
-        "flip": { "variant": "LDR-FLIP (flip-rs, FLIP v1.7)", "pixels_per_degree": FLIP_PPD,
-                  "input": "8-bit sRGB of linear x 2^exposure, as the PNGs" },
-        "error_map_scale": error_scale,
-        "rows": rows,
-        "notes": input.notes,
-    });
-    serde_json::to_string_pretty(&value).map_err(|e| e.to_string())
-}
-
-/// The summary table as Markdown (also what goes into closing notes; the CLI can
-/// print it).
-pub fn markdown_table(rows: &[ReportRow]) -> String {
-    let mut s = String::from(
-        "| strategy | kind | budget | samples | wall time (s) | overhead (s) | RMSE | relMSE | FLIP | speed-up vs full |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-    );
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {:.3} | {:.3} | {:.4e} | {:.4e} | {:.4} | {} |",
-            r.label.replace('|', "\\|"),
-            r.kind,
-            budget_text(r),
-            r.samples,
-            r.wall_time_s,
-            r.overhead_s,
-            r.rmse,
-            r.relmse,
-            r.flip,
-            r.speedup_vs_reference
-                .map_or("–".into(), |v| format!("{v:.1}×")),
-        );
-    }
-    s
-}
-
-fn budget_text(r: &ReportRow) -> String {
-    match (r.budget, r.spp) {
-        (Some(b), _) => percent(b),
-        (None, Some(spp)) => format!("{spp} spp"),
-        _ => "–".into(),
-    }
-}
-
-fn markdown(
-    input: &ReportInput,
-    rows: &[ReportRow],
-    cards: &[Card],
-    plots: &[(String, String)],
-) -> String {
-    let mut s = format!("# Strategy comparison: {}\n\n", input.scene);
-    let _ = writeln!(s, "{}\n", meta_line(input));
-    s += &markdown_table(rows);
-    s += "\n";
-    for (name, _) in plots {
-        let _ = writeln!(s, "![{name}]({ASSET_DIR}/{name})");
-    }
-    let _ = writeln!(s, "\n![reference]({ASSET_DIR}/reference.png)\n");
-    for (run, card) in input.runs.iter().zip(cards) {
-        let _ = write!(
-            s,
-            "- {} ({}): [image]({ASSET_DIR}/{}) · [error]({ASSET_DIR}/{})",
-            run.label,
-            run.kind.short(),
-            card.image,
-            card.error
-        );
-        if let Some(m) = &card.samples {
-            let _ = write!(s, " · [samples]({ASSET_DIR}/{m})");
-        }
-        s += "\n";
-    }
-    if !input.notes.is_empty() {
-        s += "\n## Notes\n\n";
-        for n in &input.notes {
-            let _ = writeln!(s, "- {n}");
-        }
-    }
-    s
-}
-
-fn meta_line(input: &ReportInput) -> String {
-    format!(
-        "{}×{} pixels; reference {} spp in {:.1} s; exposure {:+} stops; relMSE ε = {}; \
-         FLIP: LDR-FLIP at {:.1} pixels/degree on the displayed 8-bit sRGB.",
-        input.width,
-        input.height,
-        input.reference_spp,
-        input.reference_time_s,
-        input.exposure,
-        RELMSE_EPS,
-        FLIP_PPD
-    )
-}
-
-const CSS: &str = "body{font-family:sans-serif;margin:1.5em;color:#222;max-width:110em}\
-table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:.25em .6em;text-align:right}\
-td:first-child,th:first-child,td:nth-child(2){text-align:left}th{background:#eee}\
-.grid{display:flex;flex-wrap:wrap;gap:1.2em}.card{flex:1 1 40em;border:1px solid #ccc;padding:.6em;border-radius:4px}\
-.imgs{display:flex;gap:.4em;flex-wrap:wrap}figure{margin:0;flex:1 1 0;min-width:10em}figcaption{font-size:.8em;color:#555}\
-img{image-rendering:pixelated;max-width:100%;height:auto}.plots{display:flex;flex-wrap:wrap;gap:1em}";
-
-fn html(
-    input: &ReportInput,
-    rows: &[ReportRow],
-    cards: &[Card],
-    assets: &[(String, Vec<u8>)],
-    plots: &[(String, String)],
-    error_scale: f32,
-) -> String {
-    let data = |name: &str| {
-        let bytes = assets
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(&[][..], |(_, b)| b);
-        format!("data:image/png;base64,{}", base64(bytes))
-    };
-    let (w, h) = (input.width, input.height);
-    let img = |name: &str, alt: &str| {
-        format!(
-            "<figure style=\"max-width:{w}px\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{}\"><figcaption>{a}</figcaption></figure>",
-            data(name),
-            a = esc(alt)
-        )
-    };
-    let mut s = String::new();
-    let _ = write!(
-        s,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>gradtrace compare: {0}</title>\
-         <style>{CSS}</style></head><body>\n<h1>Strategy comparison: {0}</h1>\n<p>{1}</p>\n",
-        esc(&input.scene),
-        esc(&meta_line(input))
-    );
-
-    s += "<h2>Summary</h2>\n<table><tr><th>strategy</th><th>kind</th><th>budget</th><th>samples</th>\
-          <th>wall time (s)</th><th>overhead (s)</th><th>RMSE</th><th>relMSE</th><th>FLIP</th><th>speed-up vs full</th></tr>\n";
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4e}</td>\
-             <td>{:.4e}</td><td>{:.4}</td><td>{}</td></tr>",
-            esc(&r.label),
-            r.kind,
-            budget_text(r),
-            r.samples,
-            r.wall_time_s,
-            r.overhead_s,
-            r.rmse,
-            r.relmse,
-            r.flip,
-            r.speedup_vs_reference.map_or("–".into(), |v| format!("{v:.1}×"))
-        );
-    }
-    s += "</table>\n<p>Adaptive rows compare strategies at equal sample count; equal-time rows render every \
-          pixel uniformly with fewer samples per pixel in about the same wall time, the honest baseline for \
-          any claimed speed-up.</p>\n";
-
-    s += "<h2>Speed against error</h2>\n<p>Log-log; one line per strategy, points labelled by budget.</p>\n<div class=\"plots\">\n";
-    for (_, svg) in plots {
-        s += &inline_svg(svg);
-        s += "\n";
-    }
-    s += "</div>\n";
-
-    s += "<h2>Reference</h2>\n";
-    s += &img(
-        "reference.png",
-        &format!("reference, {} spp", input.reference_spp),
-    );
-    let _ = write!(
-        s,
-        "\n<h3>Error-map scale</h3>\n<p>|luminance(run) − luminance(reference)|, linear units, shared by all maps.</p>\n{}\n",
-        legend_svg(error_scale)
-    );
-
-    // (kind name, heading, explanation)
-    let sections = [
-        ("adaptive", "Adaptive sampling (equal sample count)", ""),
-        (
-            "equal-time",
-            "Equal-time baselines",
-            "Uniform rendering of every pixel with fewer samples per pixel, at about the wall time of an adaptive run.",
-        ),
-        (
-            "interpolation",
-            "Gradient vs linear interpolation (Sec. 8)",
-            "The same sparse samples reconstructed with and without the analytic gradients.",
-        ),
-    ];
-    for (kind, title, blurb) in sections {
-        let members: Vec<usize> = (0..input.runs.len())
-            .filter(|&i| input.runs[i].kind.name() == kind)
-            .collect();
-        if members.is_empty() {
-            continue;
-        }
-        let _ = writeln!(s, "<h2>{title}</h2>");
-        if !blurb.is_empty() {
-            let _ = writeln!(s, "<p>{blurb}</p>");
-        }
-        s += "<div class=\"grid\">\n";
-        for i in members {
-            let (run, row, card) = (&input.runs[i], &rows[i], &cards[i]);
-            let name = format!("{} ({})", run.label, run.kind.short());
-            let _ = write!(
-                s,
-                "<div class=\"card\"><h3>{}</h3><p>{} samples, {:.3} s; RMSE {:.4e}, relMSE {:.4e}, FLIP {:.4}</p><div class=\"imgs\">",
-                esc(&name),
-                row.samples,
-                row.wall_time_s,
-                row.rmse,
-                row.relmse,
-                row.flip
-            );
-            s += &img(&card.image, &name);
-            s += &img(&card.error, "error map");
-            if let Some(m) = &card.samples {
-                s += &img(
-                    m,
-                    &format!("{} sample positions", run.sample_positions.len()),
-                );
-            }
-            s += "</div></div>\n";
-        }
-        s += "</div>\n";
-    }
-
-    if !input.notes.is_empty() {
-        s += "<h2>Notes</h2>\n<ul>\n";
-        for n in &input.notes {
-            let _ = writeln!(s, "<li>{}</li>", esc(n));
-        }
-        s += "</ul>\n";
-    }
-    s += "</body></html>\n";
-    s
 }
 
 /// An SVG document made fit for inline HTML: the XML declaration and the
@@ -698,39 +998,6 @@ fn inline_svg(svg: &str) -> String {
         None => svg,
     };
     body.replace(" xmlns=\"http://www.w3.org/2000/svg\"", "")
-}
-
-/// Horizontal viridis bar from 0 to `scale` with five ticks.
-fn legend_svg(scale: f32) -> String {
-    let mut s = String::from(
-        "<svg width=\"420\" height=\"48\" viewBox=\"0 0 420 48\"><defs><linearGradient id=\"viridis\">",
-    );
-    for k in 0..=16 {
-        let t = k as f32 / 16.0;
-        let _ = write!(
-            s,
-            "<stop offset=\"{t}\" stop-color=\"{}\"/>",
-            viridis_hex(t)
-        );
-    }
-    s += "</linearGradient></defs><rect x=\"10\" y=\"4\" width=\"400\" height=\"18\" fill=\"url(#viridis)\" stroke=\"#444\"/>";
-    for k in 0..=4 {
-        let x = 10.0 + 100.0 * k as f32;
-        let v = scale * k as f32 / 4.0;
-        let anchor = match k {
-            0 => "start",
-            4 => "end",
-            _ => "middle",
-        };
-        let _ = write!(
-            s,
-            "<line x1=\"{x}\" y1=\"22\" x2=\"{x}\" y2=\"27\" stroke=\"#444\"/>\
-             <text x=\"{x}\" y=\"40\" font-size=\"12\" text-anchor=\"{anchor}\" font-family=\"sans-serif\">{}{v:.3e}</text>",
-            if k == 4 { "≥ " } else { "" }
-        );
-    }
-    s += "</svg>";
-    s
 }
 
 /// Budget in samples per pixel as a percentage of the pixels: 0.05 → "5%".
@@ -774,26 +1041,4 @@ fn esc(text: &str) -> String {
         }
     }
     s
-}
-
-/// Standard base64 (RFC 4648, with padding) for the `data:` URIs.
-pub fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }

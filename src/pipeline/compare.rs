@@ -1,19 +1,20 @@
-//! scene → every sampling strategy at several budgets, a cached reference and
-//! honest baselines → `out/<scene>/report.{html,json,md}`.
+//! scene → every sampling strategy at several budgets, repeated over seeds, against
+//! a content-keyed cached reference and the baselines a user would pick instead →
+//! `<out>/report.{html,json,md}`.
 //!
-//! What is compared, per the adaptive-sampling issue and the first-order paper's
-//! Sec. 8–9: each strategy of `adaptive` at each budget (equal sample counts,
-//! reconstructed by gradient-aware C1 interpolation); a full render at the same
-//! samples per evaluated point (whose wall time is the speed-up baseline); full
-//! renders with fewer samples per pixel at the wall time of the `gradient`
-//! strategy (equal-time baselines); and Sec. 8's 1%-of-pixels experiment, gradient
-//! against linear interpolation, at the reference's samples per point and also scored
-//! on the largest surface away from silhouettes (the ground plane of Fig. 13).
+//! Per the first-order paper's Sec. 8–9: each strategy of `adaptive` at each budget
+//! (equal sample counts, reconstructed by gradient-aware C1 interpolation); a full
+//! render at the same samples per evaluated point; the baselines — every pixel
+//! rendered with as many samples as the `gradient` strategy's wall time buys — at
+//! equal time; and Sec. 8's 1%-of-pixels experiment, gradient against linear
+//! interpolation, also scored on the largest surface away from silhouettes.
 
 use super::adaptive::{render_adaptive, AdaptiveRender};
+use super::output_set::image_of_render;
 use crate::accel::Accel;
 use crate::adaptive::{Settings, Strategy};
-use crate::output::report::{self, ReportInput, ReportRow, Run, RunKind};
+use crate::math::sampler::hash2;
+use crate::output::report::{self, ReferenceInfo, ReportInput, ReportRow, Run, RunKind};
 use crate::reconstruct::Interpolation;
 use crate::render::{render, RenderOptions, RenderOutput};
 use crate::scene::Scene;
@@ -39,12 +40,21 @@ pub struct CompareOptions {
     /// [`RenderOptions::gradient_spp`]).
     pub gradient_spp: Option<u32>,
     pub seed: Option<u32>,
-    /// Directory of the report (default `out/<scene>`); the reference is cached there.
+    /// Repetitions of every run with independent random numbers (≥ 1; the
+    /// report gives means and 95 % intervals).
+    pub seeds: u32,
+    /// Keep every run's image as an EXR under `<out_dir>/runs/`.
+    pub keep_exr: bool,
+    /// Images of every budget in the report, not only the headline budget's.
+    pub all_images: bool,
+    /// Directory of the report; the reference is cached there.
     pub out_dir: PathBuf,
+    /// The command line, recorded in `report.json`.
+    pub command: String,
 }
 
 impl CompareOptions {
-    /// Every strategy at 5, 10, 17, 25 and 50 % of the pixels.
+    /// Every strategy at 5, 10, 17, 25 and 50 % of the pixels, one seed.
     pub fn new(out_dir: PathBuf) -> Self {
         Self {
             strategies: Strategy::ALL.to_vec(),
@@ -55,22 +65,96 @@ impl CompareOptions {
             vis_samples: Some(4),
             gradient_spp: None,
             seed: None,
+            seeds: 1,
+            keep_exr: false,
+            all_images: false,
             out_dir,
+            command: String::new(),
         }
+    }
+
+    /// Every option checked before any work: a bad list must not cost a
+    /// reference render (nor leave one behind).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |option: &str, message: String| {
+            Err(Error::Option {
+                option: option.into(),
+                message,
+            })
+        };
+        if self.strategies.is_empty() {
+            return bad("--strategies", "needs at least one strategy".into());
+        }
+        if self.budgets.is_empty() {
+            return bad("--budgets", "needs at least one budget".into());
+        }
+        if let Some(b) = self.budgets.iter().find(|b| !(**b > 0.0 && **b <= 16.0)) {
+            return bad(
+                "--budgets",
+                format!("{b}: a budget is samples per pixel in (0, 16], e.g. 0.17"),
+            );
+        }
+        if self.seeds == 0 {
+            return bad("--seeds", "must be at least 1".into());
+        }
+        if self.out_dir.exists() && !self.out_dir.is_dir() {
+            return bad(
+                "--out",
+                format!("{}: exists and is not a folder", self.out_dir.display()),
+            );
+        }
+        Ok(())
     }
 }
 
-/// `gradtrace compare`: loads the scene, runs [`compare`] with one progress line
-/// per step, and returns the report's rows.
+/// `out/<scene path>`: derived from the whole path, so that two scenes never share a
+/// folder (`scenes/cornell.toml` → `out/cornell`, `scenes/validation/cornell.toml` →
+/// `out/validation-cornell`; a scene outside the working folder gets its stem and a
+/// hash of its absolute path).
+pub fn default_dir(scene: &Path) -> PathBuf {
+    let stem = scene
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let abs = std::fs::canonicalize(scene).unwrap_or_else(|_| cwd.join(scene));
+    let name = match abs.strip_prefix(&cwd) {
+        Ok(rel) => {
+            let mut parts: Vec<String> = rel
+                .with_extension("")
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            if parts.len() > 1 && parts[0] == "scenes" {
+                parts.remove(0);
+            }
+            parts.join("-")
+        }
+        Err(_) => {
+            let key = hash2(
+                abs.to_string_lossy()
+                    .bytes()
+                    .fold(0u32, |h, b| hash2(h, b as u32)),
+                0,
+            );
+            format!("{stem}-{key:08x}")
+        }
+    };
+    Path::new("out").join(name)
+}
+
+/// `gradtrace compare`: checks the options, loads the scene, runs [`compare`] with
+/// one progress line per step, and returns the report's rows.
 pub fn run(
     scene_path: &Path,
     threads: Option<u32>,
     opts: &CompareOptions,
     mode: super::progress::ProgressMode,
 ) -> Result<Vec<ReportRow>> {
+    opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
-    let steps = 3 + opts.strategies.len() * opts.budgets.len() + 2 + opts.budgets.len();
-    let phase = super::progress::Phase::new(mode, "compare", steps as u64, "steps");
+    let per_seed = 1 + opts.strategies.len() * opts.budgets.len() + opts.budgets.len();
+    let steps = 2 + per_seed * opts.seeds as usize + 2;
+    let phase = super::progress::Phase::new(mode, "compare", steps as u64, "runs");
     let progress = |msg: &str| {
         phase.inc(1);
         phase.message(msg);
@@ -78,7 +162,18 @@ pub fn run(
     super::with_threads(threads, || compare(&scene, &accel, opts, &progress))?
 }
 
-/// Runs the comparison and writes the report; returns its table rows.
+/// The run settings shared by every render of a comparison.
+struct Plan<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    opts: &'a CompareOptions,
+    base: RenderOptions,
+    spp: u32,
+    reference_spp: u32,
+    size: (u32, u32),
+}
+
+/// Runs the comparison and writes the report; returns its rows.
 /// `progress` receives one line per finished step.
 pub fn compare(
     scene: &Scene,
@@ -86,14 +181,9 @@ pub fn compare(
     opts: &CompareOptions,
     progress: &dyn Fn(&str),
 ) -> Result<Vec<ReportRow>> {
-    if opts.budgets.is_empty() || opts.strategies.is_empty() {
-        return Err(Error::Option {
-            option: "compare".into(),
-            message: "needs at least one strategy and one budget".into(),
-        });
-    }
+    opts.validate()?;
+    let start = Instant::now();
     let spp = opts.spp.unwrap_or(scene.settings.spp).max(1);
-    let ref_spp = opts.reference_spp.unwrap_or(8 * spp).max(spp);
     let base = RenderOptions {
         spp: Some(spp),
         resolution: opts.resolution,
@@ -102,155 +192,269 @@ pub fn compare(
         gradient_spp: opts.gradient_spp,
         ..Default::default()
     };
-    let (w, h) = opts
-        .resolution
-        .unwrap_or((scene.camera.width, scene.camera.height));
-    let (reference, reference_time) =
-        cached_reference(scene, accel, &base, ref_spp, (w, h), &opts.out_dir)?;
+    let plan = Plan {
+        scene,
+        accel,
+        opts,
+        size: base.resolution_of(scene),
+        reference_spp: opts.reference_spp.unwrap_or(8 * spp).max(spp),
+        spp,
+        base,
+    };
+    let scene_hash = scene.content_hash()?;
+    let (reference, info) = cached_reference(&plan, &scene_hash)?;
     progress(&format!(
-        "reference: {ref_spp} spp ({reference_time:.1} s when rendered)"
+        "reference: {} spp, {} ({:.1} s when rendered)",
+        info.spp,
+        if info.reused { "reused" } else { "rendered" },
+        info.time_s
     ));
+    let mut rendering_s = if info.reused { 0.0 } else { info.time_s };
 
-    // The full render every adaptive run is measured against.
-    let (full, full_time) = timed_render(scene, accel, &base)?;
-    progress(&format!("full render: {spp} spp, {full_time:.2} s"));
-    let mut runs = vec![full_run("full", full, spp, full_time)];
+    let mut runs = Vec::new();
+    for k in 0..opts.seeds {
+        let seed_runs = seed_runs(&plan, k, progress)?;
+        rendering_s += seed_runs.iter().map(|r| r.wall_time_s).sum::<f64>();
+        runs.extend(seed_runs);
+    }
+    warn_identical_sample_sets(&runs, progress);
+    let (grid, sec8_note) = interpolation_runs(&plan, &reference)?;
+    rendering_s += grid.iter().map(|r| r.wall_time_s).sum::<f64>();
+    progress("Sec. 8 interpolation grid");
+    runs.extend(grid);
+    if opts.keep_exr {
+        keep_exrs(&plan, &runs)?;
+    }
 
-    let mut gradient_times = Vec::new();
-    for &strategy in &opts.strategies {
-        for &budget in &opts.budgets {
+    let outside_s = (start.elapsed().as_secs_f64() - rendering_s).max(0.0);
+    let notes = notes(
+        &plan,
+        &info,
+        sec8_note,
+        outside_s,
+        start.elapsed().as_secs_f64(),
+    );
+    let (w, h) = plan.size;
+    let input = ReportInput {
+        scene: scene.name(),
+        scene_hash,
+        command: opts.command.clone(),
+        version: super::version(),
+        threads: rayon::current_num_threads(),
+        width: w as usize,
+        height: h as usize,
+        reference,
+        reference_info: info,
+        exposure: 0.0,
+        runs,
+        all_images: opts.all_images,
+        notes,
+    };
+    report::write_report(&opts.out_dir, &input)
+}
+
+/// The seed of repetition `k`: the runs' seed itself first (so one repetition is
+/// the single-seed comparison), then independent streams derived from it.
+fn repetition_seed(base: u32, k: u32) -> u32 {
+    if k == 0 {
+        base
+    } else {
+        hash2(base, 0x5eed_0000 + k)
+    }
+}
+
+/// One repetition: the full render, every strategy × budget, and for every budget
+/// the baselines at the `gradient` run's wall time.
+fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
+    let seed = repetition_seed(plan.base.seed.unwrap_or(plan.scene.settings.seed), k);
+    let base = RenderOptions {
+        seed: Some(seed),
+        ..plan.base.clone()
+    };
+    let (full, full_time) = timed_render(plan, &base)?;
+    progress(&format!(
+        "seed {k}: full render, {} spp, {full_time:.2} s",
+        plan.spp
+    ));
+    let mut runs = vec![full_run(
+        "full",
+        RunKind::Full { spp: plan.spp },
+        k,
+        full,
+        full_time,
+    )];
+    for &budget in &plan.opts.budgets {
+        let mut gradient_time = None;
+        for &strategy in &plan.opts.strategies {
             let settings = Settings::new(strategy, budget);
             let out = render_adaptive(
-                scene,
-                accel,
+                plan.scene,
+                plan.accel,
                 &base,
                 &settings,
                 Interpolation::Gradient,
                 &|_, _| {},
             )?;
-            let st = out.stats;
             progress(&format!(
-                "{} at {:.0}%: {} samples, {:.2} s",
+                "seed {k}: {} at {:.0}%, {} samples, {:.2} s",
                 strategy.name(),
                 budget * 100.0,
                 out.samples.samples.len(),
-                st.wall_s
+                out.stats.wall_s
             ));
             if strategy == Strategy::Gradient {
-                gradient_times.push((budget, st.wall_s));
+                gradient_time = Some(out.stats.wall_s);
             }
             runs.push(adaptive_run(
-                strategy.name().into(),
+                strategy.name(),
                 RunKind::Adaptive { budget },
+                k,
                 out,
             ));
         }
-    }
-
-    // How much shorter than the reference render itself the gradient runs are.
-    // (Only when the cached render time is known.)
-    let against_reference = (reference_time > 0.0 && !gradient_times.is_empty()).then(|| {
-        let list = gradient_times
-            .iter()
-            .map(|&(budget, t)| format!("{:.0}%: {:.1}×", budget * 100.0, reference_time / t))
-            .collect::<Vec<_>>()
-            .join(", ");
-        format!("gradient's wall time against the reference render ({reference_time:.1} s): {list} shorter.")
-    });
-    // Equal wall time: every pixel rendered, with as many samples as the gradient
-    // strategy's time buys.
-    for (budget, t_grad) in gradient_times {
-        let spp_eq = ((spp as f64 * t_grad / full_time).round() as u32).max(1);
-        let equal_time = RenderOptions {
-            spp: Some(spp_eq),
-            ..base.clone()
-        };
-        let (out, secs) = timed_render(scene, accel, &equal_time)?;
+        // The baselines need the gradient run's time; without `gradient` among the
+        // strategies, the first strategy's time stands in.
+        let target =
+            gradient_time.unwrap_or_else(|| runs.last().map_or(full_time, |r| r.wall_time_s));
+        let spp_eq = ((plan.spp as f64 * target / full_time).round() as u32).max(1);
+        let (out, secs) = timed_render(
+            plan,
+            &RenderOptions {
+                spp: Some(spp_eq),
+                ..base.clone()
+            },
+        )?;
         progress(&format!(
-            "equal time as gradient at {:.0}%: {spp_eq} spp, {secs:.2} s",
+            "seed {k}: uniform-all-pixels at the time of {:.0}%: {spp_eq} spp, {secs:.2} s",
             budget * 100.0
         ));
-        runs.push(full_run("uniform-all-pixels", out, spp_eq, secs));
+        let kind = RunKind::Baseline {
+            budget,
+            spp: spp_eq,
+        };
+        runs.push(full_run("uniform-all-pixels", kind, k, out, secs));
     }
+    Ok(runs)
+}
 
-    // Sec. 8: 1% of the pixels on a regular grid, gradient vs linear interpolation.
-    // The paper evaluates these few pixels with dense light sampling ("we must have
-    // accurate values at the image pixels"): here at the reference's spp, a quarter
-    // of the camera samples carrying the gradient with 32 shadow rays per line. The
-    // grid is 1% of the image, so this costs a few percent of the reference.
+/// Two strategies that placed exactly the same samples at one budget and seed
+/// (forced boundary cells can take the whole budget) are one result twice.
+fn warn_identical_sample_sets(runs: &[Run], progress: &dyn Fn(&str)) {
+    for (i, a) in runs.iter().enumerate() {
+        for b in &runs[i + 1..] {
+            if a.seed == b.seed
+                && a.kind == b.kind
+                && matches!(a.kind, RunKind::Adaptive { .. })
+                && !a.sample_positions.is_empty()
+                && a.sample_positions == b.sample_positions
+            {
+                progress(&format!(
+                    "warning: {} and {} placed the same {} samples",
+                    a.name,
+                    b.name,
+                    a.sample_positions.len()
+                ));
+            }
+        }
+    }
+}
+
+/// Sec. 8: 1% of the pixels on a regular grid, linear then gradient interpolation,
+/// and the note scoring them on the largest surface away from silhouettes.
+///
+/// The paper evaluates these few pixels with dense light sampling ("we must have
+/// accurate values at the image pixels"): here at the reference's spp, a quarter
+/// of the camera samples carrying the gradient with 32 shadow rays per line.
+fn interpolation_runs(plan: &Plan, reference: &[Vec3]) -> Result<(Vec<Run>, Option<String>)> {
     let grid_opts = RenderOptions {
-        spp: Some(ref_spp),
-        gradient_spp: Some((ref_spp / 4).max(1)),
-        vis_samples: Some(opts.vis_samples.unwrap_or(0).max(32)),
-        ..base.clone()
+        spp: Some(plan.reference_spp),
+        gradient_spp: Some((plan.reference_spp / 4).max(1)),
+        vis_samples: Some(plan.opts.vis_samples.unwrap_or(0).max(32)),
+        ..plan.base.clone()
     };
+    let mut runs = Vec::new();
     for interp in [Interpolation::Linear, Interpolation::Gradient] {
         let settings = Settings::new(Strategy::Uniform, 0.01);
-        let out = render_adaptive(scene, accel, &grid_opts, &settings, interp, &|_, _| {})?;
+        let out = render_adaptive(
+            plan.scene,
+            plan.accel,
+            &grid_opts,
+            &settings,
+            interp,
+            &|_, _| {},
+        )?;
+        let name = format!("1% grid, {} interpolation", interp.name());
         runs.push(adaptive_run(
-            format!("1% grid, {} interpolation", interp.name()),
+            &name,
             RunKind::Interpolation { budget: 0.01 },
+            0,
             out,
         ));
     }
-
-    // Sec. 8 is about soft shadows on the ground plane: also score the grid runs on
-    // the surface that covers the most pixels (the ground in three_spheres_env).
     // Pixels within one grid spacing of another surface are left out: there the
-    // grid cannot place the silhouette (both interpolations show the same blocky
-    // outline) and Sec. 8 is about the shading and shadows in between.
-    let mut notes = Vec::new();
+    // grid cannot place the silhouette and Sec. 8 is about the shading in between.
+    let (w, h) = plan.size;
     let spacing = (1.0f32 / 0.01).sqrt().ceil() as usize;
-    let surface = largest_surface(scene, accel, &base)?
+    let surface = largest_surface(plan)?
         .map(|(id, mask)| (id, erode(&mask, w as usize, h as usize, spacing)))
         .filter(|(_, mask)| mask.contains(&true));
-    if let Some((id, mask)) = surface {
-        let pick = |v: &[Vec3]| -> Vec<Vec3> {
-            v.iter()
-                .zip(&mask)
-                .filter(|(_, &m)| m)
-                .map(|(c, _)| *c)
-                .collect()
-        };
-        let reference_on_mask = pick(&reference);
-        let n = reference_on_mask.len();
-        let masked = |img: &[Vec3]| crate::output::metrics::rmse(&pick(img), &reference_on_mask);
-        // The last two runs are the grid's, linear then gradient.
-        let grid = &runs[runs.len() - 2..];
-        let (lin, grad) = (masked(&grid[0].image)?, masked(&grid[1].image)?);
-        let line = format!(
-            "Sec. 8, 1% grid on the largest surface (shape {id}, the {n} pixels more than {spacing} px from any other surface): RMSE linear {lin:.4e}, gradient {grad:.4e} ({:.2}×).",
-            grad / lin.max(f32::MIN_POSITIVE)
-        );
-        progress(&line);
-        notes.push(line);
-    }
-
-    let input = ReportInput {
-        scene: scene.name(),
-        width: w as usize,
-        height: h as usize,
-        reference,
-        reference_time_s: full_time,
-        reference_spp: ref_spp,
-        exposure: 0.0,
-        runs,
-        notes: [
+    let note = match surface {
+        None => None,
+        Some((id, mask)) => {
+            let pick = |v: &[Vec3]| -> Vec<Vec3> {
+                v.iter()
+                    .zip(&mask)
+                    .filter(|(_, &m)| m)
+                    .map(|(c, _)| *c)
+                    .collect()
+            };
+            let reference_on_mask = pick(reference);
+            let masked =
+                |img: &[Vec3]| crate::output::metrics::rmse(&pick(img), &reference_on_mask);
+            let (lin, grad) = (masked(&runs[0].image)?, masked(&runs[1].image)?);
             Some(format!(
-                "Reference: every pixel at {ref_spp} spp, with random numbers independent of every run ({reference_time:.1} s when rendered). Speed-ups are against the full render at {spp} spp per pixel ({full_time:.2} s), \
-                 the same number of samples per evaluated point as the adaptive runs."
-            )),
-            against_reference,
-            Some("Adaptive runs evaluate the renderer (path tracing with analytic gradients: direct light, soft shadows and the indirect term) at the quadtree's \
-             samples and reconstruct the pixels by Sibson C1 interpolation with those gradients; overhead = quadtree + reconstruction."
-                .into()),
-        ]
-        .into_iter()
-        .flatten()
-        .chain(notes)
-        .collect(),
+                "Sec. 8, 1% grid on the largest surface (shape {id}, the {} pixels more than {spacing} px from any other surface): RMSE linear {lin:.4e}, gradient {grad:.4e} ({:.2}×).",
+                reference_on_mask.len(),
+                grad / lin.max(f32::MIN_POSITIVE)
+            ))
+        }
     };
-    report::write_report(&opts.out_dir, &input)
+    Ok((runs, note))
+}
+
+fn notes(
+    plan: &Plan,
+    info: &ReferenceInfo,
+    sec8: Option<String>,
+    outside_s: f64,
+    total_s: f64,
+) -> Vec<String> {
+    [
+        Some(format!(
+            "Reference: every pixel at {} spp with random numbers independent of every run, {} ({:.1} s when rendered); cache key {}.",
+            info.spp,
+            if info.reused { "reused from the cache" } else { "rendered for this report" },
+            info.time_s,
+            info.cache_key
+        )),
+        Some(format!(
+            "Adaptive runs evaluate the renderer (path tracing with analytic gradients: direct light, soft shadows and the indirect term) at the quadtree's samples, {} spp each, and reconstruct the pixels by Sibson C1 interpolation with those gradients; overhead = quadtree + reconstruction.",
+            plan.spp
+        )),
+        Some(format!(
+            "{} repetition{} with independent random numbers; ± is the 95% Student-t interval of the mean.",
+            plan.opts.seeds,
+            if plan.opts.seeds == 1 { "" } else { "s" }
+        )),
+        sec8,
+        Some(format!(
+            "compare spent {outside_s:.2} s of its {total_s:.1} s outside rendering (metrics, report, cache): {:.1}%.",
+            100.0 * outside_s / total_s.max(1e-9)
+        )),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
 }
 
 /// `mask` shrunk by `r` pixels: a pixel stays set only if every pixel in the
@@ -272,25 +476,17 @@ fn erode(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<bool> {
 
 /// The shape seen at the most pixel centres (1-based id as in the `object.id` layer)
 /// and its pixel mask, from one primary ray per pixel; `None` if nothing is hit.
-fn largest_surface(
-    scene: &Scene,
-    accel: &Accel,
-    base: &RenderOptions,
-) -> Result<Option<(u32, Vec<bool>)>> {
-    let ids = render(
-        scene,
-        accel,
-        &RenderOptions {
-            spp: Some(1),
-            max_depth: Some(1),
-            aovs: true,
-            gradients: false,
-            ..base.clone()
-        },
-        &|_, _| {},
-    )?
-    .object_id
-    .unwrap_or_default();
+fn largest_surface(plan: &Plan) -> Result<Option<(u32, Vec<bool>)>> {
+    let opts = RenderOptions {
+        spp: Some(1),
+        max_depth: Some(1),
+        aovs: true,
+        gradients: false,
+        ..plan.base.clone()
+    };
+    let ids = render(plan.scene, plan.accel, &opts, &|_, _| {})?
+        .object_id
+        .unwrap_or_default();
     let mut counts = std::collections::BTreeMap::new();
     for &id in ids.iter().filter(|&&id| id > 0.0) {
         *counts.entry(id as u32).or_insert(0usize) += 1;
@@ -302,17 +498,22 @@ fn largest_surface(
 }
 
 /// Every pixel rendered with `opts`, and the wall time it took.
-fn timed_render(scene: &Scene, accel: &Accel, opts: &RenderOptions) -> Result<(RenderOutput, f64)> {
+fn timed_render(plan: &Plan, opts: &RenderOptions) -> Result<(RenderOutput, f64)> {
     let t = Instant::now();
-    let out = render(scene, accel, opts, &|_, _| {})?;
+    let out = render(plan.scene, plan.accel, opts, &|_, _| {})?;
     Ok((out, t.elapsed().as_secs_f64()))
 }
 
-/// A report run of a full render at `spp` samples per pixel.
-fn full_run(label: &str, out: RenderOutput, spp: u32, secs: f64) -> Run {
+/// A report run of a render of every pixel.
+fn full_run(name: &str, kind: RunKind, seed: u32, out: RenderOutput, secs: f64) -> Run {
+    let spp = match kind {
+        RunKind::Full { spp } | RunKind::Baseline { spp, .. } => spp,
+        _ => out.spp,
+    };
     Run {
-        label: label.into(),
-        kind: RunKind::EqualTime { spp },
+        name: name.into(),
+        kind,
+        seed,
         samples: out.width * out.height * spp as usize,
         wall_time_s: secs,
         overhead_s: 0.0,
@@ -322,10 +523,11 @@ fn full_run(label: &str, out: RenderOutput, spp: u32, secs: f64) -> Run {
 }
 
 /// A report run of an adaptive render (its overhead: quadtree + reconstruction).
-fn adaptive_run(label: String, kind: RunKind, out: AdaptiveRender) -> Run {
+fn adaptive_run(name: &str, kind: RunKind, seed: u32, out: AdaptiveRender) -> Run {
     Run {
-        label,
+        name: name.into(),
         kind,
+        seed,
         samples: out.samples.samples.len(),
         wall_time_s: out.stats.wall_s,
         overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s,
@@ -334,59 +536,127 @@ fn adaptive_run(label: String, kind: RunKind, out: AdaptiveRender) -> Run {
     }
 }
 
-/// The reference image, rendered once and cached as
-/// `reference-<spp>spp-<w>x<h>-seed<s>.exr` with its render time in a `.txt` sidecar.
+/// `--keep-exr`: every run's image as `runs/<name>-<setting>-seed<k>.exr`.
+fn keep_exrs(plan: &Plan, runs: &[Run]) -> Result<()> {
+    let dir = plan.opts.out_dir.join("runs");
+    std::fs::create_dir_all(&dir).map_err(|e| Error::Output {
+        path: dir.clone(),
+        message: format!("cannot create the folder: {e}"),
+    })?;
+    let (w, h) = plan.size;
+    for r in runs {
+        let setting = match r.kind {
+            RunKind::Adaptive { budget } | RunKind::Interpolation { budget } => {
+                format!("b{budget}")
+            }
+            RunKind::Baseline { budget, spp } => format!("t{budget}-{spp}spp"),
+            RunKind::Full { spp } => format!("{spp}spp"),
+        };
+        let name: String = format!("{}-{setting}-seed{}", r.name, r.seed)
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let mut img = crate::output::OutputImage::new(w as usize, h as usize);
+        img.push_vec3("", crate::output::names::RGB, &r.image);
+        crate::output::write_exr(&dir.join(format!("{name}.exr")), &img)?;
+    }
+    Ok(())
+}
+
+/// The reference's cache key: SHA-256 over the scene's content hash, every render
+/// setting of the reference and the renderer's version — any change re-renders.
+fn reference_key(scene_hash: &str, opts: &RenderOptions) -> String {
+    use sha2::{Digest, Sha256};
+    let text = format!(
+        "gradtrace reference v1\nscene {scene_hash}\noptions {opts:?}\nversion {}\n",
+        super::version()
+    );
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// The reference image, rendered once and cached as `reference-<key>.exr` with a
+/// JSON sidecar (spp, time, full key, scene hash); reused only when the key of the
+/// present inputs matches the sidecar's.
 ///
 /// Its random numbers come from a seed of its own (derived from the runs' seed):
 /// with the runs' seed, its first `spp` samples per pixel would be the full render's
 /// very samples, and the full and equal-time renders would share a quarter or more of
 /// their noise with the reference — their error would look ~25% smaller than it is.
-fn cached_reference(
-    scene: &Scene,
-    accel: &Accel,
-    base: &RenderOptions,
-    spp: u32,
-    (w, h): (u32, u32),
-    dir: &Path,
-) -> Result<(Vec<Vec3>, f64)> {
-    let seed = crate::math::sampler::hash2(base.seed.unwrap_or(scene.settings.seed), 0x7265_6665);
-    let stem = format!("reference-{spp}spp-{w}x{h}-seed{seed}");
-    let exr = dir.join(format!("{stem}.exr"));
-    let meta = dir.join(format!("{stem}.txt"));
-    if let (Ok(img), Ok(text)) = (
-        crate::output::read_exr(&exr),
-        std::fs::read_to_string(&meta),
-    ) {
-        if let (Some(r), Some(g), Some(b)) = (img.channel("R"), img.channel("G"), img.channel("B"))
-        {
-            if img.width == w as usize && img.height == h as usize {
-                let pixels = r
-                    .data
-                    .iter()
-                    .zip(&g.data)
-                    .zip(&b.data)
-                    .map(|((&r, &g), &b)| Vec3::new(r, g, b))
-                    .collect();
-                return Ok((pixels, text.trim().parse().unwrap_or(0.0)));
-            }
-        }
-    }
-    let reference = RenderOptions {
-        spp: Some(spp),
+fn cached_reference(plan: &Plan, scene_hash: &str) -> Result<(Vec<Vec3>, ReferenceInfo)> {
+    let seed = hash2(
+        plan.base.seed.unwrap_or(plan.scene.settings.seed),
+        0x7265_6665,
+    );
+    let opts = RenderOptions {
+        spp: Some(plan.reference_spp),
         seed: Some(seed),
-        ..base.clone()
+        resolution: Some(plan.size),
+        gradients: false,
+        aovs: false,
+        ..plan.base.clone()
     };
-    let (out, secs) = timed_render(scene, accel, &reference)?;
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
+    let key = reference_key(scene_hash, &opts);
+    let dir = &plan.opts.out_dir;
+    let stem = format!("reference-{}", &key[..16]);
+    let (exr, meta) = (
+        dir.join(format!("{stem}.exr")),
+        dir.join(format!("{stem}.json")),
+    );
+    if let Some((pixels, time_s)) = read_cached(&exr, &meta, &key, plan.size) {
+        let info = ReferenceInfo {
+            spp: plan.reference_spp,
+            time_s,
+            cache_key: key,
+            reused: true,
+        };
+        return Ok((pixels, info));
+    }
+    let (out, secs) = timed_render(plan, &opts)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
+        path: dir.clone(),
+        message: format!("cannot create the folder: {e}"),
     })?;
-    crate::output::write_exr(&exr, &super::output_set::image_of_render(&out))?;
+    crate::output::write_exr(&exr, &image_of_render(&out))?;
+    let sidecar = serde_json::json!({
+        "cache_key": key, "scene_hash": scene_hash, "spp": plan.reference_spp,
+        "time_s": secs, "options": format!("{opts:?}"), "version": super::version(),
+    });
     crate::output::write_atomic(&meta, |f| {
         use std::io::Write;
-        writeln!(f, "{secs}").map_err(|e| e.to_string())
+        writeln!(f, "{sidecar:#}").map_err(|e| e.to_string())
     })?;
-    Ok((out.beauty, secs))
+    let info = ReferenceInfo {
+        spp: plan.reference_spp,
+        time_s: secs,
+        cache_key: key,
+        reused: false,
+    };
+    Ok((out.beauty, info))
+}
+
+/// The cached reference's pixels and render time, if its sidecar carries `key` and
+/// its size is right.
+fn read_cached(exr: &Path, meta: &Path, key: &str, (w, h): (u32, u32)) -> Option<(Vec<Vec3>, f64)> {
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(meta).ok()?).ok()?;
+    if sidecar["cache_key"].as_str() != Some(key) {
+        return None;
+    }
+    let img = crate::output::read_exr(exr).ok()?;
+    if (img.width, img.height) != (w as usize, h as usize) {
+        return None;
+    }
+    let pixels = img.vec3("", crate::output::names::RGB)?;
+    Some((pixels, sidecar["time_s"].as_f64().unwrap_or(0.0)))
 }
 
 #[cfg(test)]

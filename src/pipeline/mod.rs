@@ -6,6 +6,7 @@
 
 pub mod adaptive;
 pub mod compare;
+pub mod memory;
 pub mod output_set;
 pub mod preview;
 pub mod progress;
@@ -62,4 +63,13 @@ pub fn info(path: &Path) -> Result<String> {
         crate::render::describe(&scene),
         build.as_secs_f64() * 1e3,
     ))
+}
+
+/// The renderer's version: the crate version and, when the build knew it, the git
+/// commit (`GRADTRACE_GIT_COMMIT`, set by `build.rs`), e.g. `0.1.0 (4342f2c)`.
+pub fn version() -> String {
+    match option_env!("GRADTRACE_GIT_COMMIT") {
+        Some(c) if !c.is_empty() => format!("{} ({c})", env!("CARGO_PKG_VERSION")),
+        _ => env!("CARGO_PKG_VERSION").to_string(),
+    }
 }

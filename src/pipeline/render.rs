@@ -3,11 +3,11 @@
 use super::adaptive::render_adaptive;
 use super::output_set::{image_of_reconstruction, image_of_render, output_paths, write_output_set};
 use super::progress::{Phase, ProgressMode};
-use super::{load, with_threads};
+use super::{memory, with_threads};
 use crate::adaptive::Settings;
 use crate::reconstruct::Interpolation;
 use crate::render::{self, RenderOptions};
-use crate::Result;
+use crate::{Error, Result};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -22,6 +22,9 @@ pub struct RenderJob {
     pub adaptive: Option<(Settings, Interpolation)>,
     /// Worker threads (default: all cores); never changes the image.
     pub threads: Option<u32>,
+    /// Refuse runs estimated to need more bytes than this (default: 90 % of the
+    /// memory available).
+    pub max_memory: Option<u64>,
     pub progress: ProgressMode,
 }
 
@@ -94,10 +97,27 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     let (exr, png) = output_paths(job.out.as_deref(), &stem)?;
-    let (scene, accel) = load(&job.scene)?;
+    if job.adaptive.is_some() && job.options.gradients {
+        return Err(Error::Option {
+            option: "--gradients".into(),
+            message: "adaptive renders (--strategy) compute the gradient at their samples and \
+                      reconstruct with it; the per-pixel grad.* layers come from full renders: \
+                      drop --gradients or --strategy"
+                .into(),
+        });
+    }
+    let scene = crate::scene::load(&job.scene)?;
+    let (w, h) = job.options.resolution_of(&scene);
+    let pixels = u64::from(w) * u64::from(h);
+    let bytes = match &job.adaptive {
+        None => memory::full_render_bytes(pixels, &job.options),
+        Some((s, _)) => memory::adaptive_render_bytes(pixels, s.budget, &job.options),
+    };
+    let what = format!("a {w}x{h} render");
+    memory::check(bytes, job.max_memory, &what, "--width/--height/--budget")?;
+    let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
     with_threads(job.threads, || match &job.adaptive {
         None => {
-            let (w, h) = job.options.resolution_of(&scene);
             let phase = Phase::new(job.progress, "render", w as u64 * h as u64, "pixels");
             let out = render::render(&scene, &accel, &job.options, &phase.callback())?;
             drop(phase);
@@ -126,7 +146,11 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
             )?;
             drop(phase);
             let rec = &out.reconstruction;
-            write_output_set(&image_of_reconstruction(rec), &rec.image, &exr, &png)?;
+            let mut image = image_of_reconstruction(rec);
+            if job.options.aovs {
+                add_aovs(&mut image, &scene, &accel, &job.options)?;
+            }
+            write_output_set(&image, &rec.image, &exr, &png)?;
             Ok(RenderSummary {
                 width: rec.width,
                 height: rec.height,
@@ -142,4 +166,34 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
             })
         }
     })?
+}
+
+/// The AOV layers of an adaptive render (normal, depth, albedo, object id), from
+/// one camera ray per pixel: what the reconstructed radiance sits on, at a cost of
+/// one primary ray and hit per pixel (a 256-spp adaptive sample costs hundreds).
+fn add_aovs(
+    image: &mut crate::output::OutputImage,
+    scene: &crate::scene::Scene,
+    accel: &crate::accel::Accel,
+    opts: &RenderOptions,
+) -> Result<()> {
+    let gbuffer = render::render(
+        scene,
+        accel,
+        &RenderOptions {
+            spp: Some(1),
+            max_depth: Some(1),
+            aovs: true,
+            gradients: false,
+            ..opts.clone()
+        },
+        &|_, _| {},
+    )?;
+    // Every layer but the beauty (`R,G,B`) and the one-sample variance.
+    let aovs = image_of_render(&gbuffer)
+        .channels
+        .into_iter()
+        .filter(|c| c.name.contains('.') && !c.name.starts_with(crate::output::names::VARIANCE));
+    image.channels.extend(aovs);
+    Ok(())
 }
