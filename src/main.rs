@@ -39,7 +39,9 @@ enum Command {
     Compare(CompareArgs),
 }
 
+// Negative numbers reach the value parsers, which name the flag in the error.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 struct CompareArgs {
     /// Scene file (TOML).
     scene: PathBuf,
@@ -51,7 +53,6 @@ struct CompareArgs {
         long,
         value_name = "LIST",
         value_delimiter = ',',
-        allow_negative_numbers = true,
         value_parser = budget
     )]
     budgets: Vec<f32>,
@@ -84,6 +85,7 @@ struct CompareArgs {
 }
 
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 struct RenderArgs {
     /// Scene file (TOML).
     scene: PathBuf,
@@ -135,7 +137,6 @@ struct RenderArgs {
         long,
         value_name = "F",
         requires = "strategy",
-        allow_negative_numbers = true,
         value_parser = budget
     )]
     budget: Option<f32>,

@@ -144,11 +144,113 @@ fn bad_arguments_are_one_error_line_with_status_1() {
         (&["render", "tiny.toml", "--threads", "0"][..], "--threads"),
         (&["render", "tiny.toml", "--bogus"][..], "--bogus"),
         (&["render", "tiny.toml", "--out", "img.png"][..], "img.png"),
+        // Every numeric flag is checked like its scene key (issue 18, defect 7 and 12).
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--strategy",
+                "gradient",
+                "--budget",
+                "-1",
+            ][..],
+            "--budget",
+        ),
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--strategy",
+                "gradient",
+                "--budget",
+                "17",
+            ][..],
+            "(0, 16]",
+        ),
+        (
+            &["render", "tiny.toml", "--far-light", "nan"][..],
+            "--far-light",
+        ),
+        (
+            &["render", "tiny.toml", "--max-depth", "0"][..],
+            "--max-depth",
+        ),
+        (
+            &["render", "tiny.toml", "--max-memory", "-2"][..],
+            "--max-memory",
+        ),
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--strategy",
+                "gradient",
+                "--gradients",
+            ][..],
+            "--gradients",
+        ),
+        (
+            &["compare", "tiny.toml", "--budgets", "0.1,-0.5"][..],
+            "--budgets",
+        ),
+        // Defect 3: a run that cannot fit is refused before any work.
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--width",
+                "1000000",
+                "--height",
+                "1000000",
+            ][..],
+            "GiB",
+        ),
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--max-memory",
+                "0.001",
+                "--width",
+                "2000",
+                "--height",
+                "2000",
+            ][..],
+            "--max-memory",
+        ),
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--strategy",
+                "gradient",
+                "--budget",
+                "16",
+                "--width",
+                "2000",
+                "--height",
+                "2000",
+                "--max-memory",
+                "4",
+            ][..],
+            "GiB",
+        ),
     ] {
         let out = run_in(&dir, args);
         assert_failed_with(&out, needle);
     }
     assert_eq!(tree(&dir), vec!["tiny.toml"]);
+}
+
+/// An `--out` inside a regular file names that file (not "File exists").
+#[test]
+fn out_under_a_regular_file_names_the_file() {
+    let dir = temp_dir("outfile");
+    std::fs::write(dir.join("tiny.toml"), TINY_SCENE).unwrap();
+    std::fs::write(dir.join("plain"), b"x").unwrap();
+    let out = run_in(&dir, &["render", "tiny.toml", "--out", "plain/sub/img.exr"]);
+    assert_failed_with(&out, "plain: cannot write output: is a file, not a folder");
+    assert_eq!(tree(&dir), vec!["plain", "tiny.toml"]);
 }
 
 #[test]

@@ -133,6 +133,13 @@ fn create_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
         .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
         .map(Path::to_path_buf)
         .collect();
+    // The first ancestor that exists must be a folder ("File exists" would hide it).
+    if let Some(blocker) = dir.ancestors().find(|a| a.exists()).filter(|a| !a.is_dir()) {
+        return Err(Error::Output {
+            path: blocker.to_path_buf(),
+            message: "is a file, not a folder: cannot create the output folder inside it".into(),
+        });
+    }
     std::fs::create_dir_all(dir).map_err(|e| Error::Output {
         path: dir.to_path_buf(),
         message: format!("cannot create the output directory: {e}"),
