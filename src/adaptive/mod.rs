@@ -234,6 +234,11 @@ pub struct Settings {
     /// [`surfaces_differ`], which also tells curvature from steps). 0.02 catches the
     /// folds of a mesh, such as the 2.7% step on objects_bumpy's cow face.
     pub depth_tolerance: f32,
+    /// The largest share of the budget that forced (boundary) splits may spend,
+    /// in [0, 1]. Past it, boundary cells compete on their strategy's metric like
+    /// any other: without a cap, silhouettes, creases and terminators can take the
+    /// whole of a low budget and every strategy places the same samples.
+    pub boundary_share: f32,
 }
 
 impl Settings {
@@ -244,6 +249,7 @@ impl Settings {
             budget,
             block_size: 8,
             depth_tolerance: 0.02,
+            boundary_share: 0.5,
         }
     }
 }

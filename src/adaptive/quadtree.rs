@@ -9,7 +9,9 @@
 //! sort before every metric-driven cell and are split down to pixel size. Among
 //! themselves they are ordered by the radiance jump across the boundary × area, the
 //! same for every strategy, so that when the budget cannot refine every boundary the
-//! visible ones go first (Cornell-box-like scenes spend all of 17% on boundaries).
+//! visible ones go first. Forced splits may spend at most `Settings::boundary_share`
+//! of the budget (default half); past it boundary cells compete on the strategy's
+//! metric, so that at low budgets the strategies still differ.
 //!
 //! Determinism: heap keys are totally ordered (ties broken by cell id), splits are
 //! taken in batches whose size depends only on the tree, and each batch is evaluated
@@ -51,8 +53,8 @@ const PARTIAL_ORDER: [u8; 4] = [0, 3, 1, 2];
 /// samples each; when fewer than four remain, the most important cell is split
 /// *partially* (children in the order top-left, bottom-right, top-right, bottom-left), so
 /// the count is always met exactly. Forced (object-boundary) splits are taken before any
-/// metric-driven split; if they alone exceed the budget the boundary is refined only as
-/// far as the budget allows.
+/// metric-driven split until they have spent `boundary_share` of the budget; the rest
+/// of the boundary then competes on the strategy's metric.
 ///
 /// Errors: empty image, budget not in `(0, 16]` or rounding to zero samples, a
 /// non-finite or negative depth tolerance, a zero block size, and `Durand`/`GradientVis`
@@ -361,6 +363,10 @@ struct Tree {
     is_dirty: Vec<bool>,
     /// Wall time spent in `evaluate`.
     evaluate_s: f64,
+    /// Samples created by forced splits so far, and the most they may create
+    /// (`boundary_share × target`).
+    forced_spent: usize,
+    forced_cap: usize,
 }
 
 impl Tree {
@@ -389,7 +395,15 @@ impl Tree {
             dirty: Vec::new(),
             is_dirty: Vec::new(),
             evaluate_s: 0.0,
+            forced_spent: 0,
+            forced_cap: (f64::from(settings.boundary_share.clamp(0.0, 1.0)) * target as f64)
+                as usize,
         }
+    }
+
+    /// Whether forced splits may still spend `n` more samples.
+    fn boundary_budget_left(&self, n: usize) -> bool {
+        self.forced_spent + n <= self.forced_cap
     }
 
     /// The sparse uniform start: one sample at the centre of every block (clipped to
@@ -489,13 +503,22 @@ impl Tree {
         )
     }
 
-    /// Pops the most important valid leaf (skipping stale entries).
+    /// Pops the most important valid leaf (skipping stale entries). Once the
+    /// boundary share is spent, a forced entry goes back as an ordinary one.
     fn pop(&mut self) -> Option<u32> {
         while let Some(e) = self.heap.pop() {
             let c = &self.cells[e.id as usize];
-            if c.version == e.version && c.split == 0 {
-                return Some(e.id);
+            if c.version != e.version || c.split != 0 {
+                continue;
             }
+            if e.forced && !self.boundary_budget_left(4) {
+                self.push(e.id);
+                continue;
+            }
+            if e.forced {
+                self.forced_spent += 4;
+            }
+            return Some(e.id);
         }
         None
     }
@@ -720,13 +743,21 @@ impl Tree {
         c.version += 1;
         let metric = if c.metric.is_finite() { c.metric } else { 0.0 };
         let area = c.area();
-        let key = if c.forced {
+        let forced = c.forced && self.forced_spent + 4 <= self.forced_cap;
+        // Past the boundary share, a boundary cell's jump still counts as the
+        // contrast |ΔI| over its size, the metric a finite difference would give it.
+        let metric = if c.forced {
+            metric.max(c.jump / c.size())
+        } else {
+            metric
+        };
+        let key = if forced {
             c.jump * area
         } else {
             metric * weight * area
         };
         self.heap.push(Entry {
-            forced: c.forced,
+            forced,
             key,
             area,
             id,
