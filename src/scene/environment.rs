@@ -8,7 +8,7 @@
 //! and u = 0 looks along −z. Texel placement also follows Mitsuba (see [`bilinear`]).
 
 use crate::math::scalar::{dot_const, Scalar};
-use crate::math::{Vec2, Vec3};
+use crate::math::{luminance, Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 use std::path::Path;
 
@@ -88,6 +88,48 @@ impl Environment {
             }
         }
     }
+}
+
+impl Environment {
+    /// Mean luminance over the sphere of directions (the environment's power per
+    /// unit solid angle, for choosing lights in proportion to power).
+    pub fn mean_luminance(&self) -> f32 {
+        match self {
+            Environment::Constant { radiance } => luminance(*radiance),
+            Environment::Image {
+                width,
+                height,
+                texels,
+                scale,
+            } => {
+                let mut s = 0.0f64;
+                let mut wsum = 0.0f64;
+                for y in 0..*height {
+                    let st = ((y as f64 + 0.5) / *height as f64 * std::f64::consts::PI).sin();
+                    for x in 0..*width {
+                        s += luminance(texels[y * width + x]) as f64 * st;
+                        wsum += st;
+                    }
+                }
+                (*scale as f64 * s / wsum.max(1e-30)) as f32
+            }
+            Environment::GaussianSky {
+                sharpness,
+                peak,
+                ambient,
+                ..
+            } => {
+                luminance(*ambient)
+                    + luminance(*peak) * gaussian_lobe_integral(*sharpness) / (4.0 * PI)
+            }
+        }
+    }
+}
+
+/// ∫ exp(κ (ω·d − 1)) dω over the sphere = 2π (1 − e^{−2κ}) / κ.
+pub fn gaussian_lobe_integral(sharpness: f32) -> f32 {
+    let k = sharpness.max(1e-4);
+    2.0 * PI * (-(-2.0 * k).exp_m1()) / k
 }
 
 /// `scale ·` the bilinear lookup of a lat-long image along `d`; over duals the
