@@ -8,6 +8,15 @@
 //! * A direction on or below the horizon (`z <= 0`) gives f = 0, pdf = 0 and no sample.
 //! * Inputs are re-normalised in f64; NaN/negative colours count as 0 and exponents are
 //!   clamped to `[0, MAX_EXPONENT]`, so no input can produce NaN or Inf.
+//! * Each material's f is written once, in [`Material::f`], generic over
+//!   [`Scalar`] and fed the half-vector sum ([`HalfSum`]):
+//!   `eval` runs it at f64 in the local frame, the gradient stage over dual numbers in
+//!   world space ([`Material::f_cos_world`]), so both share the guards above. Every
+//!   `match` on a material's variants lives in this module.
+//!
+//! Adding a material: a variant here, its formulas in a file of this folder (f generic
+//! over `Scalar`, plus pdf and sampling), an arm in each method of [`Material`], and its
+//! TOML form in `scene/parse.rs`; render/ needs no change.
 //!
 //! Formulas are from "The Blinn-Phong Normalization Zoo" (Schüler 2011,
 //! `papers/blinn-phong-normalization-zoo.md`, "the zoo" below):
