@@ -227,6 +227,34 @@ impl Material {
     }
 }
 
+/// The material as `info` prints it: its TOML type name and parameters, e.g.
+/// `blinn_phong kd=[0.5, 0.5, 0.5] ks=[0.2, 0.2, 0.2] exponent=40`.
+impl std::fmt::Display for Material {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v3 = |v: &Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
+        match self {
+            Material::Lambert { albedo } => write!(f, "lambert albedo={}", v3(albedo)),
+            Material::BlinnPhong { kd, ks, exponent } => {
+                write!(
+                    f,
+                    "blinn_phong kd={} ks={} exponent={exponent}",
+                    v3(kd),
+                    v3(ks)
+                )
+            }
+            Material::CookTorrance { kd, ks, exponent } => {
+                write!(
+                    f,
+                    "cook_torrance kd={} ks={} exponent={exponent}",
+                    v3(kd),
+                    v3(ks)
+                )
+            }
+            Material::Mirror { reflectance } => write!(f, "mirror reflectance={}", v3(reflectance)),
+        }
+    }
+}
+
 /// The half-vector *sum* s = ω_o + ω_i of two unit directions, seen from the
 /// shading normal n: everything an isotropic half-vector lobe needs, without
 /// cancellation (sin²θh = |n×s|²/|s|², L·H = |s|/2).
@@ -304,4 +332,26 @@ fn finite_nonneg(x: f32) -> f32 {
 fn to_f32(c: DVec3) -> Vec3 {
     let v = c.as_vec3();
     Vec3::new(finite_nonneg(v.x), finite_nonneg(v.y), finite_nonneg(v.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_names_the_toml_type_and_parameters() {
+        let m = Material::BlinnPhong {
+            kd: Vec3::splat(0.5),
+            ks: Vec3::new(0.25, 0.5, 1.0),
+            exponent: 40.0,
+        };
+        assert_eq!(
+            m.to_string(),
+            "blinn_phong kd=[0.5, 0.5, 0.5] ks=[0.25, 0.5, 1] exponent=40"
+        );
+        let m = Material::Lambert {
+            albedo: Vec3::new(0.7, 0.5, 0.3),
+        };
+        assert_eq!(m.to_string(), "lambert albedo=[0.7, 0.5, 0.3]");
+    }
 }

@@ -126,6 +126,34 @@ impl Environment {
     }
 }
 
+/// The environment as `info` prints it: its TOML type name and parameters.
+impl std::fmt::Display for Environment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v3 = |v: &Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
+        match self {
+            Environment::Constant { radiance } => write!(f, "constant radiance={}", v3(radiance)),
+            Environment::Image {
+                width,
+                height,
+                scale,
+                ..
+            } => write!(f, "image {width}x{height} scale={scale}"),
+            Environment::GaussianSky {
+                direction,
+                sharpness,
+                peak,
+                ambient,
+            } => write!(
+                f,
+                "gaussian_sky direction={} sharpness={sharpness} peak={} ambient={}",
+                v3(direction),
+                v3(peak),
+                v3(ambient)
+            ),
+        }
+    }
+}
+
 /// ∫ exp(κ (ω·d − 1)) dω over the sphere = 2π (1 − e^{−2κ}) / κ.
 pub fn gaussian_lobe_integral(sharpness: f32) -> f32 {
     let k = sharpness.max(1e-4);
