@@ -9,6 +9,7 @@
 use super::{rms_relative, Locate, Scene};
 use crate::{Error, Result};
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Receiver points per figure (spacing 0.01 over the range [-3, 3]).
@@ -395,18 +396,13 @@ pub(super) fn push_row(csv: &mut String, row: &[f64]) {
     csv.push('\n');
 }
 
-/// Writes `contents` to `dir/name` through a temporary file and a rename, so a
-/// reader never sees a half-written file; the temporary name carries the process id
-/// so that two processes writing the same figure do not share it.
+/// Writes `contents` to `dir/name` with the renderer's atomic writer (temporary
+/// file, fsync, rename), so a reader never sees a half-written figure.
 pub(super) fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
     let path = dir.join(name);
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let err = |e: std::io::Error| Error::Output {
-        path: path.clone(),
-        message: e.to_string(),
-    };
-    std::fs::write(&tmp, contents).map_err(err)?;
-    std::fs::rename(&tmp, &path).map_err(err)?;
+    crate::output::write_atomic(&path, |w| {
+        w.write_all(contents.as_bytes()).map_err(|e| e.to_string())
+    })?;
     Ok(path)
 }
 
