@@ -6,36 +6,25 @@ use gradtrace::accel::{offset_ray_origin, Accel, Hit, PrimRef};
 use gradtrace::math::{Ray, Vec3};
 use gradtrace::scene::{Mesh, Sphere};
 
+mod common;
 mod scenes;
+use common::Rng;
 
-/// Small deterministic PCG32 so that failures reproduce.
-struct Rng(u64);
+/// Ranges and directions drawn from the shared test generator.
+trait RngExt {
+    fn range(&mut self, a: f32, b: f32) -> f32;
+    fn vec(&mut self, a: f32, b: f32) -> Vec3;
+    fn unit(&mut self) -> Vec3;
+}
 
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(
-            seed.wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407),
-        )
-    }
-    fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
+impl RngExt for Rng {
     fn range(&mut self, a: f32, b: f32) -> f32 {
-        a + (b - a) * self.f32()
+        a + (b - a) * self.next_f32()
     }
     fn vec(&mut self, a: f32, b: f32) -> Vec3 {
         Vec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
     }
+    /// Uniform on the sphere, by rejection from the cube.
     fn unit(&mut self) -> Vec3 {
         loop {
             let v = self.vec(-1.0, 1.0);
@@ -354,7 +343,7 @@ fn leak_count(
             let (pa, pb) = (m.positions[a as usize], m.positions[b as usize]);
             for k in 0..per_edge {
                 // Midpoint, then random points along the edge.
-                let s = if k == 0 { 0.5 } else { rng.f32() };
+                let s = if k == 0 { 0.5 } else { rng.next_f32() };
                 shoot(o, pa + (pb - pa) * s);
             }
         }
@@ -412,7 +401,7 @@ fn rays_from_inside_a_sphere_hit_its_far_side() {
     let accel = Accel::build(&[], &[sphere(c, r), sphere(c + Vec3::X * 10.0, 1.0)]);
     let mut worst = 0.0f32;
     for _ in 0..20_000 {
-        let o = c + rng.unit() * (r * rng.f32().sqrt() * 0.999);
+        let o = c + rng.unit() * (r * rng.next_f32().sqrt() * 0.999);
         let d = rng.unit();
         let h = accel.intersect(&Ray::new(o, d)).expect("inside ray hits");
         assert_eq!(h.prim, PrimRef::Sphere(0));
@@ -521,7 +510,11 @@ fn pathological_deep_scene_matches_brute_force() {
     for i in 0..4000 {
         // Rays aimed at random triangles of the line from random directions, every
         // fourth one at the stack of coincident copies deep in the tree.
-        let k = if i % 4 == 0 { 500 } else { rng.next_u32() % n };
+        let k = if i % 4 == 0 {
+            500
+        } else {
+            (rng.next_u64() % n as u64) as u32
+        };
         let x = x_of(k);
         // The triangle's centroid.
         let s = x * 1e-3;
@@ -554,7 +547,7 @@ fn spawned_rays_do_not_self_intersect() {
     let mut checked = 0;
     for _ in 0..20_000 {
         // Hit one of the two convex objects from outside.
-        let target = if rng.f32() < 0.5 { c } else { ico_center };
+        let target = if rng.next_f32() < 0.5 { c } else { ico_center };
         let o = target + rng.unit() * 20.0;
         let ray = Ray::new(o, (target + rng.vec(-1.0, 1.0) - o).normalize());
         let Some(h) = accel.intersect(&ray) else {

@@ -852,3 +852,94 @@ fn no_nan_or_inf_for_extreme_inputs() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------
+// 5. The gradient stage's dual evaluation is the same implementation.
+// ---------------------------------------------------------------------------
+
+/// Rotation of `v` about the unit axis `a` by angle `t` (Rodrigues).
+fn rotate(v: DVec3, a: DVec3, t: f64) -> DVec3 {
+    v * t.cos() + a.cross(v) * t.sin() + a * a.dot(v) * (1.0 - t.cos())
+}
+
+/// `Material::f_cos_world` over duals (what `render::gradients` differentiates)
+/// against the path tracer's `eval · cos θi`, and its lanes against central
+/// differences of the same generic code at f64. Exponents to 1e5 near the peak and
+/// half-angles beyond 45° (the ln branch of the half-vector guard): a powf of an f32
+/// cosine, as the gradient stage evaluated its own copy before, is off by ~n·6e-8
+/// relative (6e-3 at n = 1e5), far beyond the 2e-5 allowed here.
+#[test]
+fn dual_evaluation_matches_eval_and_finite_differences() {
+    use gradtrace::math::dual::Dual;
+    let z = DVec3::Z;
+    let (axis_i, axis_n) = (DVec3::new(0.6, 0.8, 0.0), DVec3::new(0.0, 0.6, 0.8));
+    let mut cases = Vec::new();
+    for n in [1.0f32, 40.0, 1e3, 1e5] {
+        let lobe = 1.0 / (n as f64).sqrt();
+        for theta_o in [10.0f64, 60.0, 89.0] {
+            let wo = wo_at(theta_o).as_dvec3();
+            let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
+            // Near the highlight, one lobe width off it, and (low exponents) wide.
+            for off in [0.3 * lobe, lobe, if n <= 40.0 { 1.2 } else { 2.0 * lobe }] {
+                let wi = rotate(mirror, DVec3::new(0.0, 1.0, 0.0), -off.min(0.5)).normalize();
+                let wi = rotate(wi, z, 0.7 * off).normalize();
+                if wi.z > 1e-3 {
+                    cases.push((n, wo, wi));
+                }
+            }
+        }
+    }
+    for (n, wo, wi) in cases {
+        for m in [
+            blinn_phong(n),
+            cook_torrance(n),
+            Material::Lambert {
+                albedo: Vec3::new(0.7, 0.5, 0.3),
+            },
+        ] {
+            let f64s = |v: DVec3| v.to_array();
+            let at = |t_i: f64, t_n: f64| -> [f64; 3] {
+                let wi = rotate(wi, axis_i, t_i);
+                let nn = rotate(z, axis_n, t_n);
+                m.f_cos_world(f64s(nn), f64s(wo), f64s(wi))
+            };
+            let dual = |v: DVec3, lane: usize, d: DVec3| -> [Dual<2>; 3] {
+                let mut r = [0, 1, 2].map(|k| Dual::constant(v[k] as f32));
+                for k in 0..3 {
+                    r[k].d[lane] = d[k] as f32;
+                }
+                r
+            };
+            let g = m.f_cos_world(
+                dual(z, 1, axis_n.cross(z)),
+                dual(wo, 0, DVec3::ZERO),
+                dual(wi, 0, axis_i.cross(wi)),
+            );
+            let want = m.eval(wo.as_vec3(), wi.as_vec3()) * wi.as_vec3().z;
+            let h = 1e-6;
+            let fd_i = (0..3).map(|c| (at(h, 0.0)[c] - at(-h, 0.0)[c]) / (2.0 * h));
+            let fd_n = (0..3).map(|c| (at(0.0, h)[c] - at(0.0, -h)[c]) / (2.0 * h));
+            for (c, (di, dn)) in fd_i.zip(fd_n).enumerate() {
+                let what = format!("{m:?} wo {wo} wi {wi} channel {c}");
+                assert!(
+                    rel_close(g[c].v, want[c], 2e-5),
+                    "{what}: {} vs eval {}",
+                    g[c].v,
+                    want[c]
+                );
+                // Lane tolerance: f32 lanes, scaled by the value's own size.
+                let scale = (di.abs() + dn.abs()).max(1e-3 * g[c].v as f64);
+                assert!(
+                    ((g[c].d[0] as f64) - di).abs() <= 1e-3 * scale,
+                    "{what}: ∂/∂wi {} vs {di}",
+                    g[c].d[0]
+                );
+                assert!(
+                    ((g[c].d[1] as f64) - dn).abs() <= 1e-3 * scale,
+                    "{what}: ∂/∂n {} vs {dn}",
+                    g[c].d[1]
+                );
+            }
+        }
+    }
+}

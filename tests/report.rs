@@ -14,6 +14,9 @@ use gradtrace::output::report::{
 };
 use std::path::PathBuf;
 
+mod common;
+use common::Rng;
+
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("gradtrace-report-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -33,17 +36,10 @@ fn texture(w: usize, h: usize) -> Vec<Vec3> {
         .collect()
 }
 
-/// Deterministic zero-mean noise in [-amp, amp] (a fixed LCG; no external crate).
+/// Deterministic zero-mean noise in [-amp, amp] (the shared test generator).
 fn add_noise(img: &[Vec3], amp: f32, seed: u64) -> Vec<Vec3> {
-    let mut s = seed
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    let mut next = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-    };
+    let mut rng = Rng::new(seed);
+    let mut next = || rng.next_f32() * 2.0 - 1.0;
     img.iter()
         .map(|p| *p + Vec3::new(next(), next(), next()) * amp)
         .collect()

@@ -9,7 +9,8 @@
 //! `L·H = V·H = |s|/2` is symmetric in `wo`, `wi` to the last bit (reciprocity).
 
 use super::normalization::{blinn_phong_modified_rdf, blinn_phong_ndf};
-use super::{sanitize, MAX_EXPONENT};
+use super::{sanitize, HalfSum, MAX_EXPONENT};
+use crate::math::scalar::Scalar;
 use crate::math::{warp, Vec2, Vec3};
 use glam::DVec3;
 use std::f64::consts::{FRAC_1_PI, PI};
@@ -49,33 +50,32 @@ fn luminance(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
-/// Half-vector quantities of a pair of unit directions above the horizon.
-struct Half {
+/// Half-vector quantities of a pair of unit directions above the horizon: the
+/// numerical guards of both glossy lobes, for every scalar type.
+struct Half<T> {
     /// (N·H)^n.
-    cos_n: f64,
+    cos_n: T,
     /// L·H = V·H, floored at [`MIN_LH`].
-    lh: f64,
+    lh: T,
 }
 
-impl Half {
-    fn new(wo: DVec3, wi: DVec3, n: f64) -> Self {
-        let s = wo + wi;
-        // |s| ≥ s.z = wo.z + wi.z > 0: no division by zero.
-        let len2 = s.length_squared();
-        let sin2 = (s.x * s.x + s.y * s.y) / len2;
-        let ln_cos2 = if sin2 < 0.5 {
+impl<T: Scalar> Half<T> {
+    fn new(s: &HalfSum<T>, n: f64) -> Self {
+        // |s| ≥ n·s = cos θo + cos θi > 0: no division by zero.
+        let sin2 = s.perp2 / s.len2;
+        let ln_cos2 = if sin2.value() < 0.5 {
             (-sin2).ln_1p()
         } else {
-            (s.z * s.z / len2).ln()
+            (s.along * s.along / s.len2).ln()
         };
         let cos_n = if n == 0.0 {
-            1.0
+            T::constant(1.0)
         } else {
-            (0.5 * n * ln_cos2).exp()
+            ln_cos2.mul_const(0.5 * n).exp()
         };
         Self {
             cos_n,
-            lh: (0.5 * len2.sqrt()).max(MIN_LH),
+            lh: s.len2.sqrt().mul_const(0.5).max_const(MIN_LH),
         }
     }
 }
@@ -112,31 +112,38 @@ impl Glossy {
     }
 
     /// Scalar specular term (to be multiplied by ks).
-    fn specular(&self, h: &Half) -> f64 {
+    fn specular<T: Scalar>(&self, h: &Half<T>) -> T {
         match self.form {
-            SpecularForm::BlinnPhong => self.spec_norm * h.cos_n,
+            SpecularForm::BlinnPhong => h.cos_n.mul_const(self.spec_norm),
             // f_s = (n+1)(N·H)^n / (8π (L·H)^3), zoo "Minimalist Cook-Torrance".
-            SpecularForm::CookTorrance => self.spec_norm * h.cos_n / (h.lh * h.lh * h.lh),
+            SpecularForm::CookTorrance => h.cos_n.mul_const(self.spec_norm) / (h.lh * h.lh * h.lh),
         }
     }
 
     /// Density of the specular strategy in wi: pdf_h / (4 wo·h), with
     /// pdf_h = (n+1)/(2π) (N·H)^n (zoo "Blinn-Phong (NDF)").
-    fn specular_pdf(&self, h: &Half) -> f64 {
+    fn specular_pdf(&self, h: &Half<f64>) -> f64 {
         self.ndf_norm * h.cos_n / (4.0 * h.lh)
+    }
+
+    /// f = kd/π + ks · specular, per channel.
+    fn f_from<T: Scalar>(&self, h: &Half<T>) -> [T; 3] {
+        let spec = self.specular(h);
+        let (kd, ks) = (self.kd.to_array(), self.ks.to_array());
+        [0, 1, 2].map(|c| spec.mul_const(ks[c]).add_const(kd[c] * FRAC_1_PI))
+    }
+
+    /// f for directions above the horizon given by their half-vector sum.
+    pub(super) fn f<T: Scalar>(&self, s: &HalfSum<T>) -> [T; 3] {
+        self.f_from(&Half::new(s, self.n))
     }
 
     /// f and the mixture pdf for unit directions above the horizon.
     pub(super) fn eval_pdf(&self, wo: DVec3, wi: DVec3) -> (DVec3, f64) {
-        let h = Half::new(wo, wi, self.n);
-        let f = self.kd * FRAC_1_PI + self.ks * self.specular(&h);
+        let h = Half::new(&HalfSum::local(wo, wi), self.n);
+        let f = DVec3::from_array(self.f_from(&h));
         let pdf = (1.0 - self.p_spec) * wi.z * FRAC_1_PI + self.p_spec * self.specular_pdf(&h);
         (f, pdf)
-    }
-
-    pub(super) fn eval(&self, wo: DVec3, wi: DVec3) -> DVec3 {
-        let h = Half::new(wo, wi, self.n);
-        self.kd * FRAC_1_PI + self.ks * self.specular(&h)
     }
 
     pub(super) fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {

@@ -8,6 +8,15 @@
 //! * A direction on or below the horizon (`z <= 0`) gives f = 0, pdf = 0 and no sample.
 //! * Inputs are re-normalised in f64; NaN/negative colours count as 0 and exponents are
 //!   clamped to `[0, MAX_EXPONENT]`, so no input can produce NaN or Inf.
+//! * Each material's f is written once, in [`Material::f`], generic over
+//!   [`Scalar`] and fed the half-vector sum ([`HalfSum`]):
+//!   `eval` runs it at f64 in the local frame, the gradient stage over dual numbers in
+//!   world space ([`Material::f_cos_world`]), so both share the guards above. Every
+//!   `match` on a material's variants lives in this module.
+//!
+//! Adding a material: a variant here, its formulas in a file of this folder (f generic
+//! over `Scalar`, plus pdf and sampling), an arm in each method of [`Material`], and its
+//! TOML form in `scene/parse.rs`; render/ needs no change.
 //!
 //! Formulas are from "The Blinn-Phong Normalization Zoo" (Schüler 2011,
 //! `papers/blinn-phong-normalization-zoo.md`, "the zoo" below):
@@ -50,6 +59,7 @@ mod lambert;
 mod mirror;
 pub mod normalization;
 
+use crate::math::scalar::{dot, Scalar};
 use crate::math::{Vec2, Vec3};
 use glam::DVec3;
 
@@ -89,13 +99,35 @@ impl Material {
         let Some((wo, wi)) = upper_pair(wo, wi) else {
             return Vec3::ZERO;
         };
+        to_f32(DVec3::from_array(self.f(&HalfSum::local(wo, wi))))
+    }
+
+    /// f for a pair of directions strictly above the horizon (checked by the
+    /// caller), from their half-vector sum: the one implementation of every
+    /// material, at f64 for [`eval`](Self::eval) and over duals for the gradients
+    /// ([`f_cos_world`](Self::f_cos_world)). Zero for delta lobes.
+    pub fn f<T: Scalar>(&self, h: &HalfSum<T>) -> [T; 3] {
         match self {
-            Material::Lambert { albedo } => lambert::eval(*albedo),
+            Material::Lambert { albedo } => lambert::eval(*albedo)
+                .to_array()
+                .map(|c| T::constant(c as f64)),
             Material::BlinnPhong { .. } | Material::CookTorrance { .. } => {
-                self.glossy().map_or(Vec3::ZERO, |g| to_f32(g.eval(wo, wi)))
+                self.glossy().map_or([T::constant(0.0); 3], |g| g.f(h))
             }
-            Material::Mirror { .. } => Vec3::ZERO,
+            Material::Mirror { .. } => [T::constant(0.0); 3],
         }
+    }
+
+    /// f(ω_o, ω_i; n) · (n·ω_i)₊ for world-space unit vectors given as components
+    /// (the gradient stage passes duals, whose lanes then carry the derivatives);
+    /// zero unless both directions are strictly above the shading normal's horizon.
+    pub fn f_cos_world<T: Scalar>(&self, n: [T; 3], wo: [T; 3], wi: [T; 3]) -> [T; 3] {
+        let cos_i = dot(n, wi);
+        let cos_o = dot(n, wo);
+        if cos_i.value() <= 0.0 || cos_o.value() <= 0.0 {
+            return [T::constant(0.0); 3];
+        }
+        self.f(&HalfSum::world(n, wo, wi)).map(|f| f * cos_i)
     }
 
     /// Solid-angle density of sampling `wi` given `wo`; zero for delta lobes.
@@ -160,6 +192,21 @@ impl Material {
         }
     }
 
+    /// Ω_ρ = √(6s), the BRDF's angular bandwidth in the Durand et al. 2005 frequency
+    /// analysis (first-order paper Sec. 9.1), with s the Phong exponent of an
+    /// equivalent lobe: 1 for Lambert, the exponent (at least 1) for the glossy
+    /// lobes and a large 1e4 for a mirror.
+    pub fn angular_bandwidth(&self) -> f32 {
+        let s = match self {
+            Material::Lambert { .. } => 1.0,
+            Material::BlinnPhong { exponent, .. } | Material::CookTorrance { exponent, .. } => {
+                exponent.max(1.0)
+            }
+            Material::Mirror { .. } => 1e4,
+        };
+        (6.0 * s).sqrt()
+    }
+
     /// True when the material is a pure delta (no light sampling is useful).
     pub fn is_delta(&self) -> bool {
         matches!(self, Material::Mirror { .. })
@@ -178,6 +225,48 @@ impl Material {
             _ => return None,
         };
         (!g.is_black()).then_some(g)
+    }
+}
+
+/// The half-vector *sum* s = ω_o + ω_i of two unit directions, seen from the
+/// shading normal n: everything an isotropic half-vector lobe needs, without
+/// cancellation (sin²θh = |n×s|²/|s|², L·H = |s|/2).
+#[derive(Clone, Copy, Debug)]
+pub struct HalfSum<T> {
+    /// |s|².
+    pub len2: T,
+    /// |n × s|², the squared length of s's component in the tangent plane.
+    pub perp2: T,
+    /// n · s.
+    pub along: T,
+}
+
+impl HalfSum<f64> {
+    /// In the local shading frame (n = +z), in f64.
+    pub fn local(wo: DVec3, wi: DVec3) -> Self {
+        let s = wo + wi;
+        Self {
+            len2: s.length_squared(),
+            perp2: s.x * s.x + s.y * s.y,
+            along: s.z,
+        }
+    }
+}
+
+impl<T: Scalar> HalfSum<T> {
+    /// In world space, for a unit normal `n`.
+    pub fn world(n: [T; 3], wo: [T; 3], wi: [T; 3]) -> Self {
+        let s = [0, 1, 2].map(|k| wo[k] + wi[k]);
+        let c = [
+            n[1] * s[2] - n[2] * s[1],
+            n[2] * s[0] - n[0] * s[2],
+            n[0] * s[1] - n[1] * s[0],
+        ];
+        Self {
+            len2: dot(s, s),
+            perp2: dot(c, c),
+            along: dot(n, s),
+        }
     }
 }
 
@@ -216,4 +305,26 @@ fn finite_nonneg(x: f32) -> f32 {
 fn to_f32(c: DVec3) -> Vec3 {
     let v = c.as_vec3();
     Vec3::new(finite_nonneg(v.x), finite_nonneg(v.y), finite_nonneg(v.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_names_the_toml_type_and_parameters() {
+        let m = Material::BlinnPhong {
+            kd: Vec3::splat(0.5),
+            ks: Vec3::new(0.25, 0.5, 1.0),
+            exponent: 40.0,
+        };
+        assert_eq!(
+            m.to_string(),
+            "blinn_phong kd=[0.5, 0.5, 0.5] ks=[0.25, 0.5, 1] exponent=40"
+        );
+        let m = Material::Lambert {
+            albedo: Vec3::new(0.7, 0.5, 0.3),
+        };
+        assert_eq!(m.to_string(), "lambert albedo=[0.7, 0.5, 0.3]");
+    }
 }

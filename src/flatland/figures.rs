@@ -9,6 +9,7 @@
 use super::{rms_relative, Locate, Scene};
 use crate::{Error, Result};
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Receiver points per figure (spacing 0.01 over the range [-3, 3]).
@@ -71,79 +72,130 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
 
     // Fig. 9a: the scene.
     files.push(write(out_dir, "fig9a_scene.svg", &scene_svg(&scene))?);
-
-    // Fig. 9b/9c: shading and gradients across the receiver.
-    let b_exact: Vec<f64> = xs.iter().map(|&x| scene.shading(x)).collect();
-    let b_sampled = map(&xs, |x| scene.shading_sampled(x, FIG_SAMPLES))?;
-    let g_ana: Vec<f64> = xs.iter().map(|&x| scene.grad_analytic(x)).collect();
-    let g_semi = |loc| map(&xs, |x| scene.grad_semianalytic(x, FIG_SAMPLES, loc));
-    let (g_sample, g_mid, g_bis, g_gaps) = (
-        g_semi(Locate::Sample)?,
-        g_semi(Locate::Midpoint)?,
-        g_semi(Locate::Bisection)?,
-        g_semi(Locate::BisectionGaps)?,
-    );
-    let g_theta: Vec<f64> = xs.iter().map(|&x| scene.grad_angular_analytic(x)).collect();
-    let g_fd = map(&xs, |x| scene.grad_numerical(x, FD_STEP_EXACT))?;
-    let g_fd_sampled = map(&xs, |x| scene.grad_numerical_sampled(x, dx, FIG_SAMPLES))?;
-    let mut csv = String::from(
-        "x,shading_exact,shading_sampled_256,grad_analytic,grad_semianalytic_256_sample,\
-         grad_semianalytic_256_midpoint,grad_semianalytic_256_bisection,\
-         grad_semianalytic_256_bisection_gaps,grad_fd_exact,grad_fd_sampled_256,\
-         grad_theta_analytic\n",
-    );
-    for i in 0..GRID {
-        let row = [
-            xs[i],
-            b_exact[i],
-            b_sampled[i],
-            g_ana[i],
-            g_sample[i],
-            g_mid[i],
-            g_bis[i],
-            g_gaps[i],
-            g_fd[i],
-            g_fd_sampled[i],
-            g_theta[i],
-        ];
-        push_row(&mut csv, &row);
-    }
-    files.push(write(out_dir, "fig9_shading_gradient.csv", &csv)?);
-    let pts = |v: &[f64]| {
-        xs.iter()
-            .copied()
-            .zip(v.iter().copied())
-            .collect::<Vec<_>>()
+    let fig9 = Fig9::compute(&scene, &xs, dx)?;
+    files.extend(fig9.write(out_dir)?);
+    let (interp_linear_rms, interp_gradient_rms) = write_fig10(out_dir, &scene, &fig9, &mut files)?;
+    let angular = write_angular(out_dir, &scene, &fig9, &mut files)?;
+    let summary = FigureSummary {
+        files: Vec::new(),
+        angular,
+        fd_exact_rms: rms_relative(&fig9.g_fd, &fig9.g_ana),
+        fd_exact_rms_smooth: fd_exact_rms_smooth(&scene, &fig9),
+        fd_sampled_rms: rms_relative(&fig9.g_fd_sampled, &fig9.g_ana),
+        interp_linear_rms,
+        interp_gradient_rms,
     };
-    let fig9 = Svg::new(900.0, 720.0)
-        .panel(
-            Panel::new(0.0, "Fig. 9b: shading B(x) on the receiver", "x", "B")
-                .series("exact", "#000000", pts(&b_exact))
-                .series("256 angular samples", "#d62728", pts(&b_sampled)),
-        )
-        .panel(
-            Panel::new(1.0, "Fig. 9c: gradient dB/dx", "x", "dB/dx")
-                .series(
-                    "central differences of 256-sample B",
-                    "#bbbbbb",
-                    pts(&g_fd_sampled),
-                )
-                .series("analytic (Eq. 37)", "#000000", pts(&g_ana))
-                .series(
-                    "semianalytic 256, sample position (paper)",
-                    "#ff7f0e",
-                    pts(&g_sample),
-                )
-                .series(
-                    "semianalytic 256, bisection + gaps",
-                    "#1f77b4",
-                    pts(&g_gaps),
-                ),
-        )
-        .finish();
-    files.push(write(out_dir, "fig9_shading_gradient.svg", &fig9)?);
+    files.push(write(out_dir, "summary.txt", &summary_text(&summary, dx))?);
+    Ok(FigureSummary { files, ..summary })
+}
 
-    // Fig. 10: interpolation from uniform coarse samples.
+/// Fig. 9b/9c: shading and gradients across the receiver, on the figure grid.
+struct Fig9 {
+    xs: Vec<f64>,
+    b_exact: Vec<f64>,
+    b_sampled: Vec<f64>,
+    g_ana: Vec<f64>,
+    g_sample: Vec<f64>,
+    g_mid: Vec<f64>,
+    g_bis: Vec<f64>,
+    g_gaps: Vec<f64>,
+    g_theta: Vec<f64>,
+    g_fd: Vec<f64>,
+    g_fd_sampled: Vec<f64>,
+}
+
+impl Fig9 {
+    fn compute(scene: &Scene, xs: &[f64], dx: f64) -> Result<Self> {
+        let g_semi = |loc| map(xs, |x| scene.grad_semianalytic(x, FIG_SAMPLES, loc));
+        Ok(Self {
+            xs: xs.to_vec(),
+            b_exact: xs.iter().map(|&x| scene.shading(x)).collect(),
+            b_sampled: map(xs, |x| scene.shading_sampled(x, FIG_SAMPLES))?,
+            g_ana: xs.iter().map(|&x| scene.grad_analytic(x)).collect(),
+            g_sample: g_semi(Locate::Sample)?,
+            g_mid: g_semi(Locate::Midpoint)?,
+            g_bis: g_semi(Locate::Bisection)?,
+            g_gaps: g_semi(Locate::BisectionGaps)?,
+            g_theta: xs.iter().map(|&x| scene.grad_angular_analytic(x)).collect(),
+            g_fd: map(xs, |x| scene.grad_numerical(x, FD_STEP_EXACT))?,
+            g_fd_sampled: map(xs, |x| scene.grad_numerical_sampled(x, dx, FIG_SAMPLES))?,
+        })
+    }
+
+    /// `v` against the grid's abscissae.
+    fn pts(&self, v: &[f64]) -> Vec<(f64, f64)> {
+        self.xs.iter().copied().zip(v.iter().copied()).collect()
+    }
+
+    /// `fig9_shading_gradient.{csv,svg}`.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut csv = String::from(
+            "x,shading_exact,shading_sampled_256,grad_analytic,grad_semianalytic_256_sample,\
+             grad_semianalytic_256_midpoint,grad_semianalytic_256_bisection,\
+             grad_semianalytic_256_bisection_gaps,grad_fd_exact,grad_fd_sampled_256,\
+             grad_theta_analytic\n",
+        );
+        for i in 0..self.xs.len() {
+            let row = [
+                self.xs[i],
+                self.b_exact[i],
+                self.b_sampled[i],
+                self.g_ana[i],
+                self.g_sample[i],
+                self.g_mid[i],
+                self.g_bis[i],
+                self.g_gaps[i],
+                self.g_fd[i],
+                self.g_fd_sampled[i],
+                self.g_theta[i],
+            ];
+            push_row(&mut csv, &row);
+        }
+        let csv_path = write(out_dir, "fig9_shading_gradient.csv", &csv)?;
+        let svg = Svg::new(900.0, 720.0)
+            .panel(
+                Panel::new(0.0, "Fig. 9b: shading B(x) on the receiver", "x", "B")
+                    .series("exact", "#000000", self.pts(&self.b_exact))
+                    .series("256 angular samples", "#d62728", self.pts(&self.b_sampled)),
+            )
+            .panel(
+                Panel::new(1.0, "Fig. 9c: gradient dB/dx", "x", "dB/dx")
+                    .series(
+                        "central differences of 256-sample B",
+                        "#bbbbbb",
+                        self.pts(&self.g_fd_sampled),
+                    )
+                    .series("analytic (Eq. 37)", "#000000", self.pts(&self.g_ana))
+                    .series(
+                        "semianalytic 256, sample position (paper)",
+                        "#ff7f0e",
+                        self.pts(&self.g_sample),
+                    )
+                    .series(
+                        "semianalytic 256, bisection + gaps",
+                        "#1f77b4",
+                        self.pts(&self.g_gaps),
+                    ),
+            )
+            .finish();
+        Ok(vec![
+            csv_path,
+            write(out_dir, "fig9_shading_gradient.svg", &svg)?,
+        ])
+    }
+}
+
+/// Fig. 10: interpolation from uniform coarse samples (`fig10_interpolation.{csv,svg}`,
+/// `fig10_coarse_samples.csv`); returns the RMS errors of linear and gradient
+/// interpolation.
+fn write_fig10(
+    out_dir: &Path,
+    scene: &Scene,
+    fig9: &Fig9,
+    files: &mut Vec<PathBuf>,
+) -> Result<(f64, f64)> {
+    let (x0, x1) = Scene::FIG_RANGE;
+    let (xs, b_exact) = (&fig9.xs, &fig9.b_exact);
     let coarse_n = ((x1 - x0) / COARSE_SPACING).round() as usize + 1;
     let cx: Vec<f64> = (0..coarse_n)
         .map(|i| x0 + i as f64 * COARSE_SPACING)
@@ -155,10 +207,10 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
         .map(|&x| interp(&cx, &cb, &cg, x, false))
         .collect();
     let her: Vec<f64> = xs.iter().map(|&x| interp(&cx, &cb, &cg, x, true)).collect();
-    let interp_linear_rms = rms_relative(&lin, &b_exact);
-    let interp_gradient_rms = rms_relative(&her, &b_exact);
+    let linear_rms = rms_relative(&lin, b_exact);
+    let gradient_rms = rms_relative(&her, b_exact);
     let mut csv = String::from("x,shading_exact,linear_interpolation,gradient_interpolation\n");
-    for i in 0..GRID {
+    for i in 0..xs.len() {
         push_row(&mut csv, &[xs[i], b_exact[i], lin[i], her[i]]);
     }
     files.push(write(out_dir, "fig10_interpolation.csv", &csv)?);
@@ -169,11 +221,11 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
     files.push(write(out_dir, "fig10_coarse_samples.csv", &csv)?);
     let err = |v: &[f64]| {
         xs.iter()
-            .zip(v.iter().zip(&b_exact))
+            .zip(v.iter().zip(b_exact))
             .map(|(&x, (a, b))| (x, a - b))
             .collect::<Vec<_>>()
     };
-    let fig10 = Svg::new(900.0, 720.0)
+    let svg = Svg::new(900.0, 720.0)
         .panel(
             Panel::new(
                 0.0,
@@ -181,28 +233,37 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
                 "x",
                 "B",
             )
-            .series("exact", "#000000", pts(&b_exact))
-            .series("linear", "#d62728", pts(&lin))
-            .series("gradient (cubic Hermite)", "#1f77b4", pts(&her))
+            .series("exact", "#000000", fig9.pts(b_exact))
+            .series("linear", "#d62728", fig9.pts(&lin))
+            .series("gradient (cubic Hermite)", "#1f77b4", fig9.pts(&her))
             .markers(cx.iter().copied().zip(cb.iter().copied()).collect()),
         )
         .panel(
             Panel::new(1.0, "interpolation error", "x", "error")
                 .series(
-                    &format!("linear, RMS rel {interp_linear_rms:.2e}"),
+                    &format!("linear, RMS rel {linear_rms:.2e}"),
                     "#d62728",
                     err(&lin),
                 )
                 .series(
-                    &format!("gradient, RMS rel {interp_gradient_rms:.2e}"),
+                    &format!("gradient, RMS rel {gradient_rms:.2e}"),
                     "#1f77b4",
                     err(&her),
                 ),
         )
         .finish();
-    files.push(write(out_dir, "fig10_interpolation.svg", &fig10)?);
+    files.push(write(out_dir, "fig10_interpolation.svg", &svg)?);
+    Ok((linear_rms, gradient_rms))
+}
 
-    // Convergence in the number of angular samples.
+/// Convergence in the number of angular samples (`angular_samples.{csv,svg}`).
+fn write_angular(
+    out_dir: &Path,
+    scene: &Scene,
+    fig9: &Fig9,
+    files: &mut Vec<PathBuf>,
+) -> Result<Vec<AngularRow>> {
+    let xs = &fig9.xs;
     let mut angular = Vec::new();
     let mut csv = String::from(
         "samples,rms_sample,rms_midpoint,rms_bisection,rms_bisection_gaps,rms_shading\n",
@@ -210,8 +271,8 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
     for &n in &SAMPLE_COUNTS {
         let e = |loc| -> Result<f64> {
             Ok(rms_relative(
-                &map(&xs, |x| scene.grad_semianalytic(x, n, loc))?,
-                &g_ana,
+                &map(xs, |x| scene.grad_semianalytic(x, n, loc))?,
+                &fig9.g_ana,
             ))
         };
         let row = AngularRow {
@@ -220,7 +281,7 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
             midpoint: e(Locate::Midpoint)?,
             bisection: e(Locate::Bisection)?,
             bisection_gaps: e(Locate::BisectionGaps)?,
-            shading: rms_relative(&map(&xs, |x| scene.shading_sampled(x, n))?, &b_exact),
+            shading: rms_relative(&map(xs, |x| scene.shading_sampled(x, n))?, &fig9.b_exact),
         };
         push_row(
             &mut csv,
@@ -236,13 +297,22 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
         angular.push(row);
     }
     files.push(write(out_dir, "angular_samples.csv", &csv)?);
+    files.push(write(
+        out_dir,
+        "angular_samples.svg",
+        &angular_svg(&angular),
+    )?);
+    Ok(angular)
+}
+
+fn angular_svg(angular: &[AngularRow]) -> String {
     let col = |f: fn(&AngularRow) -> f64| {
         angular
             .iter()
             .map(|r| (r.samples as f64, f(r)))
             .collect::<Vec<_>>()
     };
-    let conv = Svg::new(900.0, 400.0)
+    Svg::new(900.0, 400.0)
         .panel(
             Panel::new(
                 0.0,
@@ -262,28 +332,26 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
             )
             .series("sampled shading B", "#7f7f7f", col(|r| r.shading)),
         )
-        .finish();
-    files.push(write(out_dir, "angular_samples.svg", &conv)?);
+        .finish()
+}
 
-    let summary = FigureSummary {
-        files: Vec::new(),
-        angular,
-        fd_exact_rms: rms_relative(&g_fd, &g_ana),
-        fd_exact_rms_smooth: {
-            let smooth: Vec<usize> = (0..GRID)
-                .filter(|&i| {
-                    let s = scene.signature(xs[i]);
-                    scene.signature(xs[i] - FD_STEP_EXACT) == s
-                        && scene.signature(xs[i] + FD_STEP_EXACT) == s
-                })
-                .collect();
-            let pick = |v: &[f64]| smooth.iter().map(|&i| v[i]).collect::<Vec<_>>();
-            rms_relative(&pick(&g_fd), &pick(&g_ana))
-        },
-        fd_sampled_rms: rms_relative(&g_fd_sampled, &g_ana),
-        interp_linear_rms,
-        interp_gradient_rms,
-    };
+/// RMS error of the exact shading's central differences over the grid points with
+/// no kink of `B` within the step.
+fn fd_exact_rms_smooth(scene: &Scene, fig9: &Fig9) -> f64 {
+    let smooth: Vec<usize> = (0..fig9.xs.len())
+        .filter(|&i| {
+            let s = scene.signature(fig9.xs[i]);
+            scene.signature(fig9.xs[i] - FD_STEP_EXACT) == s
+                && scene.signature(fig9.xs[i] + FD_STEP_EXACT) == s
+        })
+        .collect();
+    let pick = |v: &[f64]| smooth.iter().map(|&i| v[i]).collect::<Vec<_>>();
+    rms_relative(&pick(&fig9.g_fd), &pick(&fig9.g_ana))
+}
+
+/// `summary.txt`: the convergence table and the measured errors.
+fn summary_text(summary: &FigureSummary, dx: f64) -> String {
+    let (x0, x1) = Scene::FIG_RANGE;
     let mut text = String::new();
     let _ = writeln!(
         text,
@@ -310,8 +378,7 @@ pub fn write_figures(out_dir: &Path) -> Result<FigureSummary> {
         "Fig. 10 interpolation from spacing {COARSE_SPACING}: linear {:.3e}, gradient {:.3e}",
         summary.interp_linear_rms, summary.interp_gradient_rms
     );
-    files.push(write(out_dir, "summary.txt", &text)?);
-    Ok(FigureSummary { files, ..summary })
+    text
 }
 
 fn map(xs: &[f64], f: impl Fn(f64) -> Result<f64>) -> Result<Vec<f64>> {
@@ -329,18 +396,13 @@ pub(super) fn push_row(csv: &mut String, row: &[f64]) {
     csv.push('\n');
 }
 
-/// Writes `contents` to `dir/name` through a temporary file and a rename, so a
-/// reader never sees a half-written file; the temporary name carries the process id
-/// so that two processes writing the same figure do not share it.
+/// Writes `contents` to `dir/name` with the renderer's atomic writer (temporary
+/// file, fsync, rename), so a reader never sees a half-written figure.
 pub(super) fn write(dir: &Path, name: &str, contents: &str) -> Result<PathBuf> {
     let path = dir.join(name);
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let err = |e: std::io::Error| Error::Output {
-        path: path.clone(),
-        message: e.to_string(),
-    };
-    std::fs::write(&tmp, contents).map_err(err)?;
-    std::fs::rename(&tmp, &path).map_err(err)?;
+    crate::output::write_atomic(&path, |w| {
+        w.write_all(contents.as_bytes()).map_err(|e| e.to_string())
+    })?;
     Ok(path)
 }
 
@@ -550,40 +612,98 @@ impl Svg {
     }
 }
 
+/// Where a panel sits on the page and the (transformed) data range it shows.
+struct Frame<'p> {
+    p: &'p Panel,
+    left: f64,
+    top: f64,
+    w: f64,
+    h: f64,
+    xmin: f64,
+    xmax: f64,
+    ymin: f64,
+    ymax: f64,
+}
+
+impl<'p> Frame<'p> {
+    /// The range of every drawable point of `p` (ticks do not widen it), the y range
+    /// padded by 5%.
+    fn new(p: &'p Panel, left: f64, top: f64, w: f64, h: f64) -> Self {
+        let mut f = Self {
+            p,
+            left,
+            top,
+            w,
+            h,
+            xmin: f64::MAX,
+            xmax: f64::MIN,
+            ymin: f64::MAX,
+            ymax: f64::MIN,
+        };
+        let all = p
+            .series
+            .iter()
+            .flat_map(|sr| sr.points.iter())
+            .chain(p.markers.iter())
+            .filter(|q| f.ok(q));
+        let (mut xmin, mut xmax, mut ymin, mut ymax) = (f.xmin, f.xmax, f.ymin, f.ymax);
+        for &(x, y) in all {
+            xmin = xmin.min(f.tx(x));
+            xmax = xmax.max(f.tx(x));
+            ymin = ymin.min(f.ty(y));
+            ymax = ymax.max(f.ty(y));
+        }
+        if xmin > xmax {
+            (xmin, xmax, ymin, ymax) = (0.0, 1.0, 0.0, 1.0);
+        }
+        if xmax - xmin < 1e-300 {
+            xmax = xmin + 1.0;
+        }
+        if ymax - ymin < 1e-300 {
+            ymax = ymin + 1.0;
+        }
+        let pad = 0.05 * (ymax - ymin);
+        (f.xmin, f.xmax, f.ymin, f.ymax) = (xmin, xmax, ymin - pad, ymax + pad);
+        f
+    }
+    fn tx(&self, v: f64) -> f64 {
+        if self.p.log_x {
+            v.log10()
+        } else {
+            v
+        }
+    }
+    fn ty(&self, v: f64) -> f64 {
+        if self.p.log_y {
+            v.log10()
+        } else {
+            v
+        }
+    }
+    /// Drawable: finite, and positive on a log axis.
+    fn ok(&self, (x, y): &(f64, f64)) -> bool {
+        x.is_finite() && y.is_finite() && (!self.p.log_x || *x > 0.0) && (!self.p.log_y || *y > 0.0)
+    }
+    fn sx(&self, x: f64) -> f64 {
+        self.left + (self.tx(x) - self.xmin) / (self.xmax - self.xmin) * self.w
+    }
+    fn sy(&self, y: f64) -> f64 {
+        self.top + self.h - (self.ty(y) - self.ymin) / (self.ymax - self.ymin) * self.h
+    }
+}
+
 /// Draws one panel with frame, 5 ticks per axis, the series and a legend. Non-finite
 /// values (and non-positive ones on log axes) are skipped, never written.
 fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
-    let tx = |v: f64| if p.log_x { v.log10() } else { v };
-    let ty = |v: f64| if p.log_y { v.log10() } else { v };
-    let ok = |(x, y): &(f64, f64)| {
-        x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0)
-    };
-    let all = p
-        .series
-        .iter()
-        .flat_map(|sr| sr.points.iter())
-        .chain(p.markers.iter())
-        .filter(|q| ok(q));
-    let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for &(x, y) in all {
-        xmin = xmin.min(tx(x));
-        xmax = xmax.max(tx(x));
-        ymin = ymin.min(ty(y));
-        ymax = ymax.max(ty(y));
-    }
-    if xmin > xmax {
-        (xmin, xmax, ymin, ymax) = (0.0, 1.0, 0.0, 1.0);
-    }
-    if xmax - xmin < 1e-300 {
-        xmax = xmin + 1.0;
-    }
-    if ymax - ymin < 1e-300 {
-        ymax = ymin + 1.0;
-    }
-    let pad = 0.05 * (ymax - ymin);
-    let (ymin, ymax) = (ymin - pad, ymax + pad);
-    let sx = |x: f64| left + (tx(x) - xmin) / (xmax - xmin) * w;
-    let sy = |y: f64| top + h - (ty(y) - ymin) / (ymax - ymin) * h;
+    let f = Frame::new(p, left, top, w, h);
+    draw_axes(s, &f);
+    draw_series(s, &f);
+    draw_marks(s, &f);
+}
+
+/// Frame, title, axis labels and 5 ticks with grid lines per axis.
+fn draw_axes(s: &mut String, f: &Frame) {
+    let (p, left, top, w, h) = (f.p, f.left, f.top, f.w, f.h);
     let _ = writeln!(
         s,
         r#"<rect x="{left}" y="{top}" width="{w}" height="{h}" fill="none" stroke="black"/>"#
@@ -611,11 +731,14 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
         p.ylabel
     );
     for i in 0..=4 {
-        let f = i as f64 / 4.0;
-        let (vx, vy) = (xmin + f * (xmax - xmin), ymin + f * (ymax - ymin));
+        let t = i as f64 / 4.0;
+        let (vx, vy) = (
+            f.xmin + t * (f.xmax - f.xmin),
+            f.ymin + t * (f.ymax - f.ymin),
+        );
         let lx = if p.log_x { 10f64.powf(vx) } else { vx };
         let ly = if p.log_y { 10f64.powf(vy) } else { vy };
-        let (gx, gy) = (left + f * w, top + h - f * h);
+        let (gx, gy) = (left + t * w, top + h - t * h);
         let _ = writeln!(
             s,
             r##"<line x1="{gx:.2}" y1="{top}" x2="{gx:.2}" y2="{}" stroke="#eeeeee"/><text x="{gx:.2}" y="{}" font-size="11" text-anchor="middle">{}</text>"##,
@@ -632,12 +755,17 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
             tick(ly)
         );
     }
-    for (k, sr) in p.series.iter().enumerate() {
+}
+
+/// The polylines and their legend entries.
+fn draw_series(s: &mut String, f: &Frame) {
+    let (left, top, w) = (f.left, f.top, f.w);
+    for (k, sr) in f.p.series.iter().enumerate() {
         let (label, color, pts) = (&sr.label, &sr.color, &sr.points);
         let q: Vec<(f64, f64)> = pts
             .iter()
-            .filter(|q| ok(q))
-            .map(|&(x, y)| (sx(x), sy(y)))
+            .filter(|q| f.ok(q))
+            .map(|&(x, y)| (f.sx(x), f.sy(y)))
             .collect();
         polyline(s, &q, color);
         let ly = top + 16.0 + 16.0 * k as f64;
@@ -650,15 +778,19 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
             ly + 4.0
         );
     }
-    for q in p.markers.iter().filter(|q| ok(q)) {
+}
+
+/// Circled markers, then the rows of sample-position ticks (first row at the top).
+fn draw_marks(s: &mut String, f: &Frame) {
+    let (p, top, h) = (f.p, f.top, f.h);
+    for q in p.markers.iter().filter(|q| f.ok(q)) {
         let _ = writeln!(
             s,
             r#"<circle cx="{:.2}" cy="{:.2}" r="3.5" fill="none" stroke="black"/>"#,
-            sx(q.0),
-            sy(q.1)
+            f.sx(q.0),
+            f.sy(q.1)
         );
     }
-    // Sample positions: one row of short ticks per set, first row at the top.
     for (k, (color, xs)) in p.ticks.iter().enumerate() {
         let (ya, yb) = if k == 0 {
             (top, top + 8.0)
@@ -672,7 +804,7 @@ fn draw_panel(s: &mut String, p: &Panel, left: f64, top: f64, w: f64, h: f64) {
             let _ = writeln!(
                 s,
                 r#"<line x1="{0:.2}" y1="{ya}" x2="{0:.2}" y2="{yb}" stroke="{color}"/>"#,
-                sx(x)
+                f.sx(x)
             );
         }
     }

@@ -614,22 +614,68 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
     let img = Image::render(&receiver, FIG_PIXELS)?;
     let n = img.xs.len();
     let mut files = Vec::new();
+    let coarse = CoarseStart::new(&img);
+    files.extend(write_fig16(out_dir, &img, &coarse)?);
+    let rows = FIG_BUDGETS
+        .iter()
+        .map(|&b| img.row(FIG_COARSE_STEP, b))
+        .collect::<Result<Vec<_>>>()?;
+    files.extend(write_fig17(out_dir, &rows)?);
+    let mean = img.b.iter().sum::<f64>() / n as f64;
+    let signal_std = (img.b.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64).sqrt();
+    let summary = SamplingSummary {
+        files: Vec::new(),
+        rows,
+        signal_std,
+        coarse_numerical_rms: coarse.numerical_rms,
+        coarse_analytic_rms: coarse.analytic_rms,
+    };
+    files.push(write(
+        out_dir,
+        "sampling_summary.txt",
+        &sampling_summary_text(&summary, n),
+    )?);
+    Ok(SamplingSummary { files, ..summary })
+}
 
-    // Fig. 16: the signal, the coarse numerical gradient, samples and reconstructions.
-    let coarse = coarse_indices(n, FIG_COARSE_STEP);
-    let mut quotient = vec![0.0; n];
-    let (mut num_sq, mut ana_sq) = (0.0, 0.0);
-    for w in coarse.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let q = (img.b[b] - img.b[a]) / (img.xs[b] - img.xs[a]);
-        let ga = img.g[a].abs().max(img.g[b].abs());
-        num_sq += q * q;
-        ana_sq += ga * ga;
-        for v in &mut quotient[a..=b] {
-            *v = q;
+/// The coarse start's difference quotients (the paper's "numerical gradient" of
+/// Fig. 16), per pixel, and their RMS against the analytic gradient's.
+struct CoarseStart {
+    quotient: Vec<f64>,
+    numerical_rms: f64,
+    analytic_rms: f64,
+}
+
+impl CoarseStart {
+    fn new(img: &Image) -> Self {
+        let n = img.xs.len();
+        let coarse = coarse_indices(n, FIG_COARSE_STEP);
+        let mut quotient = vec![0.0; n];
+        let (mut num_sq, mut ana_sq) = (0.0, 0.0);
+        for w in coarse.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let q = (img.b[b] - img.b[a]) / (img.xs[b] - img.xs[a]);
+            let ga = img.g[a].abs().max(img.g[b].abs());
+            num_sq += q * q;
+            ana_sq += ga * ga;
+            for v in &mut quotient[a..=b] {
+                *v = q;
+            }
+        }
+        let intervals = (coarse.len() - 1).max(1) as f64;
+        Self {
+            quotient,
+            numerical_rms: (num_sq / intervals).sqrt(),
+            analytic_rms: (ana_sq / intervals).sqrt(),
         }
     }
-    let intervals = (coarse.len() - 1).max(1) as f64;
+}
+
+/// Fig. 16 (`fig16_signal_samples.{csv,svg}`): the signal, the coarse numerical
+/// gradient, both methods' samples and reconstructions at [`FIG16_BUDGET`].
+fn write_fig16(out_dir: &Path, img: &Image, coarse: &CoarseStart) -> Result<Vec<PathBuf>> {
+    let n = img.xs.len();
+    let quotient = &coarse.quotient;
     let ana = img.adaptive(FIG_COARSE_STEP, FIG16_BUDGET, Metric::Analytic)?;
     let num = img.adaptive(FIG_COARSE_STEP, FIG16_BUDGET, Metric::Numerical)?;
     let lin_ana = reconstruct(&img.xs, &ana, Reconstruction::Linear)?;
@@ -663,7 +709,7 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
             ],
         );
     }
-    files.push(write(out_dir, "fig16_signal_samples.csv", &csv)?);
+    let csv_path = write(out_dir, "fig16_signal_samples.csv", &csv)?;
     let pts = |v: &[f64]| img.xs.iter().copied().zip(v.iter().copied()).collect();
     let at = |s: &[PixelSample]| s.iter().map(|p| img.xs[p.index]).collect();
     let fig16 = svg_document(
@@ -690,7 +736,7 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
             .series(
                 &format!("coarse |dB|/dx, every {FIG_COARSE_STEP} px"),
                 "#d62728",
-                pts(&quotient),
+                pts(quotient),
             ),
             Panel::new(2.0, "linear reconstructions", "x", "B")
                 .series("exact", "#000000", pts(&img.b))
@@ -698,17 +744,18 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
                 .series("numerical adaptive", "#d62728", pts(&lin_num)),
         ],
     );
-    files.push(write(out_dir, "fig16_signal_samples.svg", &fig16)?);
+    Ok(vec![
+        csv_path,
+        write(out_dir, "fig16_signal_samples.svg", &fig16)?,
+    ])
+}
 
-    // Fig. 17: error against the sample count.
-    let rows = FIG_BUDGETS
-        .iter()
-        .map(|&b| img.row(FIG_COARSE_STEP, b))
-        .collect::<Result<Vec<_>>>()?;
+/// Fig. 17 (`fig17_error_vs_samples.{csv,svg}`): error against the sample count.
+fn write_fig17(out_dir: &Path, rows: &[BudgetRow]) -> Result<Vec<PathBuf>> {
     let mut csv = String::from(
         "samples,rms_uniform_linear,rms_numerical_linear,rms_analytic_linear,rms_analytic_hermite\n",
     );
-    for r in &rows {
+    for r in rows {
         push_row(
             &mut csv,
             &[
@@ -720,7 +767,7 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
             ],
         );
     }
-    files.push(write(out_dir, "fig17_error_vs_samples.csv", &csv)?);
+    let csv_path = write(out_dir, "fig17_error_vs_samples.csv", &csv)?;
     let col = |f: fn(&BudgetRow) -> f64| rows.iter().map(|r| (r.samples as f64, f(r))).collect();
     let fig17 = svg_document(
         900.0,
@@ -748,17 +795,14 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
             col(|r| r.analytic_hermite),
         )],
     );
-    files.push(write(out_dir, "fig17_error_vs_samples.svg", &fig17)?);
+    Ok(vec![
+        csv_path,
+        write(out_dir, "fig17_error_vs_samples.svg", &fig17)?,
+    ])
+}
 
-    let mean = img.b.iter().sum::<f64>() / n as f64;
-    let signal_std = (img.b.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64).sqrt();
-    let summary = SamplingSummary {
-        files: Vec::new(),
-        rows,
-        signal_std,
-        coarse_numerical_rms: (num_sq / intervals).sqrt(),
-        coarse_analytic_rms: (ana_sq / intervals).sqrt(),
-    };
+/// `sampling_summary.txt`: the setup and the Fig. 17 table.
+fn sampling_summary_text(summary: &SamplingSummary, n: usize) -> String {
     let mut text = String::new();
     let _ = writeln!(
         text,
@@ -781,8 +825,7 @@ pub fn write_sampling_figures(out_dir: &Path) -> Result<SamplingSummary> {
             r.samples, r.uniform_linear, r.numerical_linear, r.analytic_linear, r.analytic_hermite
         );
     }
-    files.push(write(out_dir, "sampling_summary.txt", &text)?);
-    Ok(SamplingSummary { files, ..summary })
+    text
 }
 
 /// Stacks the panels vertically, 300 px each, with the shared plot writer of

@@ -46,6 +46,15 @@ impl<const N: usize> Dual<N> {
         self.chain(e, e)
     }
 
+    pub fn ln(self) -> Self {
+        self.chain(self.v.ln(), 1.0 / self.v)
+    }
+
+    /// ln(1 + x), accurate for small x.
+    pub fn ln_1p(self) -> Self {
+        self.chain(self.v.ln_1p(), 1.0 / (1.0 + self.v))
+    }
+
     /// x^p for x ≥ 0 (negative inputs clamp to zero, as cosine lobes do).
     pub fn powf(self, p: f32) -> Self {
         if self.v <= 0.0 {

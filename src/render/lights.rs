@@ -6,7 +6,7 @@
 use crate::accel::PrimRef;
 use crate::math::distribution::{Distribution1D, Distribution2D};
 use crate::math::{luminance, warp, Frame, Vec2, Vec3};
-use crate::scene::environment::{direction_to_latlong, latlong_to_direction};
+use crate::scene::environment::{self, direction_to_latlong, latlong_to_direction};
 use crate::scene::{Environment, Scene};
 use std::f32::consts::PI;
 
@@ -104,7 +104,7 @@ impl LightSet {
             Some(env) => {
                 let r = scene_radius(scene);
                 // Power through a disk the size of the scene (pbrt's Φ of an infinite light).
-                power.push(mean_luminance(env) * 4.0 * PI * PI * r * r);
+                power.push(env.mean_luminance() * 4.0 * PI * PI * r * r);
                 lights.push(Light::Environment);
                 (Some(lights.len() as u32 - 1), Some(build_env_sampler(env)))
             }
@@ -326,7 +326,7 @@ fn build_env_sampler(env: &Environment) -> EnvSampler {
             ..
         } => {
             // Power of each part: the lobe integrates to peak·2π(1−e^{−2κ})/κ.
-            let lobe = luminance(*peak) * gaussian_lobe_integral(*sharpness);
+            let lobe = luminance(*peak) * environment::gaussian_lobe_integral(*sharpness);
             let flat = luminance(*ambient) * 4.0 * PI;
             let total = lobe + flat;
             let p = if total > 0.0 { lobe / total } else { 0.0 };
@@ -334,43 +334,6 @@ fn build_env_sampler(env: &Environment) -> EnvSampler {
             EnvSampler::GaussianSky {
                 lobe_prob: p.clamp(0.0, 0.95),
             }
-        }
-    }
-}
-
-/// ∫ exp(κ (ω·d − 1)) dω over the sphere = 2π (1 − e^{−2κ}) / κ.
-fn gaussian_lobe_integral(sharpness: f32) -> f32 {
-    let k = sharpness.max(1e-4);
-    2.0 * PI * (-(-2.0 * k).exp_m1()) / k
-}
-
-fn mean_luminance(env: &Environment) -> f32 {
-    match env {
-        Environment::Constant { radiance } => luminance(*radiance),
-        Environment::Image {
-            width,
-            height,
-            texels,
-            scale,
-        } => {
-            let mut s = 0.0f64;
-            let mut wsum = 0.0f64;
-            for y in 0..*height {
-                let st = ((y as f64 + 0.5) / *height as f64 * std::f64::consts::PI).sin();
-                for x in 0..*width {
-                    s += luminance(texels[y * width + x]) as f64 * st;
-                    wsum += st;
-                }
-            }
-            (*scale as f64 * s / wsum.max(1e-30)) as f32
-        }
-        Environment::GaussianSky {
-            sharpness,
-            peak,
-            ambient,
-            ..
-        } => {
-            luminance(*ambient) + luminance(*peak) * gaussian_lobe_integral(*sharpness) / (4.0 * PI)
         }
     }
 }

@@ -11,7 +11,7 @@ use super::lights::{LightSet, LineLight};
 use crate::accel::Accel;
 use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
-use crate::math::{finite_or_zero, Frame, Ray, Vec3};
+use crate::math::{finite_or_zero, Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 
 /// Sampler dimensions used per path vertex; fixed so that vertex k always reads
@@ -79,6 +79,61 @@ pub fn power_heuristic(f: f32, g: f32) -> f32 {
     f2 / (f2 + g2)
 }
 
+/// The state a path carries from bounce to bounce.
+struct PathState {
+    radiance: Vec3,
+    beta: Vec3,
+    /// Density of the BSDF sample that produced the current ray; infinite for
+    /// camera rays and delta lobes (emitters they hit count with full weight).
+    prev_pdf: f32,
+    prev_p: Vec3,
+    /// The previous vertex sampled its direct light by lines: emitters that
+    /// lines cover are not counted again when the path hits them.
+    prev_line: bool,
+}
+
+/// What the first hit records besides radiance (pbrt-v4's `VisibleSurface`): the
+/// AOVs and, with gradients, the gradient capture.
+struct VisibleSurface<'a> {
+    aovs: FirstHit,
+    gradient: Option<GradientCapture<'a>>,
+}
+
+/// The gradient stage's view of the first hit: its duals, the gradient gathered so
+/// far, the path's continuation from it, and the radiance once the emitters it sees
+/// directly are counted (what the path adds after that is indirect).
+struct GradientCapture<'a> {
+    hd: HitDuals,
+    g: GradientSample,
+    continuation: Option<Continuation<'a>>,
+    direct_done: Option<Vec3>,
+}
+
+/// The BSDF sample that continued the path from the first hit.
+#[derive(Clone, Copy)]
+struct Continuation<'a> {
+    material: &'a Material,
+    wi: Vec3,
+    pdf: f32,
+    weight: Vec3,
+}
+
+impl GradientCapture<'_> {
+    /// The finished gradient: adds the indirect term once the path's radiance is known.
+    fn finish(mut self, radiance: Vec3) -> GradientSample {
+        if let (Some(c), Some(done)) = (self.continuation, self.direct_done) {
+            // The path's indirect contribution is weight × L_in (Russian roulette's
+            // 1/q stays in L_in, keeping it unbiased).
+            // A non-finite deeper bounce must not poison the gradient (the radiance
+            // itself is cleaned when it is accumulated).
+            let gathered = finite_or_zero(radiance - done);
+            let l_in = Vec3::select(c.weight.cmpgt(Vec3::ZERO), gathered / c.weight, Vec3::ZERO);
+            self.g.indirect = shading::indirect_sample(c.material, &self.hd, c.wi, c.pdf, l_in);
+        }
+        self.g
+    }
+}
+
 impl PathTracer<'_> {
     /// Radiance arriving at the camera along `ray`. With `dd` (the image
     /// derivatives ∂d/∂u, ∂d/∂v of the ray's unit direction) the result also
@@ -94,21 +149,14 @@ impl PathTracer<'_> {
     ) -> SampleResult {
         let scene = self.scene;
         let mut out = SampleResult::default();
-        let mut grad: Option<(GradientSample, HitDuals)> = None;
-        let mut radiance = Vec3::ZERO;
-        let mut beta = Vec3::ONE;
-        // Density of the BSDF sample that produced `ray`; infinite for camera rays
-        // and delta lobes (emitters they hit are counted with full weight).
-        let mut prev_pdf = f32::INFINITY;
-        let mut prev_p = ray.origin;
-        // The previous vertex sampled its direct light by lines: emitters that
-        // lines cover are not counted again when the path hits them.
-        let mut prev_line = false;
-        // With gradients: the first hit's material and continuation (direction,
-        // density, BSDF weight), and the radiance once emitters seen directly from
-        // the first hit are counted — what the path adds after that is indirect.
-        let mut continuation: Option<(&Material, Vec3, f32, Vec3)> = None;
-        let mut direct_done: Option<Vec3> = None;
+        let mut visible: Option<VisibleSurface> = None;
+        let mut st = PathState {
+            radiance: Vec3::ZERO,
+            beta: Vec3::ONE,
+            prev_pdf: f32::INFINITY,
+            prev_p: ray.origin,
+            prev_line: false,
+        };
         for depth in 1..=self.max_depth {
             sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
             out.rays += 1;
@@ -116,54 +164,16 @@ impl PathTracer<'_> {
                 if let (Some(env), Some(dd), 1) = (&scene.environment, dd, depth) {
                     out.gradient = Some(escaped_ray_gradient(env, ray.dir, dd));
                 }
-                if let Some(env) = &scene.environment {
-                    let le = env.eval(ray.dir);
-                    let w = if prev_line {
-                        0.0
-                    } else if prev_pdf.is_infinite() {
-                        1.0
-                    } else {
-                        power_heuristic(prev_pdf, self.lights.pdf_env(scene, ray.dir))
-                    };
-                    radiance += beta * le * w;
-                }
-                if depth == 2 {
-                    direct_done = Some(radiance);
-                }
+                st.radiance += self.escaped(&ray, &st);
+                mark_direct_done(&mut visible, depth, st.radiance);
                 break;
             };
             let si = interaction(scene, &ray, &hit);
-            if let (Some(dd), 1) = (dd, depth) {
-                let hd = hit_duals(scene, &si, &ray, dd);
-                let g = GradientSample {
-                    cv: hd.cv,
-                    ..Default::default()
-                };
-                grad = Some((g, hd));
-            }
             if depth == 1 {
-                out.first_hit = Some(FirstHit {
-                    normal: si.frame.n,
-                    depth: hit.t,
-                    albedo: scene.materials[si.material as usize].albedo(),
-                    object_id: si.object_id,
-                    back_facing: si.frame.n.dot(ray.dir) >= 0.0,
-                });
+                visible = Some(self.visible_surface(&si, &ray, hit.t, dd));
             }
-            if si.emission != Vec3::ZERO {
-                let w = if prev_line && self.lights.is_line_light(scene, si.prim) {
-                    0.0
-                } else if prev_pdf.is_infinite() {
-                    1.0
-                } else {
-                    let light_pdf = self.lights.pdf_emitter(scene, si.prim, prev_p, si.p, si.ng);
-                    power_heuristic(prev_pdf, light_pdf)
-                };
-                radiance += beta * si.emission * w;
-            }
-            if depth == 2 {
-                direct_done = Some(radiance);
-            }
+            st.radiance += self.emitted(&si, &st);
+            mark_direct_done(&mut visible, depth, st.radiance);
             if depth == self.max_depth {
                 break;
             }
@@ -175,92 +185,202 @@ impl PathTracer<'_> {
             // Next-event estimation (one light sample per vertex).
             let u_pick = sampler.next_1d();
             let u_light = sampler.next_2d();
+            let capture = first_hit_capture(&mut visible, depth);
             // In line mode every line-coverable light is accounted for by the lines
             // in expectation over the pick, whichever light this sample picked, so the
             // continuation must not count them again even when the pick fell on a
             // (point-sampled) mesh emitter.
-            prev_line =
-                grad.is_some() && self.lines.is_some() && depth == 1 && !material.is_delta();
-            let line = match (&mut grad, self.lines) {
-                (Some((g, hd)), Some(cfg)) if prev_line => self
-                    .lights
-                    .pick_line(scene, u_pick)
-                    .map(|(ll, pmf)| (ll, pmf, g, *hd, cfg)),
-                _ => None,
-            };
-            if let Some((ll, pmf, g, hd, cfg)) = line {
-                let (l, rays) = self.line_direct(&si, wo, material, &hd, ll, pmf, u_light, cfg, g);
-                radiance += l;
-                out.rays += rays;
-            } else if !material.is_delta() {
-                if let Some(ls) = self.lights.sample(scene, si.p, u_pick, u_light) {
-                    let wi_local = si.frame.to_local(ls.wi);
-                    let f = material.eval(wo, wi_local);
-                    // Both sides must agree: the shading and the geometric normal.
-                    if wi_local.z > 0.0 && ls.wi.dot(si.ng) > 0.0 && f != Vec3::ZERO {
-                        out.rays += 1;
-                        if self.unoccluded(&si, ls.wi, ls.point) {
-                            let bsdf_pdf = material.pdf(wo, wi_local);
-                            let w = power_heuristic(ls.pdf, bsdf_pdf);
-                            radiance += beta * f * wi_local.z * ls.radiance * (w / ls.pdf);
-                            // The gradient uses this light sample alone (weight 1):
-                            // an unbiased estimate of ∂(direct light) on its own.
-                            if let (Some((g, hd)), 1) = (grad.as_mut(), depth) {
-                                let far = self.far_light.map(|k| (hd.cv, k));
-                                let lp =
-                                    light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far);
-                                g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0);
-                            }
-                        }
-                    }
-                }
-            }
-            // BSDF sampling continues the path.
-            let u_lobe = sampler.next_1d();
-            let u_dir = sampler.next_2d();
-            let Some(bs) = material.sample(wo, u_lobe, u_dir) else {
+            st.prev_line = capture.is_some() && self.lines.is_some() && !material.is_delta();
+            let (ld, rays) = self.sample_ld(
+                &si,
+                wo,
+                material,
+                st.beta,
+                u_pick,
+                u_light,
+                st.prev_line,
+                capture,
+            );
+            st.radiance += ld;
+            out.rays += rays;
+            let capture = first_hit_capture(&mut visible, depth);
+            let Some(next) =
+                self.continue_path(&si, wo, material, sampler, &mut st, depth, capture)
+            else {
                 break;
             };
-            let wi = si.frame.to_world(bs.wi);
-            if wi.dot(si.ng) <= 0.0 || !bs.weight.is_finite() {
-                break;
-            }
-            if grad.is_some() && depth == 1 && !bs.is_delta {
-                continuation = Some((material, wi, bs.pdf, bs.weight));
-            }
-            beta *= bs.weight;
-            prev_pdf = if bs.is_delta { f32::INFINITY } else { bs.pdf };
-            prev_p = si.p;
-            ray = Ray::new(offset_origin(si.p, si.ng, wi), wi);
-            // Russian roulette on the throughput, once paths are long enough.
-            let u_rr = sampler.next_1d();
-            if depth >= self.rr_depth {
-                let q = beta.max_element().min(0.95);
-                if q <= 0.0 || u_rr >= q {
-                    break;
-                }
-                beta /= q;
-            }
-            if beta == Vec3::ZERO {
-                break;
-            }
+            ray = next;
         }
-        out.radiance = radiance;
-        if let (Some((g, hd)), Some((material, wi, pdf, weight)), Some(done)) =
-            (grad.as_mut(), continuation, direct_done)
-        {
-            // The path's indirect contribution is weight × L_in (Russian roulette's
-            // 1/q stays in L_in, keeping it unbiased).
-            // A non-finite deeper bounce must not poison the gradient (the radiance
-            // itself is cleaned when it is accumulated).
-            let gathered = finite_or_zero(radiance - done);
-            let l_in = Vec3::select(weight.cmpgt(Vec3::ZERO), gathered / weight, Vec3::ZERO);
-            g.indirect = shading::indirect_sample(material, hd, wi, pdf, l_in);
-        }
-        if let Some((g, _)) = grad {
-            out.gradient = Some(g);
+        out.radiance = st.radiance;
+        if let Some(v) = visible {
+            out.first_hit = Some(v.aovs);
+            if let Some(c) = v.gradient {
+                out.gradient = Some(c.finish(st.radiance));
+            }
         }
         out
+    }
+
+    /// The AOVs of the first hit and, when `dd` asks for gradients, its capture.
+    fn visible_surface<'m>(
+        &self,
+        si: &Interaction,
+        ray: &Ray,
+        t: f32,
+        dd: Option<[Vec3; 2]>,
+    ) -> VisibleSurface<'m> {
+        let gradient = dd.map(|dd| {
+            let hd = hit_duals(self.scene, si, ray, dd);
+            GradientCapture {
+                hd,
+                g: GradientSample {
+                    cv: hd.cv,
+                    ..Default::default()
+                },
+                continuation: None,
+                direct_done: None,
+            }
+        });
+        VisibleSurface {
+            aovs: FirstHit {
+                normal: si.frame.n,
+                depth: t,
+                albedo: self.scene.materials[si.material as usize].albedo(),
+                object_id: si.object_id,
+                back_facing: si.frame.n.dot(ray.dir) >= 0.0,
+            },
+            gradient,
+        }
+    }
+
+    /// The environment's contribution to a ray that leaves the scene, MIS-weighted
+    /// against the light sample that could have produced its direction.
+    fn escaped(&self, ray: &Ray, st: &PathState) -> Vec3 {
+        let Some(env) = &self.scene.environment else {
+            return Vec3::ZERO;
+        };
+        let le = env.eval(ray.dir);
+        let w = if st.prev_line {
+            0.0
+        } else if st.prev_pdf.is_infinite() {
+            1.0
+        } else {
+            power_heuristic(st.prev_pdf, self.lights.pdf_env(self.scene, ray.dir))
+        };
+        st.beta * le * w
+    }
+
+    /// Emission of the surface the path hit, MIS-weighted against light sampling
+    /// (zero where the previous vertex's lines already counted this emitter).
+    fn emitted(&self, si: &Interaction, st: &PathState) -> Vec3 {
+        if si.emission == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let w = if st.prev_line && self.lights.is_line_light(self.scene, si.prim) {
+            0.0
+        } else if st.prev_pdf.is_infinite() {
+            1.0
+        } else {
+            let light_pdf = self
+                .lights
+                .pdf_emitter(self.scene, si.prim, st.prev_p, si.p, si.ng);
+            power_heuristic(st.prev_pdf, light_pdf)
+        };
+        st.beta * si.emission * w
+    }
+
+    /// Direct light at a vertex from one light sample (pbrt's `SampleLd`), and the
+    /// shadow rays it traced. At the first hit in line mode (`line`) the picked light
+    /// is marched by a φ-line when it can be; otherwise one point sample, MIS-weighted.
+    /// With `capture` (first hit, gradients) the sample's gradient lanes are added.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_ld(
+        &self,
+        si: &Interaction,
+        wo: Vec3,
+        material: &Material,
+        beta: Vec3,
+        u_pick: f32,
+        u_light: Vec2,
+        line: bool,
+        capture: Option<&mut GradientCapture>,
+    ) -> (Vec3, u32) {
+        let scene = self.scene;
+        let mut capture = capture;
+        if let (true, Some(cfg), Some(c)) = (line, self.lines, capture.as_deref_mut()) {
+            if let Some((ll, pmf)) = self.lights.pick_line(scene, u_pick) {
+                return self.line_direct(si, wo, material, ll, pmf, u_light, cfg, c);
+            }
+        }
+        if material.is_delta() {
+            return (Vec3::ZERO, 0);
+        }
+        let Some(ls) = self.lights.sample(scene, si.p, u_pick, u_light) else {
+            return (Vec3::ZERO, 0);
+        };
+        let wi_local = si.frame.to_local(ls.wi);
+        let f = material.eval(wo, wi_local);
+        // Both sides must agree: the shading and the geometric normal.
+        if !(wi_local.z > 0.0 && ls.wi.dot(si.ng) > 0.0 && f != Vec3::ZERO) {
+            return (Vec3::ZERO, 0);
+        }
+        if !self.unoccluded(si, ls.wi, ls.point) {
+            return (Vec3::ZERO, 1);
+        }
+        let bsdf_pdf = material.pdf(wo, wi_local);
+        let w = power_heuristic(ls.pdf, bsdf_pdf);
+        // The gradient uses this light sample alone (weight 1): an unbiased
+        // estimate of ∂(direct light) on its own.
+        if let Some(c) = capture {
+            let far = self.far_light.map(|k| (c.hd.cv, k));
+            let lp = light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far);
+            c.g.add_lanes(&shading::direct_sample(material, &c.hd, &lp), 1.0);
+        }
+        (beta * f * wi_local.z * ls.radiance * (w / ls.pdf), 1)
+    }
+
+    /// BSDF sampling continues the path (throughput, MIS state, Russian roulette):
+    /// the next ray, or `None` when the path ends.
+    #[allow(clippy::too_many_arguments)]
+    fn continue_path<'m>(
+        &self,
+        si: &Interaction,
+        wo: Vec3,
+        material: &'m Material,
+        sampler: &mut PixelSampler,
+        st: &mut PathState,
+        depth: u32,
+        capture: Option<&mut GradientCapture<'m>>,
+    ) -> Option<Ray> {
+        let u_lobe = sampler.next_1d();
+        let u_dir = sampler.next_2d();
+        let bs = material.sample(wo, u_lobe, u_dir)?;
+        let wi = si.frame.to_world(bs.wi);
+        if wi.dot(si.ng) <= 0.0 || !bs.weight.is_finite() {
+            return None;
+        }
+        if let (Some(c), false) = (capture, bs.is_delta) {
+            c.continuation = Some(Continuation {
+                material,
+                wi,
+                pdf: bs.pdf,
+                weight: bs.weight,
+            });
+        }
+        st.beta *= bs.weight;
+        st.prev_pdf = if bs.is_delta { f32::INFINITY } else { bs.pdf };
+        st.prev_p = si.p;
+        let ray = Ray::new(offset_origin(si.p, si.ng, wi), wi);
+        // Russian roulette on the throughput, once paths are long enough.
+        let u_rr = sampler.next_1d();
+        if depth >= self.rr_depth {
+            let q = st.beta.max_element().min(0.95);
+            if q <= 0.0 || u_rr >= q {
+                return None;
+            }
+            st.beta /= q;
+        }
+        (st.beta != Vec3::ZERO).then_some(ray)
     }
 
     /// Direct light at the first hit from one light, by one φ-line of shadow rays
@@ -270,62 +390,19 @@ impl PathTracer<'_> {
         &self,
         si: &Interaction,
         wo: Vec3,
-        material: &crate::brdf::Material,
-        hd: &HitDuals,
+        material: &Material,
         light: LineLight,
         pmf: f32,
-        u: crate::math::Vec2,
+        u: Vec2,
         cfg: LineConfig,
-        g: &mut GradientSample,
+        c: &mut GradientCapture,
     ) -> (Vec3, u32) {
         let scene = self.scene;
         let p = si.p;
-        let (domain, le): (Domain, Vec3) = match light {
-            LineLight::Environment => (
-                Domain::Cone {
-                    frame: Frame::from_normal(si.ng),
-                    theta_max: std::f32::consts::FRAC_PI_2,
-                    sphere: None,
-                },
-                Vec3::ZERO,
-            ),
-            LineLight::Sphere(i) => {
-                let s = &scene.spheres[i as usize];
-                let to_c = s.center - p;
-                let d = to_c.length();
-                if d <= s.radius * 1.0001 {
-                    return (Vec3::ZERO, 0);
-                }
-                (
-                    Domain::Cone {
-                        frame: Frame::from_normal(to_c / d),
-                        theta_max: (s.radius / d).asin(),
-                        sphere: Some((s.center, s.radius)),
-                    },
-                    s.emission,
-                )
-            }
-            LineLight::Rect(m) => {
-                let mesh = &scene.meshes[m as usize];
-                let Some(r) = mesh.rect else {
-                    return (Vec3::ZERO, 0);
-                };
-                // One-sided: a rectangle facing away sends nothing.
-                if r.normal().dot(p - r.corner) <= 0.0 {
-                    return (Vec3::ZERO, 0);
-                }
-                let centre = r.corner + 0.5 * (r.edge_u + r.edge_v);
-                (
-                    Domain::Rect {
-                        frame: Frame::from_normal((centre - p).normalize()),
-                        corner: r.corner,
-                        edge_u: r.edge_u,
-                        edge_v: r.edge_v,
-                    },
-                    mesh.emission,
-                )
-            }
+        let Some((domain, le)) = line_domain(scene, light, si) else {
+            return (Vec3::ZERO, 0);
         };
+        let (hd, g) = (&c.hd, &mut c.g);
         let env = scene.environment.as_ref();
         let radiance_from = |w: Vec3| match light {
             LineLight::Environment => env.map_or(Vec3::ZERO, |e| e.eval(w)),
@@ -383,6 +460,58 @@ impl PathTracer<'_> {
     }
 }
 
+/// The angular domain a φ-line marches for `light` seen from the hit `si`, and the
+/// light's constant radiance (zero for the environment, looked up per direction);
+/// `None` when the light sends nothing there (inside a sphere light, behind a
+/// one-sided rectangle).
+fn line_domain(scene: &Scene, light: LineLight, si: &Interaction) -> Option<(Domain, Vec3)> {
+    let p = si.p;
+    Some(match light {
+        LineLight::Environment => (
+            Domain::Cone {
+                frame: Frame::from_normal(si.ng),
+                theta_max: std::f32::consts::FRAC_PI_2,
+                sphere: None,
+            },
+            Vec3::ZERO,
+        ),
+        LineLight::Sphere(i) => {
+            let s = &scene.spheres[i as usize];
+            let to_c = s.center - p;
+            let d = to_c.length();
+            if d <= s.radius * 1.0001 {
+                return None;
+            }
+            (
+                Domain::Cone {
+                    frame: Frame::from_normal(to_c / d),
+                    theta_max: (s.radius / d).asin(),
+                    sphere: Some((s.center, s.radius)),
+                },
+                s.emission,
+            )
+        }
+        LineLight::Rect(m) => {
+            let mesh = &scene.meshes[m as usize];
+            let r = mesh.rect?;
+            // One-sided: a rectangle facing away sends nothing.
+            if r.normal().dot(p - r.corner) <= 0.0 {
+                return None;
+            }
+            let centre = r.corner + 0.5 * (r.edge_u + r.edge_v);
+            (
+                Domain::Rect {
+                    frame: Frame::from_normal((centre - p).normalize()),
+                    corner: r.corner,
+                    edge_u: r.edge_u,
+                    edge_v: r.edge_v,
+                },
+                mesh.emission,
+            )
+        }
+    })
+}
+
 /// A light sample in the form the gradient stage differentiates: emitter points
 /// in area measure (so they stay fixed while the shading point moves), from a
 /// solid-angle density `pdf`.
@@ -417,6 +546,31 @@ fn light_point(
             }
         }
         None => LightPoint::Direction { wi, radiance, pdf },
+    }
+}
+
+/// Records the radiance once the emitters the first hit sees directly are counted
+/// (at the second vertex): what the path adds after that is indirect.
+fn mark_direct_done(visible: &mut Option<VisibleSurface>, depth: u32, radiance: Vec3) {
+    if let (
+        2,
+        Some(VisibleSurface {
+            gradient: Some(c), ..
+        }),
+    ) = (depth, visible.as_mut())
+    {
+        c.direct_done = Some(radiance);
+    }
+}
+
+/// The gradient capture, at the first hit only.
+fn first_hit_capture<'v, 'm>(
+    visible: &'v mut Option<VisibleSurface<'m>>,
+    depth: u32,
+) -> Option<&'v mut GradientCapture<'m>> {
+    match (depth, visible.as_mut()) {
+        (1, Some(v)) => v.gradient.as_mut(),
+        _ => None,
     }
 }
 

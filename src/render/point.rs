@@ -9,7 +9,6 @@ use super::interaction::{interaction, Interaction};
 use super::path::PathTracer;
 use super::{camera_sample_at, Setup};
 use crate::accel::{Accel, PrimRef};
-use crate::brdf::Material;
 use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
 use crate::scene::{Camera, Scene};
@@ -173,14 +172,8 @@ impl<'a> PointEstimator<'a> {
         let gamma =
             self.camera.height as f32 / (2.0 * (self.camera.fov_y.to_radians() * 0.5).tan());
         let cos = si.ng.dot(-dir).abs().max(1e-3);
-        let s = match &scene.materials[si.material as usize] {
-            Material::Lambert { .. } => 1.0,
-            Material::BlinnPhong { exponent, .. } | Material::CookTorrance { exponent, .. } => {
-                exponent.max(1.0)
-            }
-            Material::Mirror { .. } => 1e4,
-        };
-        let m = (1.0 / gamma) * 2.0 * k * z / cos * (6.0 * s).sqrt();
+        let omega = scene.materials[si.material as usize].angular_bandwidth();
+        let m = (1.0 / gamma) * 2.0 * k * z / cos * omega;
         if m.is_finite() {
             m
         } else {

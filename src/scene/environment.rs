@@ -7,7 +7,8 @@
 //! u = atan2(x, −z) / 2π wrapped to [0, 1), v = acos(y) / π; row 0 is the zenith
 //! and u = 0 looks along −z. Texel placement also follows Mitsuba (see [`bilinear`]).
 
-use crate::math::{Vec2, Vec3};
+use crate::math::scalar::{dot_const, Scalar};
+use crate::math::{luminance, Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 use std::path::Path;
 
@@ -56,22 +57,105 @@ pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
 impl Environment {
     /// Radiance arriving from direction `d` (unit, pointing away from the scene).
     pub fn eval(&self, d: Vec3) -> Vec3 {
+        Vec3::from_array(self.radiance(d.to_array()))
+    }
+
+    /// Radiance arriving from the unit direction `d`, for any scalar type: the one
+    /// implementation of every environment, used by [`eval`](Self::eval) (f32) and
+    /// by the gradient stage over duals (whose lanes then carry ∂L/∂d · ∂d).
+    pub fn radiance<T: Scalar>(&self, d: [T; 3]) -> [T; 3] {
         match self {
-            Environment::Constant { radiance } => *radiance,
+            Environment::Constant { radiance } => {
+                radiance.to_array().map(|c| T::constant(c as f64))
+            }
             Environment::Image {
                 width,
                 height,
                 texels,
                 scale,
-            } => *scale * bilinear(texels, *width, *height, direction_to_latlong(d)),
+            } => image_radiance(texels, *width, *height, *scale, d),
             Environment::GaussianSky {
                 direction,
                 sharpness,
                 peak,
                 ambient,
-            } => *ambient + *peak * (*sharpness * (d.dot(*direction) - 1.0)).exp(),
+            } => {
+                let lobe = dot_const(d, direction.to_array())
+                    .add_const(-1.0)
+                    .mul_const(*sharpness as f64)
+                    .exp();
+                [0, 1, 2].map(|c| lobe.mul_const(peak[c] as f64).add_const(ambient[c] as f64))
+            }
         }
     }
+}
+
+impl Environment {
+    /// Mean luminance over the sphere of directions (the environment's power per
+    /// unit solid angle, for choosing lights in proportion to power).
+    pub fn mean_luminance(&self) -> f32 {
+        match self {
+            Environment::Constant { radiance } => luminance(*radiance),
+            Environment::Image {
+                width,
+                height,
+                texels,
+                scale,
+            } => {
+                let mut s = 0.0f64;
+                let mut wsum = 0.0f64;
+                for y in 0..*height {
+                    let st = ((y as f64 + 0.5) / *height as f64 * std::f64::consts::PI).sin();
+                    for x in 0..*width {
+                        s += luminance(texels[y * width + x]) as f64 * st;
+                        wsum += st;
+                    }
+                }
+                (*scale as f64 * s / wsum.max(1e-30)) as f32
+            }
+            Environment::GaussianSky {
+                sharpness,
+                peak,
+                ambient,
+                ..
+            } => {
+                luminance(*ambient)
+                    + luminance(*peak) * gaussian_lobe_integral(*sharpness) / (4.0 * PI)
+            }
+        }
+    }
+}
+
+/// ∫ exp(κ (ω·d − 1)) dω over the sphere = 2π (1 − e^{−2κ}) / κ.
+pub fn gaussian_lobe_integral(sharpness: f32) -> f32 {
+    let k = sharpness.max(1e-4);
+    2.0 * PI * (-(-2.0 * k).exp_m1()) / k
+}
+
+/// `scale ·` the bilinear lookup of a lat-long image along `d`; over duals the
+/// lookup's exact derivative inside the current cell is chained with those of the
+/// lat-long coordinates (u, v) (same convention as [`direction_to_latlong`]).
+fn image_radiance<T: Scalar>(
+    texels: &[Vec3],
+    width: usize,
+    height: usize,
+    scale: f32,
+    d: [T; 3],
+) -> [T; 3] {
+    let dir = Vec3::from_array(d.map(|c| c.value() as f32));
+    let uv = direction_to_latlong(dir);
+    let (val, dl_du, dl_dv) = bilinear_with_derivatives(texels, width, height, uv);
+    let val = (val * scale).to_array();
+    if !T::HAS_DERIVATIVES {
+        return val.map(|c| T::constant(c as f64));
+    }
+    let (dl_du, dl_dv) = ((dl_du * scale).to_array(), (dl_dv * scale).to_array());
+    let u = d[0].atan2(-d[2]).mul_const((1.0 / TAU) as f64);
+    let v = (d[0] * d[0] + d[2] * d[2])
+        .sqrt()
+        .atan2(d[1])
+        .mul_const((1.0 / PI) as f64);
+    [0, 1, 2].map(|c| T::chain2(val[c] as f64, u, dl_du[c] as f64, v, dl_dv[c] as f64))
 }
 
 /// Bilinear lookup as Mitsuba 3's `envmap` does it: column i is centred at

@@ -5,7 +5,7 @@ use super::geometry::HitDuals;
 use super::{GDual, GVec3, CAM, CDV};
 use crate::brdf::Material;
 use crate::math::Vec3;
-use std::f32::consts::FRAC_1_PI;
+use crate::scene::Environment;
 
 /// A light sample as the gradient stage sees it.
 #[derive(Clone, Copy, Debug)]
@@ -81,75 +81,18 @@ pub fn indirect_sample(
     })
 }
 
-/// f(ω_o, ω_i; n) · (n·ω_i)₊ in world space, per RGB channel, for every material
-/// of `brdf` (the same formulas as `Material::eval`, checked against it in the
-/// tests); zero for delta lobes.
+/// f(ω_o, ω_i; n) · (n·ω_i)₊ in world space, per RGB channel, over duals: the
+/// materials' own implementation ([`Material::f_cos_world`]); zero for delta lobes.
 pub fn brdf_cos(material: &Material, n: GVec3, wo: GVec3, wi: GVec3) -> [GDual; 3] {
-    let cos_i = n.dot(wi).max0();
-    let cos_o = n.dot(wo);
-    if cos_i.v <= 0.0 || cos_o.v <= 0.0 {
-        return [GDual::constant(0.0); 3];
-    }
-    match material {
-        Material::Lambert { albedo } => [0, 1, 2].map(|c| cos_i * (albedo[c] * FRAC_1_PI)),
-        Material::BlinnPhong { kd, ks, exponent } => {
-            let h = (wo + wi).normalize();
-            let lobe = n.dot(h).max0().powf(*exponent)
-                * crate::brdf::normalization::blinn_phong_modified_rdf(*exponent as f64) as f32;
-            [0, 1, 2].map(|c| (lobe * ks[c] + kd[c] * FRAC_1_PI) * cos_i)
-        }
-        Material::CookTorrance { kd, ks, exponent } => {
-            let h = (wo + wi).normalize();
-            let l_h = wi.dot(h);
-            let lobe = n.dot(h).max0().powf(*exponent)
-                * ((exponent + 1.0) / (8.0 * std::f32::consts::PI))
-                / (l_h * l_h * l_h);
-            [0, 1, 2].map(|c| (lobe * ks[c] + kd[c] * FRAC_1_PI) * cos_i)
-        }
-        Material::Mirror { .. } => [GDual::constant(0.0); 3],
-    }
+    material.f_cos_world(components(n), components(wo), components(wi))
 }
 
 /// Radiance of the environment seen along the dual direction `d` (for camera
 /// rays that escape: the view-direction lanes then carry ∂L_env/∂u, ∂L_env/∂v).
-pub fn environment(env: &crate::scene::Environment, d: GVec3) -> [GDual; 3] {
-    use crate::scene::Environment;
-    match env {
-        Environment::Constant { radiance } => radiance.to_array().map(GDual::constant),
-        Environment::GaussianSky {
-            direction,
-            sharpness,
-            peak,
-            ambient,
-        } => {
-            let lobe = ((d.dot_const(*direction) + -1.0) * *sharpness).exp();
-            [0, 1, 2].map(|c| lobe * peak[c] + ambient[c])
-        }
-        Environment::Image {
-            width,
-            height,
-            texels,
-            scale,
-        } => {
-            // (u, v) of the lat-long map as duals (same convention as
-            // `environment::direction_to_latlong`), chained with the bilinear
-            // lookup's exact derivative inside the current cell.
-            let u = d.x.atan2(-d.z).scale(1.0 / std::f32::consts::TAU);
-            let v = (d.x * d.x + d.z * d.z)
-                .sqrt()
-                .atan2(d.y)
-                .scale(1.0 / std::f32::consts::PI);
-            let uv = crate::scene::environment::direction_to_latlong(d.value());
-            let (val, dl_dx, dl_dy) =
-                crate::scene::environment::bilinear_with_derivatives(texels, *width, *height, uv);
-            let (val, dl_dx, dl_dy) = (val * *scale, dl_dx * *scale, dl_dy * *scale);
-            [0, 1, 2].map(|c| {
-                let mut r = GDual::constant(val[c]);
-                for l in 0..super::LANES {
-                    r.d[l] = dl_dx[c] * u.d[l] + dl_dy[c] * v.d[l];
-                }
-                r
-            })
-        }
-    }
+pub fn environment(env: &Environment, d: GVec3) -> [GDual; 3] {
+    env.radiance(components(d))
+}
+
+fn components(v: GVec3) -> [GDual; 3] {
+    [v.x, v.y, v.z]
 }
