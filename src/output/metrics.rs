@@ -50,6 +50,42 @@ pub fn relmse(img: &[Vec3], reference: &[Vec3]) -> Result<f32> {
     Ok((sum / (3 * img.len()) as f64) as f32)
 }
 
+/// [`relmse`] with the `fraction` of pixels with the highest per-pixel error
+/// (mean over the three channels) left out: ⌊fraction·N⌋ pixels. A handful of
+/// fireflies can dominate a mean of squared ratios; the trimmed figure (e.g.
+/// `fraction` = 1e-4, the 0.01 % the comparisons report) says whether the rest
+/// of the image agrees. `fraction` = 0 gives [`relmse`].
+pub fn relmse_trimmed(img: &[Vec3], reference: &[Vec3], fraction: f64) -> Result<f32> {
+    check_pair(img, reference)?;
+    if !(0.0..1.0).contains(&fraction) {
+        return Err(metric_error(format!(
+            "trimmed fraction must be in [0, 1), got {fraction}"
+        )));
+    }
+    let eps = f64::from(RELMSE_EPS);
+    let mut per_pixel: Vec<f64> = img
+        .iter()
+        .zip(reference)
+        .map(|(x, r)| {
+            (0..3)
+                .map(|k| {
+                    let (x, r) = (f64::from(x[k]), f64::from(r[k]));
+                    (x - r) * (x - r) / (r * r + eps)
+                })
+                .sum::<f64>()
+                / 3.0
+        })
+        .collect();
+    let n = per_pixel.len();
+    let kept = n - ((fraction * n as f64) as usize).min(n - 1);
+    if kept < n {
+        // The `kept` smallest errors end up in front.
+        per_pixel.select_nth_unstable_by(kept, f64::total_cmp);
+    }
+    let sum: f64 = per_pixel[..kept].iter().sum();
+    Ok((sum / kept as f64) as f32)
+}
+
 /// Mean LDR-FLIP (Andersson et al. 2020) of `img` against `reference`, both
 /// tone-mapped at exposure 0 (see [`flip_exposure`]).
 pub fn flip(img: &[Vec3], reference: &[Vec3], w: usize, h: usize) -> Result<f32> {
@@ -145,5 +181,43 @@ fn metric_error(message: String) -> Error {
     Error::Option {
         option: "metrics".into(),
         message,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// N pixels, all off by 0.1 from a reference of 0.5 except `k` outliers off
+    /// by 2: trimming the k worst leaves exactly the base error, trimming fewer
+    /// leaves the closed-form mix.
+    #[test]
+    fn relmse_trimmed_drops_exactly_the_worst_pixels() {
+        let (n, k) = (1000, 3);
+        let reference = vec![Vec3::splat(0.5); n];
+        let mut img = vec![Vec3::splat(0.6); n];
+        for i in 0..k {
+            img[100 * i + 7] = Vec3::splat(2.5);
+        }
+        let eps = f64::from(RELMSE_EPS);
+        let base = 0.01 / (0.25 + eps);
+        let outlier = 4.0 / (0.25 + eps);
+        let close = |got: f32, want: f64| {
+            assert!(
+                (f64::from(got) - want).abs() <= 1e-6 * want,
+                "{got} vs {want}"
+            )
+        };
+        // ⌊0.003 · 1000⌋ = 3 pixels left out: all the outliers.
+        close(relmse_trimmed(&img, &reference, 0.003).unwrap(), base);
+        // ⌊0.002 · 1000⌋ = 2: one outlier stays among 998 pixels.
+        let mix = (997.0 * base + outlier) / 998.0;
+        close(relmse_trimmed(&img, &reference, 0.002).unwrap(), mix);
+        // Nothing left out: the plain relMSE.
+        let all = (997.0 * base + 3.0 * outlier) / 1000.0;
+        close(relmse_trimmed(&img, &reference, 0.0).unwrap(), all);
+        close(relmse(&img, &reference).unwrap(), all);
+        assert!(relmse_trimmed(&img, &reference, 1.0).is_err());
+        assert!(relmse_trimmed(&img, &reference, f64::NAN).is_err());
     }
 }
