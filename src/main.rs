@@ -8,6 +8,7 @@ use clap::{Args, Parser, Subcommand};
 use gradtrace::adaptive::{Settings, Strategy};
 use gradtrace::error::{error_line, one_line};
 use gradtrace::pipeline::compare::{self, CompareOptions};
+use gradtrace::pipeline::diff::{DiffMetric, DiffOptions};
 use gradtrace::pipeline::{self, progress::ProgressMode};
 use gradtrace::reconstruct::Interpolation;
 use gradtrace::render::RenderOptions;
@@ -37,6 +38,26 @@ enum Command {
     /// several budgets and equal-time baselines, and write `out/<scene>/report.html`
     /// (self-contained), `report.json` and `report.md`.
     Compare(CompareArgs),
+    /// Compare two EXRs' beauty (R, G, B): RMSE, relMSE, FLIP and an error-map
+    /// PNG; exit status 1 when --threshold is exceeded.
+    Diff(DiffArgs),
+}
+
+#[derive(Args, Debug)]
+struct DiffArgs {
+    /// The image to judge (EXR).
+    image: PathBuf,
+    /// The reference (EXR): relMSE divides by its square, FLIP's reference.
+    reference: PathBuf,
+    /// Metric for --threshold and the error map.
+    #[arg(long, value_parser = diff_metric(), value_name = "NAME", default_value = "rmse")]
+    metric: DiffMetric,
+    /// Exit with status 1 when the --metric is above this.
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    threshold: Option<f32>,
+    /// Error-map PNG (viridis) [default: <IMAGE stem>.diff.png beside IMAGE].
+    #[arg(long, value_name = "PATH")]
+    error_map: Option<PathBuf>,
 }
 
 // Negative numbers reach the value parsers, which name the flag in the error.
@@ -109,6 +130,11 @@ struct RenderArgs {
     /// curvature/bump and camera terms of indirect light) and write them as `grad.*` layers (∂I/∂u, ∂I/∂v and the per-term magnitudes).
     #[arg(long)]
     gradients: bool,
+    /// Denoise the beauty with Intel Open Image Denoise, guided by the albedo and
+    /// normal AOVs: R,G,B (and the PNG) hold it, `noisy.R/G/B` the render. Needs a
+    /// build with `--features oidn` (README.md, "Optional: denoiser").
+    #[arg(long, conflicts_with = "strategy")]
+    denoise: bool,
     /// With --gradients: shadow rays per azimuth line for the first hit's direct
     /// light; the same rays give the radiance and the visibility (soft-shadow)
     /// gradient [default: 32; 4 with --strategy]. 0: point light sampling and no
@@ -232,6 +258,10 @@ fn integrator() -> impl TypedValueParser<Value = Integrator> {
     choices(&Integrator::ALL, Integrator::name, |_| &[])
 }
 
+fn diff_metric() -> impl TypedValueParser<Value = DiffMetric> {
+    choices(&DiffMetric::ALL, DiffMetric::name, |_| &[])
+}
+
 fn main() -> ExitCode {
     // A bug must still end as one `error:` line and status 1, not a backtrace.
     gradtrace::error::one_line_panics();
@@ -278,6 +308,25 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Info(args) => print!("{}", pipeline::info(&args.scene)?),
+        Command::Diff(args) => {
+            let opts = DiffOptions {
+                metric: args.metric,
+                threshold: args.threshold,
+                error_map: args.error_map,
+            };
+            let report = pipeline::diff::run(&args.image, &args.reference, &opts)?;
+            println!("{report}");
+            if report.exceeds_threshold() {
+                anyhow::bail!(
+                    "{} differs from {}: {} {:.6e} is above --threshold {}",
+                    args.image.display(),
+                    args.reference.display(),
+                    args.metric.name(),
+                    report.value(),
+                    opts.threshold.unwrap_or_default()
+                );
+            }
+        }
         Command::Compare(args) => {
             let dir = args
                 .out
@@ -318,6 +367,7 @@ impl RenderArgs {
                 gradient_spp: self.gradient_spp,
             },
             adaptive,
+            denoise: self.denoise,
             threads: c.threads,
             max_memory: c
                 .max_memory

@@ -183,3 +183,41 @@ fn metric_error(message: String) -> Error {
         message,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// N pixels, all off by 0.1 from a reference of 0.5 except `k` outliers off
+    /// by 2: trimming the k worst leaves exactly the base error, trimming fewer
+    /// leaves the closed-form mix.
+    #[test]
+    fn relmse_trimmed_drops_exactly_the_worst_pixels() {
+        let (n, k) = (1000, 3);
+        let reference = vec![Vec3::splat(0.5); n];
+        let mut img = vec![Vec3::splat(0.6); n];
+        for i in 0..k {
+            img[100 * i + 7] = Vec3::splat(2.5);
+        }
+        let eps = f64::from(RELMSE_EPS);
+        let base = 0.01 / (0.25 + eps);
+        let outlier = 4.0 / (0.25 + eps);
+        let close = |got: f32, want: f64| {
+            assert!(
+                (f64::from(got) - want).abs() <= 1e-6 * want,
+                "{got} vs {want}"
+            )
+        };
+        // ⌊0.003 · 1000⌋ = 3 pixels left out: all the outliers.
+        close(relmse_trimmed(&img, &reference, 0.003).unwrap(), base);
+        // ⌊0.002 · 1000⌋ = 2: one outlier stays among 998 pixels.
+        let mix = (997.0 * base + outlier) / 998.0;
+        close(relmse_trimmed(&img, &reference, 0.002).unwrap(), mix);
+        // Nothing left out: the plain relMSE.
+        let all = (997.0 * base + 3.0 * outlier) / 1000.0;
+        close(relmse_trimmed(&img, &reference, 0.0).unwrap(), all);
+        close(relmse(&img, &reference).unwrap(), all);
+        assert!(relmse_trimmed(&img, &reference, 1.0).is_err());
+        assert!(relmse_trimmed(&img, &reference, f64::NAN).is_err());
+    }
+}

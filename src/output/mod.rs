@@ -13,7 +13,9 @@ pub mod report;
 use crate::math::Vec3;
 
 pub use self::exr::{read_exr, stage_exr, write_exr};
-pub use self::png::{srgb_oetf, stage_png, to_srgb8, write_png, write_png_exposure};
+pub use self::png::{
+    srgb_oetf, stage_png, stage_png_rgb8, to_srgb8, write_png, write_png_exposure,
+};
 pub use atomic::{write_atomic, Staged};
 
 /// One named channel plane, e.g. `R`, `normal.X`, `depth.Z`; row-major, top row first.

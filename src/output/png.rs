@@ -66,6 +66,38 @@ pub fn stage_png(
     })
 }
 
+/// Encodes display-referred 8-bit RGB (interleaved, e.g. a false-colour error
+/// map, which must not be tone-mapped again) into a temporary file next to
+/// `path`; [`Staged::commit`] puts it in place.
+pub fn stage_png_rgb8(
+    path: &Path,
+    rgb8: &[u8],
+    width: usize,
+    height: usize,
+) -> crate::Result<Staged> {
+    if width == 0 || height == 0 || rgb8.len() != 3 * width * height {
+        return Err(output_error(
+            path,
+            format!(
+                "{} bytes given for a {width}x{height} RGB image",
+                rgb8.len()
+            ),
+        ));
+    }
+    let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
+        (Ok(w), Ok(h)) => (w, h),
+        _ => {
+            let msg = format!("resolution {width}x{height} is too large for PNG");
+            return Err(output_error(path, msg));
+        }
+    };
+    stage(path, |out| {
+        PngEncoder::new(out)
+            .write_image(rgb8, w, h, ExtendedColorType::Rgb8)
+            .map_err(|e| format!("PNG encoder: {e}"))
+    })
+}
+
 /// Validates the input and tone-maps it to interleaved 8-bit RGB.
 fn encode_srgb8(
     path: &Path,

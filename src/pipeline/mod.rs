@@ -6,6 +6,7 @@
 
 pub mod adaptive;
 pub mod compare;
+pub mod diff;
 pub mod memory;
 pub mod output_set;
 pub mod preview;

@@ -5,11 +5,16 @@ use super::output_set::{image_of_reconstruction, image_of_render, output_paths, 
 use super::progress::{Phase, ProgressMode};
 use super::{memory, with_threads};
 use crate::adaptive::Settings;
+use crate::denoise;
+use crate::math::Vec3;
+use crate::output::{names::RGB, OutputImage};
 use crate::reconstruct::Interpolation;
-use crate::render::{self, RenderOptions};
+use crate::render::{self, RenderOptions, RenderOutput};
 use crate::{Error, Result};
+use std::borrow::Cow;
 use std::fmt;
 use std::path::PathBuf;
+use std::time::Instant;
 
 /// One `render` run as the command line describes it.
 #[derive(Clone, Debug)]
@@ -20,6 +25,8 @@ pub struct RenderJob {
     pub options: RenderOptions,
     /// Adaptive sampling: where the samples go and how pixels are rebuilt.
     pub adaptive: Option<(Settings, Interpolation)>,
+    /// Full renders: denoise the beauty with OIDN (`denoise::denoise`).
+    pub denoise: bool,
     /// Worker threads (default: all cores); never changes the image.
     pub threads: Option<u32>,
     /// Refuse runs estimated to need more bytes than this (default: 90 % of the
@@ -44,6 +51,8 @@ pub enum SummaryKind {
         spp: u32,
         seconds: f64,
         rays: u64,
+        /// Wall time of the denoiser, when it ran.
+        denoise_s: Option<f64>,
     },
     Adaptive {
         settings: Settings,
@@ -58,13 +67,21 @@ impl fmt::Display for RenderSummary {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
         write!(f, "{}x{}, ", self.width, self.height)?;
         match &self.kind {
-            SummaryKind::Full { spp, seconds, rays } => {
+            SummaryKind::Full {
+                spp,
+                seconds,
+                rays,
+                denoise_s,
+            } => {
                 let rate = if *seconds > 0.0 {
                     format!("{:.2} Mrays/s", *rays as f64 / seconds / 1e6)
                 } else {
                     "- Mrays/s".into()
                 };
                 write!(f, "{spp} spp, {seconds:.3} s, {rate}")?;
+                if let Some(d) = denoise_s {
+                    write!(f, ", denoised in {d:.3} s")?;
+                }
             }
             SummaryKind::Adaptive {
                 settings,
@@ -106,6 +123,9 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
                 .into(),
         });
     }
+    if job.denoise {
+        check_denoise(job)?;
+    }
     let scene = crate::scene::load(&job.scene)?;
     let (w, h) = job.options.resolution_of(&scene);
     let pixels = u64::from(w) * u64::from(h);
@@ -121,7 +141,8 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
             let phase = Phase::new(job.progress, "render", w as u64 * h as u64, "pixels");
             let out = render::render(&scene, &accel, &job.options, &phase.callback())?;
             drop(phase);
-            write_output_set(&image_of_render(&out), &out.beauty, &exr, &png)?;
+            let (image, beauty, denoise_s) = full_image(&out, job.denoise)?;
+            write_output_set(&image, &beauty, &exr, &png)?;
             Ok(RenderSummary {
                 width: out.width,
                 height: out.height,
@@ -131,6 +152,7 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
                     spp: out.spp,
                     seconds: out.stats.wall_time.as_secs_f64(),
                     rays: out.stats.rays,
+                    denoise_s,
                 },
             })
         }
@@ -196,4 +218,46 @@ fn add_aovs(
         .filter(|c| c.name.contains('.') && !c.name.starts_with(crate::output::names::VARIANCE));
     image.channels.extend(aovs);
     Ok(())
+}
+
+/// Fails before any work where `--denoise` cannot run.
+fn check_denoise(job: &RenderJob) -> Result<()> {
+    let message = if job.adaptive.is_some() {
+        "denoises full renders only, not --strategy reconstructions"
+    } else if !denoise::available() {
+        denoise::unavailable_reason()
+    } else {
+        return Ok(());
+    };
+    Err(Error::Option {
+        option: "--denoise".into(),
+        message: message.into(),
+    })
+}
+
+/// The render's planes; with `denoise` the OIDN-denoised beauty (guided by the
+/// albedo and normal AOVs when rendered) becomes `R,G,B`, the noisy one stays
+/// as `noisy.R/G/B`; returns the planes, the beauty for the PNG and the
+/// denoiser's wall time.
+fn full_image(
+    out: &RenderOutput,
+    denoise: bool,
+) -> Result<(OutputImage, Cow<'_, [Vec3]>, Option<f64>)> {
+    let mut image = image_of_render(out);
+    if !denoise {
+        return Ok((image, Cow::Borrowed(&out.beauty), None));
+    }
+    let t0 = Instant::now();
+    let (albedo, normal) = (out.albedo.as_deref(), out.normal.as_deref());
+    let clean: Vec<Vec3> = denoise::denoise(&out.beauty, albedo, normal, out.width, out.height)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    for ch in image
+        .channels
+        .iter_mut()
+        .filter(|c| RGB.contains(&c.name.as_str()))
+    {
+        ch.name = format!("noisy.{}", ch.name);
+    }
+    image.push_vec3("", RGB, &clean);
+    Ok((image, Cow::Owned(clean), Some(seconds)))
 }
