@@ -20,6 +20,10 @@
 //!    has two or more inner children still to visit), so some deep trees that the
 //!    fixed stack would survive take the slower path; correctness first.
 //!
+//! 5. The build overflows (panics) for boxes wider than ~1e19 and is quadratic
+//!    for coincident boxes → `build.rs` builds in a power-of-two-scaled frame
+//!    and deduplicates boxes first.
+//!
 //! Robustness of the ray/box test itself: `obvhs::ray::Ray::new` replaces
 //! direction components below `f32::EPSILON` by ±1/EPSILON in the inverse, which
 //! culls valid boxes for axis-parallel rays; we build the obvhs ray ourselves.
@@ -27,6 +31,7 @@
 //! errors of the quantised slab test can never cull a box a ray touches at an
 //! edge or vertex (Ize 2013, "Robust BVH Ray Traversal", makes the same point).
 
+mod build;
 mod offset;
 mod primitive;
 
@@ -36,12 +41,9 @@ use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
 use glam::{UVec2, Vec3A};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::faststack::{FastStack, HeapStack, StackStack};
-use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use primitive::{intersect_sphere, WatertightRay};
 use std::time::{Duration, Instant};
 
@@ -190,8 +192,10 @@ impl Accel {
     /// Primitives that cannot be intersected meaningfully are skipped (and counted
     /// in [`Accel::rejected_count`]) instead of failing: triangles with an
     /// out-of-range index or a non-finite vertex, spheres with a non-finite centre
-    /// or a radius that is not positive and finite. Zero-area triangles are kept
-    /// (the watertight test never reports a hit on them).
+    /// or a radius that is not positive and finite, and any primitive whose box
+    /// reaches beyond ±1.3e36 (far past the scene's own limit; see `build.rs`).
+    /// Zero-area triangles are kept (the watertight test never reports a hit on
+    /// them). Never panics, and stays O(n log n) for coincident boxes.
     pub fn build(meshes: &[Mesh], spheres: &[Sphere]) -> Self {
         let start = Instant::now();
         let mut inputs: Vec<(Prim, Aabb)> = Vec::new();
@@ -209,11 +213,11 @@ impl Accel {
                     rejected += 1;
                     continue;
                 };
-                if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                let aabb = Aabb::new(a.min(b).min(c).into(), a.max(b).max(c).into());
+                if !(a.is_finite() && b.is_finite() && c.is_finite() && box_is_buildable(&aabb)) {
                     rejected += 1;
                     continue;
                 }
-                let aabb = Aabb::new(a.min(b).min(c).into(), a.max(b).max(c).into());
                 inputs.push((
                     Prim::Triangle {
                         v: [a, b, c],
@@ -229,18 +233,19 @@ impl Accel {
         for (si, s) in spheres.iter().enumerate() {
             let this = input_count;
             input_count += 1;
-            if !(s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0) {
+            let r = Vec3::splat(s.radius);
+            let aabb = Aabb::new((s.center - r).into(), (s.center + r).into());
+            if !(s.center.is_finite() && s.radius > 0.0 && box_is_buildable(&aabb)) {
                 rejected += 1;
                 continue;
             }
-            let r = Vec3::splat(s.radius);
             inputs.push((
                 Prim::Sphere {
                     center: s.center,
                     radius: s.radius,
                     id: si as u32,
                 },
-                Aabb::new((s.center - r).into(), (s.center + r).into()),
+                aabb,
             ));
             input_index.push(this);
         }
@@ -256,42 +261,8 @@ impl Accel {
             bounds_box = bounds_box.union(b);
         }
         let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
-
-        // Pad every primitive box by a scene-relative epsilon (2^-16 of the largest
-        // coordinate magnitude, at least 1e-30). The quantised slab test has a
-        // rounding error of a few ulps of the coordinates involved; without slack a
-        // ray through a vertex or edge lying exactly on a (shared) box face can be
-        // rejected by *every* box containing the incident triangles, which would
-        // defeat the watertight triangle test. A ray through a point of a padded box
-        // stays inside it for ≥ pad along its path, which dwarfs those errors.
-        let magnitude = bounds_box.min.abs().max(bounds_box.max.abs()).max_element();
-        let pad = if inputs.is_empty() {
-            0.0
-        } else {
-            (magnitude * (1.0 / 65_536.0)).max(1.0e-30)
-        };
-        let aabbs: Vec<Aabb> = inputs
-            .iter()
-            .map(|(_, b)| Aabb::new(b.min - pad, b.max + pad))
-            .collect();
-
-        let bvh = if aabbs.is_empty() {
-            CwBvh::default()
-        } else {
-            // Same pipeline as `obvhs::cwbvh::builder::build_cwbvh` with the
-            // `medium_build` preset, minus its debug-only `validate()`, which
-            // asserts depth < 32 and would panic on the pathological scenes we
-            // deliberately support (pitfall 4).
-            let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-                PlocSearchDistance::Medium,
-                &aabbs,
-                (0..aabbs.len() as u32).collect(),
-                SortPrecision::U64,
-                3,
-            );
-            ReinsertionOptimizer::default().run(&mut bvh2, 0.05, None);
-            bvh2_to_cwbvh(&bvh2, 3, true, false)
-        };
+        let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
+        let bvh = build::build_cwbvh(&aabbs);
 
         // Reorder primitives to leaf order and build the input → slot table.
         let mut slot_of_input = vec![u32::MAX; input_count as usize];
@@ -533,6 +504,13 @@ impl Accel {
         }
         hit
     }
+}
+
+/// Whether a primitive's box is finite and within [`build::MAX_BUILD_MAGNITUDE`]
+/// (the box of finite inputs: glam's min/max skip NaN, so check those first).
+fn box_is_buildable(b: &Aabb) -> bool {
+    let m = b.min.abs().max(b.max.abs()).max_element();
+    m.is_finite() && m <= build::MAX_BUILD_MAGNITUDE
 }
 
 /// Rays with NaN/∞ origin or direction, a zero direction, a non-finite `t_min` or
