@@ -4,6 +4,10 @@
 //! throughput in elements/s, i.e. rays/s.
 //!
 //! Run: `cargo bench --bench accel -- --warm-up-time 1 --measurement-time 3`
+//!
+//! With `GRADTRACE_ACCEL_RAYS=FILE` set, the bunny's triangles and both ray sets
+//! (with our hit counts) are also written to FILE, so that
+//! `scripts/bench_embree.py` traces Embree on exactly the same rays.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use gradtrace::accel::Accel;
@@ -115,6 +119,10 @@ fn bench_accel(c: &mut Criterion) {
         let hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
         println!("{name}: {} rays, {hits} hit the bunny", rays.len());
     }
+    if let Some(path) = std::env::var_os("GRADTRACE_ACCEL_RAYS") {
+        write_rays(std::path::Path::new(&path), &meshes[0], &accel, &sets)
+            .expect("GRADTRACE_ACCEL_RAYS is writable");
+    }
 
     let mut g = c.benchmark_group("closest_hit");
     for (name, rays) in &sets {
@@ -177,6 +185,53 @@ fn bench_accel(c: &mut Criterion) {
         });
     }
     g.finish();
+}
+
+/// The dump read by `scripts/bench_embree.py`, little-endian: b"GTRAYS1\0", vertex
+/// and triangle counts (u32), vertices (f32 × 3), indices (u32 × 3), the number
+/// of ray sets, then per set: name length and bytes, ray count, our closest-hit
+/// and any-hit counts (u32), origins and directions (f32 × 3 each).
+fn write_rays(
+    path: &std::path::Path,
+    mesh: &Mesh,
+    accel: &Accel,
+    sets: &[(&str, Vec<Ray>)],
+) -> std::io::Result<()> {
+    let mut out: Vec<u8> = b"GTRAYS1\0".to_vec();
+    let u32s = |out: &mut Vec<u8>, v: &[u32]| v.iter().for_each(|x| out.extend(x.to_le_bytes()));
+    u32s(
+        &mut out,
+        &[mesh.positions.len() as u32, mesh.triangles.len() as u32],
+    );
+    for p in &mesh.positions {
+        p.to_array()
+            .iter()
+            .for_each(|x| out.extend(x.to_le_bytes()));
+    }
+    for t in &mesh.triangles {
+        u32s(&mut out, t);
+    }
+    u32s(&mut out, &[sets.len() as u32]);
+    for (name, rays) in sets {
+        let closest = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+        let any = rays.iter().filter(|r| accel.occluded(r)).count();
+        u32s(&mut out, &[name.len() as u32]);
+        out.extend(name.as_bytes());
+        u32s(&mut out, &[rays.len() as u32, closest as u32, any as u32]);
+        for r in rays {
+            r.origin
+                .to_array()
+                .iter()
+                .for_each(|x| out.extend(x.to_le_bytes()));
+        }
+        for r in rays {
+            r.dir
+                .to_array()
+                .iter()
+                .for_each(|x| out.extend(x.to_le_bytes()));
+        }
+    }
+    std::fs::write(path, out)
 }
 
 criterion_group!(benches, bench_accel);
