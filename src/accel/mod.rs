@@ -44,7 +44,7 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::faststack::{FastStack, HeapStack, StackStack};
-use primitive::{intersect_sphere, WatertightRay};
+use primitive::{intersect_sphere, with_axes, WatertightRay};
 use std::time::{Duration, Instant};
 
 /// Which primitive a ray hit.
@@ -72,12 +72,18 @@ enum Prim {
 }
 
 impl Prim {
-    /// The exact intersection with `t` in `[t_min, t_max]`.
+    /// The exact intersection with `t` in `[t_min, t_max]`; `KX, KY, KZ` are
+    /// `wr`'s axis permutation.
     #[inline(always)]
-    fn intersect(&self, ray: &Ray, wr: &WatertightRay, t_max: f32) -> Option<Hit> {
+    fn intersect<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_max: f32,
+    ) -> Option<Hit> {
         match *self {
             Prim::Triangle { v, mesh, tri } => wr
-                .intersect(v[0], v[1], v[2], ray.t_min, t_max)
+                .intersect::<KX, KY, KZ>(v[0], v[1], v[2], ray.t_min, t_max)
                 .map(|(t, b1, b2)| Hit {
                     t,
                     prim: PrimRef::Triangle { mesh, tri },
@@ -296,10 +302,13 @@ impl Accel {
         if !self.traversable(ray) {
             return None;
         }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
         if self.needs_heap_stack() {
-            self.closest_with(ray, HeapStack::new_with_capacity(self.depth as usize + 2))
+            let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
+            with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
         } else {
-            self.closest_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+            let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
+            with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
         }
     }
 
@@ -309,10 +318,13 @@ impl Accel {
         if !self.traversable(ray) {
             return false;
         }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
         if self.needs_heap_stack() {
-            self.any_with(ray, HeapStack::new_with_capacity(self.depth as usize + 2))
+            let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
+            with_axes!(wr.axes, self.any_with(ray, &wr, stack))
         } else {
-            self.any_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+            let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
+            with_axes!(wr.axes, self.any_with(ray, &wr, stack))
         }
     }
 
@@ -378,7 +390,9 @@ impl Accel {
         if !self.traversable(ray) {
             return None;
         }
-        self.closest_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
+        with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
     }
 
     /// Reference closest hit: every primitive is tested, no BVH. For tests and
@@ -388,10 +402,18 @@ impl Accel {
             return None;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
+        with_axes!(wr.axes, self.closest_brute_force(ray, &wr))
+    }
+
+    fn closest_brute_force<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         for p in &self.prims {
             let t_max = best.map_or(ray.t_max, |h| h.t);
-            if let Some(h) = p.intersect(ray, &wr, t_max) {
+            if let Some(h) = p.intersect::<KX, KY, KZ>(ray, wr, t_max) {
                 if best.is_none_or(|b| h.t < b.t) {
                     best = Some(h);
                 }
@@ -406,9 +428,17 @@ impl Accel {
             return false;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
+        with_axes!(wr.axes, self.any_brute_force(ray, &wr))
+    }
+
+    fn any_brute_force<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+    ) -> bool {
         self.prims
             .iter()
-            .any(|p| p.intersect(ray, &wr, ray.t_max).is_some())
+            .any(|p| p.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some())
     }
 
     /// The geometric data of a hit needed to continue a path robustly: the hit
@@ -453,9 +483,13 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn closest_with<S: FastStack<UVec2>>(&self, ray: &Ray, stack: S) -> Option<Hit> {
+    fn closest_with<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        stack: impl FastStack<UVec2>,
+    ) -> Option<Hit> {
         let mut tray = TraversalRay::new(ray);
-        let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut state = self.new_state(stack, tray.ray.direction);
         let mut best: Option<Hit> = None;
         let mut t_max = ray.t_max;
@@ -467,7 +501,7 @@ impl Accel {
             node.intersect_ray(&tray.ray, state.oct_inv4),
             {
                 let prim = &self.prims[state.primitive_id as usize];
-                if let Some(h) = prim.intersect(ray, &wr, t_max) {
+                if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
                     t_max = h.t;
                     tray.ray.tmax = TraversalRay::node_t_max(h.t, tray.back_off);
                     best = Some(h);
@@ -478,9 +512,13 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn any_with<S: FastStack<UVec2>>(&self, ray: &Ray, stack: S) -> bool {
+    fn any_with<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        stack: impl FastStack<UVec2>,
+    ) -> bool {
         let tray = TraversalRay::new(ray);
-        let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut state = self.new_state(stack, tray.ray.direction);
         let mut hit = false;
         let mut node: &CwBvhNode;
@@ -495,7 +533,7 @@ impl Accel {
                 node.intersect_ray(&tray.ray, state.oct_inv4),
                 {
                     let prim = &self.prims[state.primitive_id as usize];
-                    if prim.intersect(ray, &wr, ray.t_max).is_some() {
+                    if prim.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some() {
                         hit = true;
                         break 'traversal;
                     }
