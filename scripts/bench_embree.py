@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Ray throughput of gradtrace's BVH against Embree 4 on the same rays.
 
-    python3 scripts/bench_embree.py [--runs 15] [--measurement-time 3] [--no-cargo]
+    python3 scripts/bench_embree.py [--rounds 3] [--runs 15] [--measurement-time 2] [--no-cargo]
 
 Runs `cargo bench --bench accel` (closest_hit/*, shadow/*, obvhs_baseline_*) with
 GRADTRACE_ACCEL_RAYS set, so that the bench writes the Stanford bunny and its
@@ -14,7 +14,9 @@ table between the markers in benches/README.md.
 
 gradtrace: criterion's median time per pass over the ray set. Embree: median of
 --runs passes (`EmbreeScene.run` over all rays; the first pass, which commits
-the scene, i.e. builds Embree's BVH, is timed separately). One thread each.
+the scene, i.e. builds Embree's BVH, is timed separately). One thread each. On a
+shared machine the load drifts between the two, so the script alternates them
+for --rounds rounds and reports the medians over rounds (and each round's ratio).
 """
 
 from __future__ import annotations
@@ -113,41 +115,33 @@ def run_embree(verts: np.ndarray, tris: np.ndarray, sets: list[dict], runs: int)
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--runs", type=int, default=15, help="Embree passes per ray set")
-    ap.add_argument("--measurement-time", type=float, default=3.0, help="criterion seconds per bench")
-    ap.add_argument("--no-cargo", action="store_true", help="reuse the last cargo bench run's figures and ray dump")
+    ap.add_argument("--rounds", type=int, default=3, help="alternations of the cargo bench and Embree")
+    ap.add_argument("--runs", type=int, default=15, help="Embree passes per ray set and round")
+    ap.add_argument("--measurement-time", type=float, default=2.0, help="criterion seconds per bench")
+    ap.add_argument("--no-cargo", action="store_true", help="one round, reusing the last cargo bench run's figures and ray dump")
     args = ap.parse_args()
-    if not args.no_cargo:
-        run_ours(args.measurement_time)
-    verts, tris, sets = read_dump(RAYS)
-    embree = run_embree(verts, tris, sets, args.runs)
+    rounds = []
+    for k in range(1 if args.no_cargo else args.rounds):
+        if not args.no_cargo:
+            run_ours(args.measurement_time)
+        verts, tris, sets = read_dump(RAYS)
+        embree = run_embree(verts, tris, sets, args.runs)
+        rounds.append(round_rows(sets, embree))
+        print(f"round {k + 1}: " + ", ".join(f"{r['bench']} {r['ratio']:.2f}x" for r in rounds[-1]), flush=True)
     rows = []
-    for group, query in QUERIES:
-        for s in sets:
-            n = len(s["origins"])
-            ours_s = criterion_median_s(group, s["name"])
-            e = embree[(group, s["name"])]
-            our_hits = s["closest_hits"] if query == "INTERSECT" else s["any_hits"]
-            row = {
-                "bench": f"{group}/{s['name']}",
-                "rays": n,
-                "gradtrace_mrays_s": n / ours_s * 1e-6,
-                "embree_mrays_s": n / e["median_s"] * 1e-6,
-                "ratio": e["median_s"] / ours_s,
-                "hits_gradtrace": our_hits,
-                "hits_embree": e["hits"],
-                "embree_first_pass_s": e["first_s"],
-            }
-            if group == "closest_hit":
-                try:
-                    base_s = criterion_median_s("obvhs_baseline_closest_hit", s["name"])
-                    row["obvhs_baseline_mrays_s"] = n / base_s * 1e-6
-                except FileNotFoundError:
-                    pass
-            rows.append(row)
-            print(row, flush=True)
+    for i, r in enumerate(rounds[0]):
+        per_round = [rr[i] for rr in rounds]
+        med = lambda key: statistics.median(x[key] for x in per_round)  # noqa: E731
+        row = dict(r)
+        for key in ("gradtrace_mrays_s", "embree_mrays_s", "ratio"):
+            row[key] = med(key)
+        row["ratios_per_round"] = [x["ratio"] for x in per_round]
+        if "obvhs_baseline_mrays_s" in r:
+            row["obvhs_baseline_mrays_s"] = med("obvhs_baseline_mrays_s")
+        rows.append(row)
     meta = {
         "triangles": len(tris),
+        "rounds": len(rounds),
         "runs": args.runs,
         "cpu": ms_cpu(),
         "load_avg": os.getloadavg()[0],
@@ -163,6 +157,32 @@ def main() -> int:
     return 0
 
 
+def round_rows(sets: list[dict], embree: dict) -> list[dict]:
+    rows = []
+    for group, query in QUERIES:
+        for s in sets:
+            n = len(s["origins"])
+            ours_s = criterion_median_s(group, s["name"])
+            e = embree[(group, s["name"])]
+            row = {
+                "bench": f"{group}/{s['name']}",
+                "rays": n,
+                "gradtrace_mrays_s": n / ours_s * 1e-6,
+                "embree_mrays_s": n / e["median_s"] * 1e-6,
+                "ratio": e["median_s"] / ours_s,
+                "hits_gradtrace": s["closest_hits"] if query == "INTERSECT" else s["any_hits"],
+                "hits_embree": e["hits"],
+                "embree_first_pass_s": e["first_s"],
+            }
+            if group == "closest_hit":
+                try:
+                    row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
+                except FileNotFoundError:
+                    pass
+            rows.append(row)
+    return rows
+
+
 def ms_cpu() -> str:
     try:
         for line in open("/proc/cpuinfo"):
@@ -176,7 +196,8 @@ def ms_cpu() -> str:
 def markdown(rows: list[dict], meta: dict) -> str:
     lines = [
         f"Stanford bunny ({meta['triangles']:,} triangles), the `accel` bench's rays (65,536 per set), one thread; "
-        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray): median of {meta['runs']} passes. "
+        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray): median of {meta['runs']} passes; "
+        f"the two alternate for {meta['rounds']} rounds, medians over rounds (per-round ratios in brackets). "
         f"{meta['cpu']}, measured {meta['date']}, load average {meta['load_avg']:.1f} (shared machine, loaded: compare within a row).",
         "",
         "| bench | gradtrace (Mrays/s) | Embree (Mrays/s) | gradtrace / Embree | hits (ours / Embree) | obvhs' own traversal (Mrays/s) |",
@@ -187,6 +208,8 @@ def markdown(rows: list[dict], meta: dict) -> str:
         lines.append(
             f"| `{r['bench']}` | {r['gradtrace_mrays_s']:.2f} | {r['embree_mrays_s']:.2f} | {r['ratio']:.2f}× | "
             f"{r['hits_gradtrace']:,} / {r['hits_embree']:,} | {base} |"
+        ).replace(
+            f"| {r['ratio']:.2f}× |", f"| {r['ratio']:.2f}× [{', '.join(f'{x:.2f}' for x in r['ratios_per_round'])}] |"
         )
     return "\n".join(lines)
 

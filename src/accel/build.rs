@@ -36,9 +36,36 @@ use std::collections::HashMap;
 /// stay far from f32 overflow. (Scenes themselves stop at `scene::MAX_MAGNITUDE`.)
 pub(super) const MAX_BUILD_MAGNITUDE: f32 = 1.329_228e36;
 
+/// The obvhs build parameters (PLOC, reinsertion, CWBVH collapse).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug)]
+pub struct BuildPreset {
+    pub search_distance: PlocSearchDistance,
+    /// Below this PLOC depth a search distance of 1 is used.
+    pub search_depth_threshold: usize,
+    pub sort_precision: SortPrecision,
+    /// Share of the nodes reinserted per pass (obvhs' `reinsertion_batch_ratio`).
+    pub reinsertion_ratio: f32,
+    /// Most primitives per CWBVH leaf (1..=3).
+    pub max_prims_per_leaf: u32,
+}
+
+impl Default for BuildPreset {
+    /// obvhs' `medium_build` (what [`crate::accel::Accel::build`] uses).
+    fn default() -> Self {
+        Self {
+            search_distance: PlocSearchDistance::Medium,
+            search_depth_threshold: 3,
+            sort_precision: SortPrecision::U64,
+            reinsertion_ratio: 0.05,
+            max_prims_per_leaf: 3,
+        }
+    }
+}
+
 /// Builds the CWBVH over `boxes` (unpadded, finite, within
 /// [`MAX_BUILD_MAGNITUDE`]); leaf primitive indices refer to `boxes`.
-pub(super) fn build_cwbvh(boxes: &[Aabb]) -> CwBvh {
+pub(super) fn build_cwbvh(boxes: &[Aabb], preset: &BuildPreset) -> CwBvh {
     if boxes.is_empty() {
         return CwBvh::default();
     }
@@ -62,22 +89,21 @@ pub(super) fn build_cwbvh(boxes: &[Aabb]) -> CwBvh {
         .collect();
 
     let groups = DuplicateGroups::new(&scaled);
-    // Same pipeline as `obvhs::cwbvh::builder::build_cwbvh` with the
-    // `medium_build` preset, minus its debug-only `validate()`, which asserts
-    // depth < 32 and would panic on the pathological scenes we deliberately
-    // support (see `Accel::needs_heap_stack`).
+    // Same pipeline as `obvhs::cwbvh::builder::build_cwbvh`, minus its
+    // debug-only `validate()`, which asserts depth < 32 and would panic on the
+    // pathological scenes we deliberately support (`Accel::needs_heap_stack`).
     let mut bvh2 = PlocBuilder::with_capacity(groups.unique.len()).build(
-        PlocSearchDistance::Medium,
+        preset.search_distance,
         &groups.unique,
         (0..groups.unique.len() as u32).collect(),
-        SortPrecision::U64,
-        3,
+        preset.sort_precision,
+        preset.search_depth_threshold,
     );
-    ReinsertionOptimizer::default().run(&mut bvh2, 0.05, None);
+    ReinsertionOptimizer::default().run(&mut bvh2, preset.reinsertion_ratio, None);
     if groups.unique.len() < scaled.len() {
         groups.expand(&mut bvh2);
     }
-    let mut bvh = bvh2_to_cwbvh(&bvh2, 3, true, false);
+    let mut bvh = bvh2_to_cwbvh(&bvh2, preset.max_prims_per_leaf.clamp(1, 3), true, false);
     frame.to_world(&mut bvh);
     bvh.total_aabb = Aabb::new(total.min - pad, total.max + pad);
     bvh
@@ -207,6 +233,31 @@ fn balanced_subtree(
     Bvh2Node::new(aabb, 0, first as u32)
 }
 
+/// Surface-area-heuristic cost of a CWBVH relative to its root box: Σ over child
+/// boxes of area(child)/area(root) × (1 per inner child, the primitive count per
+/// leaf child). Child boxes are the quantised ones traversal tests.
+pub(super) fn sah_cost(bvh: &CwBvh) -> f32 {
+    let Some(root) = bvh.nodes.first() else {
+        return 0.0;
+    };
+    let root_area = root.aabb().half_area() as f64;
+    let mut cost = 1.0f64;
+    for node in &bvh.nodes {
+        for child in 0..8 {
+            if node.is_child_empty(child) {
+                continue;
+            }
+            let weight = if node.is_leaf(child) {
+                node.child_primitives(child).1 as f64
+            } else {
+                1.0
+            };
+            cost += weight * node.child_aabb(child).half_area() as f64 / root_area;
+        }
+    }
+    cost as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,7 +281,7 @@ mod tests {
         boxes.push(Aabb::new(Vec3A::splat(3.0), Vec3A::splat(4.0)));
         let groups = DuplicateGroups::new(&boxes);
         assert_eq!(groups.unique.len(), 2);
-        let bvh = build_cwbvh(&boxes);
+        let bvh = build_cwbvh(&boxes, &BuildPreset::default());
         let mut seen = bvh.primitive_indices.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..boxes.len() as u32).collect::<Vec<_>>());

@@ -35,6 +35,8 @@ mod build;
 mod offset;
 mod primitive;
 
+#[doc(hidden)]
+pub use build::BuildPreset;
 pub use offset::{offset_ray_origin, offset_ray_origin_with_error, SurfacePoint};
 
 use crate::math::{Ray, Vec2, Vec3};
@@ -203,6 +205,12 @@ impl Accel {
     /// Zero-area triangles are kept (the watertight test never reports a hit on
     /// them). Never panics, and stays O(n log n) for coincident boxes.
     pub fn build(meshes: &[Mesh], spheres: &[Sphere]) -> Self {
+        Self::build_with_preset(meshes, spheres, &BuildPreset::default())
+    }
+
+    /// [`Accel::build`] with other obvhs build parameters (for measuring presets).
+    #[doc(hidden)]
+    pub fn build_with_preset(meshes: &[Mesh], spheres: &[Sphere], preset: &BuildPreset) -> Self {
         let start = Instant::now();
         let mut inputs: Vec<(Prim, Aabb)> = Vec::new();
         let mut mesh_first = Vec::with_capacity(meshes.len() + 1);
@@ -268,7 +276,7 @@ impl Accel {
         }
         let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
         let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
-        let bvh = build::build_cwbvh(&aabbs);
+        let bvh = build::build_cwbvh(&aabbs, preset);
 
         // Reorder primitives to leaf order and build the input → slot table.
         let mut slot_of_input = vec![u32::MAX; input_count as usize];
@@ -365,6 +373,12 @@ impl Accel {
         self.depth
     }
 
+    /// SAH cost of the tree relative to its root box (see `build::sah_cost`).
+    #[doc(hidden)]
+    pub fn sah_cost(&self) -> f32 {
+        build::sah_cost(&self.bvh)
+    }
+
     /// Number of CWBVH nodes.
     pub fn node_count(&self) -> usize {
         self.bvh.nodes.len()
@@ -393,6 +407,50 @@ impl Accel {
         let wr = WatertightRay::new(ray.origin, ray.dir);
         let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
         with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
+    }
+
+    /// Closest-hit traversal that counts its work: (CWBVH nodes tested, primitives
+    /// tested). A load-independent measure of tree quality for comparing builds on
+    /// a shared machine.
+    #[doc(hidden)]
+    pub fn closest_hit_work(&self, ray: &Ray) -> (u32, u32) {
+        if !self.traversable(ray) {
+            return (0, 0);
+        }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
+        with_axes!(wr.axes, self.closest_work(ray, &wr, stack))
+    }
+
+    fn closest_work<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        stack: impl FastStack<UVec2>,
+    ) -> (u32, u32) {
+        let mut tray = TraversalRay::new(ray);
+        let mut state = self.new_state(stack, tray.ray.direction);
+        let (mut nodes, mut prims) = (1u32, 0u32);
+        let mut t_max = ray.t_max;
+        let mut node: &CwBvhNode;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            {
+                nodes += 1;
+                node.intersect_ray(&tray.ray, state.oct_inv4)
+            },
+            {
+                prims += 1;
+                let prim = &self.prims[state.primitive_id as usize];
+                if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
+                    t_max = h.t;
+                    tray.ray.tmax = TraversalRay::node_t_max(h.t, tray.back_off);
+                }
+            }
+        );
+        (nodes, prims)
     }
 
     /// Reference closest hit: every primitive is tested, no BVH. For tests and
