@@ -693,6 +693,21 @@ fn huge_primitives_build_without_panic() {
     }
     let hits = check_against_brute_force(&accel, Vec3::ZERO, Vec3::new(1.0, 0.5, 1.0), 200, 4);
     assert!(hits > 50, "{hits}");
+    // Tiny scales (down to subnormal coordinates) build too: the frame's scale
+    // and the pad's 1e-30 floor keep every exponent in range.
+    for scale in [1.0e-20f32, 1.0e-38, 1.0e-44] {
+        let mut tiny = g.clone();
+        for p in &mut tiny.positions {
+            *p *= scale;
+        }
+        let accel = Accel::build(std::slice::from_ref(&tiny), &[]);
+        let ray = Ray::new(Vec3::new(0.5, 1.0, 0.5) * scale, -Vec3::Y);
+        same_hit(
+            accel.intersect(&ray),
+            accel.intersect_brute_force(&ray),
+            &ray,
+        );
+    }
     // Beyond the build's own limit (far past the scene's): rejected, not a panic.
     let beyond = sphere(Vec3::ZERO, 1.0e37);
     let accel = Accel::build(std::slice::from_ref(&g), &[beyond]);
