@@ -4,6 +4,12 @@
 //! throughput in elements/s, i.e. rays/s.
 //!
 //! Run: `cargo bench --bench accel -- --warm-up-time 1 --measurement-time 3`
+//!
+//! With `GRADTRACE_ACCEL_RAYS=FILE` set, the bunny's triangles and both ray sets
+//! (with our hit counts) are also written to FILE, so that
+//! `scripts/bench_embree.py` traces Embree on exactly the same rays. With
+//! `GRADTRACE_ACCEL_PRESETS=1`, obvhs build presets are compared first by
+//! load-independent figures: SAH cost, node and primitive tests per ray.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use gradtrace::accel::Accel;
@@ -115,6 +121,13 @@ fn bench_accel(c: &mut Criterion) {
         let hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
         println!("{name}: {} rays, {hits} hit the bunny", rays.len());
     }
+    if std::env::var_os("GRADTRACE_ACCEL_PRESETS").is_some() {
+        compare_presets(&meshes, &sets);
+    }
+    if let Some(path) = std::env::var_os("GRADTRACE_ACCEL_RAYS") {
+        write_rays(std::path::Path::new(&path), &meshes[0], &accel, &sets)
+            .expect("GRADTRACE_ACCEL_RAYS is writable");
+    }
 
     let mut g = c.benchmark_group("closest_hit");
     for (name, rays) in &sets {
@@ -177,6 +190,142 @@ fn bench_accel(c: &mut Criterion) {
         });
     }
     g.finish();
+}
+
+/// SAH cost, build time and traversal work (CWBVH nodes and primitives tested
+/// per closest-hit ray) of obvhs build presets: figures the machine's load
+/// cannot move (but the build time).
+fn compare_presets(meshes: &[Mesh], sets: &[(&str, Vec<Ray>)]) {
+    use gradtrace::accel::BuildPreset;
+    use obvhs::ploc::{PlocSearchDistance as D, SortPrecision as P};
+    let base = BuildPreset::default();
+    let presets = [
+        ("medium (default)", base),
+        (
+            "low",
+            BuildPreset {
+                search_distance: D::Low,
+                search_depth_threshold: 2,
+                ..base
+            },
+        ),
+        (
+            "high, reinsertion 0.2, u128",
+            BuildPreset {
+                search_distance: D::High,
+                search_depth_threshold: 2,
+                reinsertion_ratio: 0.2,
+                sort_precision: P::U128,
+                ..base
+            },
+        ),
+        (
+            "medium, reinsertion 1.0",
+            BuildPreset {
+                reinsertion_ratio: 1.0,
+                search_depth_threshold: 1,
+                ..base
+            },
+        ),
+        (
+            "very high, reinsertion 1.0, u128",
+            BuildPreset {
+                search_distance: D::VeryHigh,
+                search_depth_threshold: 0,
+                reinsertion_ratio: 1.0,
+                sort_precision: P::U128,
+                ..base
+            },
+        ),
+        (
+            "medium, ≤ 2 per leaf",
+            BuildPreset {
+                max_prims_per_leaf: 2,
+                ..base
+            },
+        ),
+        (
+            "medium, 1 per leaf",
+            BuildPreset {
+                max_prims_per_leaf: 1,
+                ..base
+            },
+        ),
+    ];
+    println!("| preset | SAH | nodes | build (ms, best of 3) | node / primitive tests per ray: coherent | incoherent |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, preset) in presets {
+        let build = || Accel::build_with_preset(meshes, &[], &preset);
+        let ms = (0..3)
+            .map(|_| build().build_time().as_secs_f64() * 1e3)
+            .fold(f64::INFINITY, f64::min);
+        let accel = build();
+        let work: Vec<String> = sets
+            .iter()
+            .map(|(_, rays)| {
+                let (n, p) = rays.iter().fold((0u64, 0u64), |(n, p), r| {
+                    let (a, b) = accel.closest_hit_work(r);
+                    (n + a as u64, p + b as u64)
+                });
+                let k = rays.len() as f64;
+                format!("{:.2} / {:.2}", n as f64 / k, p as f64 / k)
+            })
+            .collect();
+        println!(
+            "| {name} | {:.2} | {} | {ms:.0} | {} | {} |",
+            accel.sah_cost(),
+            accel.node_count(),
+            work[0],
+            work[1]
+        );
+    }
+}
+
+/// The dump read by `scripts/bench_embree.py`, little-endian: b"GTRAYS1\0", vertex
+/// and triangle counts (u32), vertices (f32 × 3), indices (u32 × 3), the number
+/// of ray sets, then per set: name length and bytes, ray count, our closest-hit
+/// and any-hit counts (u32), origins and directions (f32 × 3 each).
+fn write_rays(
+    path: &std::path::Path,
+    mesh: &Mesh,
+    accel: &Accel,
+    sets: &[(&str, Vec<Ray>)],
+) -> std::io::Result<()> {
+    let mut out: Vec<u8> = b"GTRAYS1\0".to_vec();
+    let u32s = |out: &mut Vec<u8>, v: &[u32]| v.iter().for_each(|x| out.extend(x.to_le_bytes()));
+    u32s(
+        &mut out,
+        &[mesh.positions.len() as u32, mesh.triangles.len() as u32],
+    );
+    for p in &mesh.positions {
+        p.to_array()
+            .iter()
+            .for_each(|x| out.extend(x.to_le_bytes()));
+    }
+    for t in &mesh.triangles {
+        u32s(&mut out, t);
+    }
+    u32s(&mut out, &[sets.len() as u32]);
+    for (name, rays) in sets {
+        let closest = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+        let any = rays.iter().filter(|r| accel.occluded(r)).count();
+        u32s(&mut out, &[name.len() as u32]);
+        out.extend(name.as_bytes());
+        u32s(&mut out, &[rays.len() as u32, closest as u32, any as u32]);
+        for r in rays {
+            r.origin
+                .to_array()
+                .iter()
+                .for_each(|x| out.extend(x.to_le_bytes()));
+        }
+        for r in rays {
+            r.dir
+                .to_array()
+                .iter()
+                .for_each(|x| out.extend(x.to_le_bytes()));
+        }
+    }
+    std::fs::write(path, out)
 }
 
 criterion_group!(benches, bench_accel);

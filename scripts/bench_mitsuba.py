@@ -1,20 +1,25 @@
 #!/usr/bin/env python3
-"""Speed and error of gradtrace against Mitsuba 3 on the Cornell box.
+"""Speed and error of gradtrace against Mitsuba 3, each at its best sampler.
 
     python3 scripts/bench_mitsuba.py [--gradtrace BINARY] [--runs 3] [--ref-spp 1024]
-                                     [--no-gradtrace] [--no-llvm]
+                                     [--scenes cornell,bunny] [--no-gradtrace] [--no-llvm]
 
-Scene: scenes/validation/cornell_256.toml (mi.cornell_box() in our format) at
-256x256, 64 spp, max depth 8, box filter. Timed at equal spp:
-  * gradtrace: wall time of the whole `render` process (scene load, BVH build,
-    rendering, EXR writing), median of --runs;
-  * Mitsuba 3 `scalar_rgb` and `llvm_ad_rgb`: `mi.render` wall time, median of
-    --runs; scene loading (`mi.load_dict`) and, for LLVM, the first render that
-    JIT-compiles the kernels are reported separately.
-Error: RMSE (all pixels and channels) of each 64-spp image against a converged
-reference (Mitsuba `scalar_rgb` at --ref-spp (default 1024; its own noise is subtracted), cached in out/bench/). Writes
-out/bench/bench_mitsuba.json and the table between the markers in
-benches/README.md.
+Scenes: `cornell` = scenes/validation/cornell_256.toml (mi.cornell_box() in our
+format), 256x256, 64 spp, max depth 8; `bunny` = the Stanford bunny (diffuse, on a
+floor) under a constant environment, written to out/bench/, 128x128, 256 spp, max
+depth 5. Box filter. Timed at equal spp:
+  * gradtrace (Owen-scrambled Sobol): wall time of the whole `render` process
+    (scene load, BVH build, rendering, EXR writing), median of --runs;
+  * Mitsuba 3 `scalar_rgb` (independent sampler) and `llvm_ad_rgb` with each of
+    its `independent`, `multijitter` and `ldsampler` samplers: `mi.render` wall
+    time, median of --runs; scene loading (`mi.load_dict`) and, for LLVM, the
+    first render that JIT-compiles the kernels are reported separately.
+Error: RMSE (all pixels and channels) against a converged reference (Mitsuba
+`scalar_rgb` at --ref-spp; its own noise is subtracted), cached in out/bench/.
+Efficiency ratio = (t·RMSE²)_gradtrace / (t·RMSE²)_Mitsuba: the ratio of the times
+both would need for equal error (Monte Carlo error² ∝ 1/t); below 1 gradtrace is
+more efficient. Writes out/bench/bench_mitsuba.json and the table between the
+markers in benches/README.md.
 
 The LLVM variant needs libLLVM (Debian: `apt-get install -y libllvm19`);
 DRJIT_LIBLLVM_PATH is set from `dpkg -L libllvm19` when not already set, and
@@ -67,13 +72,84 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-SCENE = ms.REPO / "scenes" / "validation" / "cornell_256.toml"
 OUT = ms.REPO / "out" / "bench"
 README = ms.REPO / "benches" / "README.md"
 BEGIN, END = "<!-- bench_mitsuba:begin -->", "<!-- bench_mitsuba:end -->"
-W = H = 256
-SPP = 64
-DEPTH = 8
+LLVM_SAMPLERS = ["independent", "multijitter", "ldsampler"]
+
+BUNNY_TOML = """# Written by scripts/bench_mitsuba.py: the Stanford bunny under a constant environment.
+[camera]
+from = [0.0, 0.75, 2.6]
+to = [0.0, 0.5, 0.0]
+up = [0, 1, 0]
+fov = 30
+resolution = [128, 128]
+
+[render]
+spp = 256
+max_depth = 5
+rr_depth = 5
+seed = 0
+integrator = "path"
+
+[materials.floor]
+type = "lambert"
+albedo = [0.5, 0.45, 0.4]
+
+[materials.bunny]
+type = "lambert"
+albedo = [0.8, 0.8, 0.8]
+
+[[shapes]]
+name = "floor"
+type = "quad"
+corner = [-3, 0, 3]
+edge_u = [6, 0, 0]
+edge_v = [0, 0, -6]
+material = "floor"
+
+[[shapes]]
+name = "bunny"
+type = "mesh"
+file = "{obj}"
+material = "bunny"
+transform = {{ scale = 8, translate = [0.134, -0.2639, 0.012] }}
+
+[environment]
+type = "constant"
+radiance = [1.0, 1.0, 1.0]
+"""
+
+
+class Bench:
+    """One benchmark scene: its file, resolution, spp and depth."""
+
+    def __init__(self, key: str, path: Path, label: str):
+        spec = ms.load_scene(path)
+        cam, r = spec.camera(), spec.render()
+        self.key, self.path, self.label, self.spec = key, path, label, spec
+        self.w, self.h, self.spp, self.depth = int(cam["width"]), int(cam["height"]), int(r["spp"]), int(r["max_depth"])
+
+    def mitsuba_dict(self, spp: int, sampler: str = "independent") -> dict:
+        d = ms.to_mitsuba_dict(self.spec, spp=spp, width=self.w, height=self.h, max_depth=self.depth)
+        d["sensor"]["sampler"]["type"] = sampler
+        return d
+
+
+def benches(keys: list[str]) -> list[Bench]:
+    OUT.mkdir(parents=True, exist_ok=True)
+    out = []
+    for key in keys:
+        if key == "cornell":
+            out.append(Bench(key, ms.REPO / "scenes" / "validation" / "cornell_256.toml", "Cornell box (`mi.cornell_box()`)"))
+        elif key == "bunny":
+            path = OUT / "bunny_env_constant.toml"
+            obj = (ms.REPO / "scenes" / "models" / "stanford-bunny.obj").as_posix()
+            path.write_text(BUNNY_TOML.format(obj=obj))
+            out.append(Bench(key, path, "Stanford bunny (69k triangles, diffuse) under a constant environment"))
+        else:
+            raise SystemExit(f"unknown scene {key!r} (expected cornell or bunny)")
+    return out
 
 
 def cpu_name() -> str:
@@ -84,10 +160,6 @@ def cpu_name() -> str:
     except OSError:
         pass
     return platform.processor() or platform.machine()
-
-
-def scene_dict(spp: int) -> dict:
-    return ms.to_mitsuba_dict(ms.load_scene(SCENE), spp=spp, width=W, height=H, max_depth=DEPTH)
 
 
 class Reference:
@@ -103,15 +175,15 @@ class Reference:
         return math.sqrt(max(mse, 0.0))
 
 
-def reference(ref_spp: int) -> Reference:
-    path = OUT / f"cornell_256_ref_{ref_spp}spp.npz"
+def reference(b: Bench, ref_spp: int) -> Reference:
+    path = OUT / f"{b.key}_{b.w}_ref_{ref_spp}spp.npz"
     if path.exists():
         z = np.load(path)
         return Reference(z["mean"], z["var"], ref_spp)
     mi.set_variant("scalar_rgb")
-    print(f"rendering the reference ({ref_spp} spp, scalar_rgb; cached in {path.relative_to(ms.REPO)}) ...", flush=True)
+    print(f"rendering the {b.key} reference ({ref_spp} spp, scalar_rgb; cached in {path.relative_to(ms.REPO)}) ...", flush=True)
     t = time.time()
-    scene = mi.load_dict(scene_dict(ref_spp))
+    scene = mi.load_dict(b.mitsuba_dict(ref_spp))
     passes = 16
     imgs = [np.array(mi.render(scene, spp=ref_spp // passes, seed=12345 + k), dtype=np.float64)[..., :3] for k in range(passes)]
     stack = np.stack(imgs)
@@ -122,16 +194,16 @@ def reference(ref_spp: int) -> Reference:
     return Reference(mean, var, ref_spp)
 
 
-def bench_mitsuba(variant: str, runs: int, ref: Reference, spp: int = SPP) -> dict:
+def bench_mitsuba(b: Bench, variant: str, sampler: str, runs: int, ref: Reference) -> dict:
     mi.set_variant(variant)
     jit = variant.startswith(("llvm", "cuda"))
     t = time.perf_counter()
-    scene = mi.load_dict(scene_dict(spp))
+    scene = mi.load_dict(b.mitsuba_dict(b.spp, sampler))
     load_s = time.perf_counter() - t
 
     def render(seed: int) -> tuple[float, np.ndarray]:
         t0 = time.perf_counter()
-        img = mi.render(scene, spp=spp, seed=seed)
+        img = mi.render(scene, spp=b.spp, seed=seed)
         if jit:
             dr.eval(img)
             dr.sync_thread()
@@ -145,27 +217,33 @@ def bench_mitsuba(variant: str, runs: int, ref: Reference, spp: int = SPP) -> di
         times.append(s)
         errs.append(ref.rmse(img))
     return {
-        "name": f"Mitsuba 3 {variant}" + ("" if spp == SPP else f" at {spp} spp"),
-        "spp": spp,
+        "name": f"Mitsuba 3 {variant}, {sampler}",
+        "variant": variant,
+        "sampler": sampler,
+        "spp": b.spp,
         "render_s": statistics.median(times),
         "times_s": times,
         "load_s": load_s,
         "warmup_s": warm_s,
         "rmse": statistics.median(errs),
+        "rmses": errs,
     }
 
 
-def bench_gradtrace(binary: str | None, runs: int, ref: Reference) -> dict:
-    OUT.mkdir(parents=True, exist_ok=True)
+def gradtrace_binary(binary: str | None) -> str:
     if binary is None:
         subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ms.REPO, check=True)
         binary = str(ms.REPO / "target" / "release" / "gradtrace")
+    return binary
+
+
+def bench_gradtrace(b: Bench, binary: str, runs: int, ref: Reference) -> dict:
     times, errs = [], []
     for i in range(runs):
-        out = OUT / f"gradtrace_{i}.exr"
+        out = OUT / f"gradtrace_{b.key}_{i}.exr"
         t0 = time.perf_counter()
         subprocess.run(
-            [binary, "render", str(SCENE), "--out", str(out), "--spp", str(SPP), "--no-aovs", "--quiet"],
+            [binary, "render", str(b.path), "--out", str(out), "--spp", str(b.spp), "--seed", str(100 + i), "--no-aovs", "--quiet"],
             cwd=ms.REPO,
             check=True,
         )
@@ -176,34 +254,53 @@ def bench_gradtrace(binary: str | None, runs: int, ref: Reference) -> dict:
         img = np.stack([arr[..., names.index(c)] for c in "RGB"], -1)
         errs.append(ref.rmse(img))
     return {
-        "name": "gradtrace",
-        "spp": SPP,
+        "name": "gradtrace (Owen-scrambled Sobol)",
+        "variant": "gradtrace",
+        "sampler": "sobol",
+        "spp": b.spp,
         "render_s": statistics.median(times),
         "times_s": times,
         "load_s": None,
         "warmup_s": None,
         "rmse": statistics.median(errs),
+        "rmses": errs,
         "note": "whole process: load + BVH + render + EXR",
     }
 
 
-def markdown(rows: list[dict], meta: dict) -> str:
-    base = next((r for r in rows if r["name"].endswith("scalar_rgb")), rows[0])
-    lines = [
-        f"Cornell box (`mi.cornell_box()`), {W}x{H}, {SPP} spp, max depth {DEPTH}, box filter; "
-        f"median of {meta['runs']} runs on {meta['cpus']} CPU threads ({meta['cpu']}); "
-        f"RMSE against Mitsuba `scalar_rgb` at {meta['ref_spp']} spp (its own noise subtracted). "
-        f"Measured {meta['date']}, load average {meta['load_avg']:.1f} (shared machine: ratios are indicative).",
-        "",
-        "| renderer | spp | time (s) | vs scalar_rgb | RMSE | scene load (s) | JIT warm-up (s) |",
-        "|---|---:|---:|---:|---:|---:|---:|",
-    ]
+def add_ratios(rows: list[dict]) -> None:
+    """Speed at equal spp against scalar_rgb, and the efficiency ratio against
+    gradtrace: (t·RMSE²)_gradtrace / (t·RMSE²)_this."""
+    scalar = next((r for r in rows if r["variant"] == "scalar_rgb"), None)
+    ours = next((r for r in rows if r["variant"] == "gradtrace"), None)
     for r in rows:
-        f = lambda x: "—" if x is None else f"{x:.2f}"  # noqa: E731
-        lines.append(
-            f"| {r['name']} | {r['spp']} | {r['render_s']:.2f} | {base['render_s'] / r['render_s']:.2f}× | {r['rmse']:.4f} | "
-            f"{f(r['load_s'])} | {f(r['warmup_s'])} |"
-        )
+        r["speed_vs_scalar"] = scalar["render_s"] / r["render_s"] if scalar else None
+        cost = r["render_s"] * r["rmse"] ** 2
+        r["efficiency_ratio"] = ours["render_s"] * ours["rmse"] ** 2 / cost if ours and cost > 0 else None
+
+
+def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
+    f = lambda x, d=2: "—" if x is None else f"{x:.{d}f}"  # noqa: E731
+    lines = [
+        f"Median of {meta['runs']} runs on {meta['cpus']} CPU threads ({meta['cpu']}); RMSE against Mitsuba "
+        f"`scalar_rgb` at {meta['ref_spp']} spp (its own noise subtracted). Efficiency ratio = "
+        "(t·RMSE²)_gradtrace / (t·RMSE²)_row: the ratio of the times both need for equal error; "
+        f"below 1.00× gradtrace is the more efficient. Measured {meta['date']}, load average "
+        f"{meta['load_avg']:.1f} (shared, loaded machine: compare within a table).",
+    ]
+    for b, rows in scene_rows:
+        lines += [
+            "",
+            f"**{b.label}**, {b.w}x{b.h}, {b.spp} spp, max depth {b.depth}, box filter.",
+            "",
+            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | scene load (s) | JIT warm-up (s) |",
+            "|---|---:|---:|---:|---:|---:|---:|",
+        ]
+        for r in rows:
+            lines.append(
+                f"| {r['name']} | {r['render_s']:.2f} | {f(r['speed_vs_scalar'])}× | {r['rmse']:.4f} | "
+                f"{f(r['efficiency_ratio'])}× | {f(r['load_s'])} | {f(r['warmup_s'])} |"
+            )
     for note in meta["notes"]:
         lines.append(f"\n{note}")
     return "\n".join(lines)
@@ -226,54 +323,36 @@ def main() -> int:
     ap.add_argument("--gradtrace", help="gradtrace binary (default: cargo build --release, target/release/gradtrace)")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--ref-spp", type=int, default=1024, help="reference spp, a multiple of 16 (its noise is subtracted from the RMSE, so 1024 suffices)")
+    ap.add_argument("--scenes", default="cornell,bunny", help="comma-separated: cornell, bunny")
     ap.add_argument("--no-gradtrace", action="store_true", help="time the Mitsuba variants only")
     ap.add_argument("--no-llvm", action="store_true", help="skip llvm_ad_rgb")
-    ap.add_argument("--no-equal-error", action="store_true", help="skip the equal-error Mitsuba renders")
     args = ap.parse_args()
-    OUT.mkdir(parents=True, exist_ok=True)
     notes = [
         "gradtrace's time is the whole `gradtrace render --no-aovs` process (load, BVH, render, EXR+PNG); "
-        "Mitsuba's is `mi.render` alone, "
-        "with `mi.load_dict` and the first (JIT-compiling) LLVM render listed separately."
+        "Mitsuba's is `mi.render` alone, with `mi.load_dict` and the first (JIT-compiling) LLVM render listed separately."
     ]
-
-    ref = reference(args.ref_spp)
-    rows = []
-    if not args.no_gradtrace:
-        if args.gradtrace is None and shutil.which("cargo") is None:
-            ap.error("cargo not found; pass --gradtrace BINARY or --no-gradtrace")
-        rows.append(bench_gradtrace(args.gradtrace, args.runs, ref))
-        print(rows[-1], flush=True)
-    rows.append(bench_mitsuba("scalar_rgb", args.runs, ref))
-    print(rows[-1], flush=True)
-    if not args.no_llvm:
-        if LIBLLVM is None:
-            notes.append("llvm_ad_rgb skipped: no libLLVM found (apt-get install -y libllvm19).")
-        else:
-            rows.append(bench_mitsuba("llvm_ad_rgb", args.runs, ref))
-            print(rows[-1], flush=True)
-    # Equal error: Monte Carlo error falls as 1/sqrt(spp), so each Mitsuba variant
-    # is rendered again at the spp that should bring its RMSE down to gradtrace's,
-    # and measured (its RMSE is in the table, so the match can be checked).
-    ours = next((r for r in rows if r["name"] == "gradtrace"), None)
-    if ours is not None and not args.no_equal_error:
-        for r in [r for r in rows if r["name"].startswith("Mitsuba")]:
-            variant = r["name"].split()[2]
-            spp_eq = max(SPP, int(math.ceil(SPP * (r["rmse"] / ours["rmse"]) ** 2 / 16.0)) * 16)
-            rows.append(bench_mitsuba(variant, 1, ref, spp=spp_eq))
-            print(rows[-1], flush=True)
-        best = {r["name"].split()[2]: r for r in rows if r["name"].startswith("Mitsuba") and r["spp"] != SPP}
-        for variant, r in best.items():
-            notes.append(
-                f"At equal error (RMSE {ours['rmse']:.4f} vs {r['rmse']:.4f}), gradtrace is "
-                f"{r['render_s'] / ours['render_s']:.2f}× faster than Mitsuba 3 {variant}."
-            )
+    if not args.no_gradtrace and args.gradtrace is None and shutil.which("cargo") is None:
+        ap.error("cargo not found; pass --gradtrace BINARY or --no-gradtrace")
+    binary = None if args.no_gradtrace else gradtrace_binary(args.gradtrace)
+    if not args.no_llvm and LIBLLVM is None:
+        notes.append("llvm_ad_rgb skipped: no libLLVM found (apt-get install -y libllvm19).")
+    scene_rows = []
+    for b in benches(args.scenes.split(",")):
+        ref = reference(b, args.ref_spp)
+        rows = []
+        if binary is not None:
+            rows.append(bench_gradtrace(b, binary, args.runs, ref))
+            print(b.key, rows[-1], flush=True)
+        rows.append(bench_mitsuba(b, "scalar_rgb", "independent", args.runs, ref))
+        print(b.key, rows[-1], flush=True)
+        if not args.no_llvm and LIBLLVM is not None:
+            for sampler in LLVM_SAMPLERS:
+                rows.append(bench_mitsuba(b, "llvm_ad_rgb", sampler, args.runs, ref))
+                print(b.key, rows[-1], flush=True)
+        add_ratios(rows)
+        scene_rows.append((b, rows))
     meta = {
-        "scene": str(SCENE.relative_to(ms.REPO)),
-        "width": W,
-        "height": H,
-        "spp": SPP,
-        "max_depth": DEPTH,
+        "scenes": {b.key: {"file": str(b.path.relative_to(ms.REPO)), "width": b.w, "height": b.h, "spp": b.spp, "max_depth": b.depth} for b, _ in scene_rows},
         "runs": args.runs,
         "ref_spp": args.ref_spp,
         "cpus": os.cpu_count(),
@@ -284,8 +363,9 @@ def main() -> int:
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
         "notes": notes,
     }
-    (OUT / "bench_mitsuba.json").write_text(json.dumps({"meta": meta, "results": rows}, indent=2))
-    table = markdown(rows, meta)
+    results = {b.key: rows for b, rows in scene_rows}
+    (OUT / "bench_mitsuba.json").write_text(json.dumps({"meta": meta, "results": results}, indent=2))
+    table = markdown(scene_rows, meta)
     write_readme(table)
     print(table)
     return 0

@@ -20,6 +20,10 @@
 //!    has two or more inner children still to visit), so some deep trees that the
 //!    fixed stack would survive take the slower path; correctness first.
 //!
+//! 5. The build overflows (panics) for boxes wider than ~1e19 and is quadratic
+//!    for coincident boxes → `build.rs` builds in a power-of-two-scaled frame
+//!    and deduplicates boxes first.
+//!
 //! Robustness of the ray/box test itself: `obvhs::ray::Ray::new` replaces
 //! direction components below `f32::EPSILON` by ±1/EPSILON in the inverse, which
 //! culls valid boxes for axis-parallel rays; we build the obvhs ray ourselves.
@@ -27,22 +31,22 @@
 //! errors of the quantised slab test can never cull a box a ray touches at an
 //! edge or vertex (Ize 2013, "Robust BVH Ray Traversal", makes the same point).
 
+mod build;
 mod offset;
 mod primitive;
 
+#[doc(hidden)]
+pub use build::BuildPreset;
 pub use offset::{offset_ray_origin, offset_ray_origin_with_error, SurfacePoint};
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
 use glam::{UVec2, Vec3A};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::faststack::{FastStack, HeapStack, StackStack};
-use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
-use primitive::{intersect_sphere, WatertightRay};
+use primitive::{intersect_sphere, with_axes, WatertightRay};
 use std::time::{Duration, Instant};
 
 /// Which primitive a ray hit.
@@ -70,12 +74,18 @@ enum Prim {
 }
 
 impl Prim {
-    /// The exact intersection with `t` in `[t_min, t_max]`.
+    /// The exact intersection with `t` in `[t_min, t_max]`; `KX, KY, KZ` are
+    /// `wr`'s axis permutation.
     #[inline(always)]
-    fn intersect(&self, ray: &Ray, wr: &WatertightRay, t_max: f32) -> Option<Hit> {
+    fn intersect<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_max: f32,
+    ) -> Option<Hit> {
         match *self {
             Prim::Triangle { v, mesh, tri } => wr
-                .intersect(v[0], v[1], v[2], ray.t_min, t_max)
+                .intersect::<KX, KY, KZ>(v[0], v[1], v[2], ray.t_min, t_max)
                 .map(|(t, b1, b2)| Hit {
                     t,
                     prim: PrimRef::Triangle { mesh, tri },
@@ -190,9 +200,17 @@ impl Accel {
     /// Primitives that cannot be intersected meaningfully are skipped (and counted
     /// in [`Accel::rejected_count`]) instead of failing: triangles with an
     /// out-of-range index or a non-finite vertex, spheres with a non-finite centre
-    /// or a radius that is not positive and finite. Zero-area triangles are kept
-    /// (the watertight test never reports a hit on them).
+    /// or a radius that is not positive and finite, and any primitive whose box
+    /// reaches beyond ±1.3e36 (far past the scene's own limit; see `build.rs`).
+    /// Zero-area triangles are kept (the watertight test never reports a hit on
+    /// them). Never panics, and stays O(n log n) for coincident boxes.
     pub fn build(meshes: &[Mesh], spheres: &[Sphere]) -> Self {
+        Self::build_with_preset(meshes, spheres, &BuildPreset::default())
+    }
+
+    /// [`Accel::build`] with other obvhs build parameters (for measuring presets).
+    #[doc(hidden)]
+    pub fn build_with_preset(meshes: &[Mesh], spheres: &[Sphere], preset: &BuildPreset) -> Self {
         let start = Instant::now();
         let mut inputs: Vec<(Prim, Aabb)> = Vec::new();
         let mut mesh_first = Vec::with_capacity(meshes.len() + 1);
@@ -209,11 +227,11 @@ impl Accel {
                     rejected += 1;
                     continue;
                 };
-                if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                let aabb = Aabb::new(a.min(b).min(c).into(), a.max(b).max(c).into());
+                if !(a.is_finite() && b.is_finite() && c.is_finite() && box_is_buildable(&aabb)) {
                     rejected += 1;
                     continue;
                 }
-                let aabb = Aabb::new(a.min(b).min(c).into(), a.max(b).max(c).into());
                 inputs.push((
                     Prim::Triangle {
                         v: [a, b, c],
@@ -229,18 +247,19 @@ impl Accel {
         for (si, s) in spheres.iter().enumerate() {
             let this = input_count;
             input_count += 1;
-            if !(s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0) {
+            let r = Vec3::splat(s.radius);
+            let aabb = Aabb::new((s.center - r).into(), (s.center + r).into());
+            if !(s.center.is_finite() && s.radius > 0.0 && box_is_buildable(&aabb)) {
                 rejected += 1;
                 continue;
             }
-            let r = Vec3::splat(s.radius);
             inputs.push((
                 Prim::Sphere {
                     center: s.center,
                     radius: s.radius,
                     id: si as u32,
                 },
-                Aabb::new((s.center - r).into(), (s.center + r).into()),
+                aabb,
             ));
             input_index.push(this);
         }
@@ -256,42 +275,8 @@ impl Accel {
             bounds_box = bounds_box.union(b);
         }
         let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
-
-        // Pad every primitive box by a scene-relative epsilon (2^-16 of the largest
-        // coordinate magnitude, at least 1e-30). The quantised slab test has a
-        // rounding error of a few ulps of the coordinates involved; without slack a
-        // ray through a vertex or edge lying exactly on a (shared) box face can be
-        // rejected by *every* box containing the incident triangles, which would
-        // defeat the watertight triangle test. A ray through a point of a padded box
-        // stays inside it for ≥ pad along its path, which dwarfs those errors.
-        let magnitude = bounds_box.min.abs().max(bounds_box.max.abs()).max_element();
-        let pad = if inputs.is_empty() {
-            0.0
-        } else {
-            (magnitude * (1.0 / 65_536.0)).max(1.0e-30)
-        };
-        let aabbs: Vec<Aabb> = inputs
-            .iter()
-            .map(|(_, b)| Aabb::new(b.min - pad, b.max + pad))
-            .collect();
-
-        let bvh = if aabbs.is_empty() {
-            CwBvh::default()
-        } else {
-            // Same pipeline as `obvhs::cwbvh::builder::build_cwbvh` with the
-            // `medium_build` preset, minus its debug-only `validate()`, which
-            // asserts depth < 32 and would panic on the pathological scenes we
-            // deliberately support (pitfall 4).
-            let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-                PlocSearchDistance::Medium,
-                &aabbs,
-                (0..aabbs.len() as u32).collect(),
-                SortPrecision::U64,
-                3,
-            );
-            ReinsertionOptimizer::default().run(&mut bvh2, 0.05, None);
-            bvh2_to_cwbvh(&bvh2, 3, true, false)
-        };
+        let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
+        let bvh = build::build_cwbvh(&aabbs, preset);
 
         // Reorder primitives to leaf order and build the input → slot table.
         let mut slot_of_input = vec![u32::MAX; input_count as usize];
@@ -325,10 +310,13 @@ impl Accel {
         if !self.traversable(ray) {
             return None;
         }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
         if self.needs_heap_stack() {
-            self.closest_with(ray, HeapStack::new_with_capacity(self.depth as usize + 2))
+            let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
+            with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
         } else {
-            self.closest_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+            let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
+            with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
         }
     }
 
@@ -338,10 +326,13 @@ impl Accel {
         if !self.traversable(ray) {
             return false;
         }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
         if self.needs_heap_stack() {
-            self.any_with(ray, HeapStack::new_with_capacity(self.depth as usize + 2))
+            let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
+            with_axes!(wr.axes, self.any_with(ray, &wr, stack))
         } else {
-            self.any_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+            let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
+            with_axes!(wr.axes, self.any_with(ray, &wr, stack))
         }
     }
 
@@ -382,6 +373,12 @@ impl Accel {
         self.depth
     }
 
+    /// SAH cost of the tree relative to its root box (see `build::sah_cost`).
+    #[doc(hidden)]
+    pub fn sah_cost(&self) -> f32 {
+        build::sah_cost(&self.bvh)
+    }
+
     /// Number of CWBVH nodes.
     pub fn node_count(&self) -> usize {
         self.bvh.nodes.len()
@@ -407,7 +404,53 @@ impl Accel {
         if !self.traversable(ray) {
             return None;
         }
-        self.closest_with(ray, StackStack::<UVec2, OBVHS_STACK_SIZE>::default())
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
+        with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
+    }
+
+    /// Closest-hit traversal that counts its work: (CWBVH nodes tested, primitives
+    /// tested). A load-independent measure of tree quality for comparing builds on
+    /// a shared machine.
+    #[doc(hidden)]
+    pub fn closest_hit_work(&self, ray: &Ray) -> (u32, u32) {
+        if !self.traversable(ray) {
+            return (0, 0);
+        }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
+        with_axes!(wr.axes, self.closest_work(ray, &wr, stack))
+    }
+
+    fn closest_work<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        stack: impl FastStack<UVec2>,
+    ) -> (u32, u32) {
+        let mut tray = TraversalRay::new(ray);
+        let mut state = self.new_state(stack, tray.ray.direction);
+        let (mut nodes, mut prims) = (1u32, 0u32);
+        let mut t_max = ray.t_max;
+        let mut node: &CwBvhNode;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            {
+                nodes += 1;
+                node.intersect_ray(&tray.ray, state.oct_inv4)
+            },
+            {
+                prims += 1;
+                let prim = &self.prims[state.primitive_id as usize];
+                if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
+                    t_max = h.t;
+                    tray.ray.tmax = TraversalRay::node_t_max(h.t, tray.back_off);
+                }
+            }
+        );
+        (nodes, prims)
     }
 
     /// Reference closest hit: every primitive is tested, no BVH. For tests and
@@ -417,10 +460,18 @@ impl Accel {
             return None;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
+        with_axes!(wr.axes, self.closest_brute_force(ray, &wr))
+    }
+
+    fn closest_brute_force<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         for p in &self.prims {
             let t_max = best.map_or(ray.t_max, |h| h.t);
-            if let Some(h) = p.intersect(ray, &wr, t_max) {
+            if let Some(h) = p.intersect::<KX, KY, KZ>(ray, wr, t_max) {
                 if best.is_none_or(|b| h.t < b.t) {
                     best = Some(h);
                 }
@@ -435,9 +486,17 @@ impl Accel {
             return false;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
+        with_axes!(wr.axes, self.any_brute_force(ray, &wr))
+    }
+
+    fn any_brute_force<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+    ) -> bool {
         self.prims
             .iter()
-            .any(|p| p.intersect(ray, &wr, ray.t_max).is_some())
+            .any(|p| p.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some())
     }
 
     /// The geometric data of a hit needed to continue a path robustly: the hit
@@ -482,9 +541,13 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn closest_with<S: FastStack<UVec2>>(&self, ray: &Ray, stack: S) -> Option<Hit> {
+    fn closest_with<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        stack: impl FastStack<UVec2>,
+    ) -> Option<Hit> {
         let mut tray = TraversalRay::new(ray);
-        let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut state = self.new_state(stack, tray.ray.direction);
         let mut best: Option<Hit> = None;
         let mut t_max = ray.t_max;
@@ -496,7 +559,7 @@ impl Accel {
             node.intersect_ray(&tray.ray, state.oct_inv4),
             {
                 let prim = &self.prims[state.primitive_id as usize];
-                if let Some(h) = prim.intersect(ray, &wr, t_max) {
+                if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
                     t_max = h.t;
                     tray.ray.tmax = TraversalRay::node_t_max(h.t, tray.back_off);
                     best = Some(h);
@@ -507,9 +570,13 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn any_with<S: FastStack<UVec2>>(&self, ray: &Ray, stack: S) -> bool {
+    fn any_with<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        stack: impl FastStack<UVec2>,
+    ) -> bool {
         let tray = TraversalRay::new(ray);
-        let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut state = self.new_state(stack, tray.ray.direction);
         let mut hit = false;
         let mut node: &CwBvhNode;
@@ -524,7 +591,7 @@ impl Accel {
                 node.intersect_ray(&tray.ray, state.oct_inv4),
                 {
                     let prim = &self.prims[state.primitive_id as usize];
-                    if prim.intersect(ray, &wr, ray.t_max).is_some() {
+                    if prim.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some() {
                         hit = true;
                         break 'traversal;
                     }
@@ -533,6 +600,13 @@ impl Accel {
         }
         hit
     }
+}
+
+/// Whether a primitive's box is finite and within [`build::MAX_BUILD_MAGNITUDE`]
+/// (the box of finite inputs: glam's min/max skip NaN, so check those first).
+fn box_is_buildable(b: &Aabb) -> bool {
+    let m = b.min.abs().max(b.max.abs()).max_element();
+    m.is_finite() && m <= build::MAX_BUILD_MAGNITUDE
 }
 
 /// Rays with NaN/∞ origin or direction, a zero direction, a non-finite `t_min` or

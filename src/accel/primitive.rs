@@ -12,69 +12,113 @@
 
 use glam::Vec3;
 
-/// Per-ray precomputation of the watertight test (Woop et al. 2013, §3,
+/// Per-ray precomputation of the watertight test (Woop, Benthin & Wald 2013, §3,
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
 /// axis, and the shear constants that map the ray to the +z axis of a unit space.
 ///
-/// The permutation and shear are folded into three row vectors, so that e.g.
-/// `Ax = A[kx] − Sx·A[kz]` becomes `row_x · A`. The extra terms are exact zeros
-/// (`A[i]·0`) and the ±1 products are exact, so the result is bit-identical to the
-/// paper's formulation — what matters for watertightness is only that a shared
-/// vertex is transformed identically for every triangle, which holds either way —
-/// while avoiding three runtime-indexed (bounds-checked) accesses per vertex.
+/// The permutation is a type-level choice ([`Axes`]): traversal is instantiated
+/// once per permutation, so that `A[kx] − Sx·A[kz]` reads fixed fields instead
+/// of runtime-indexed ones (the per-ray set-up is then three divisions and a
+/// compare; an earlier version folded the permutation into three dot products,
+/// which cost 3× the multiplications per vertex and gives the same bits).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WatertightRay {
     org: Vec3,
-    row_x: Vec3,
-    row_y: Vec3,
-    row_z: Vec3,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+    pub(crate) axes: Axes,
 }
+
+/// The six axis permutations (kx, ky, kz) of the watertight test: `kz` the
+/// dominant axis, kx and ky swapped when `dir[kz] < 0` to keep the winding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Axes {
+    /// (1, 2, 0)
+    X,
+    /// (2, 1, 0)
+    XNeg,
+    /// (2, 0, 1)
+    Y,
+    /// (0, 2, 1)
+    YNeg,
+    /// (0, 1, 2)
+    Z,
+    /// (1, 0, 2)
+    ZNeg,
+}
+
+/// Calls `$f::<KX, KY, KZ>($args)` for the permutation `$axes` (an [`Axes`]).
+macro_rules! with_axes {
+    ($axes:expr, $($f:ident).+ ( $($arg:expr),* $(,)? )) => {
+        match $axes {
+            $crate::accel::primitive::Axes::X => $($f).+::<1, 2, 0>($($arg),*),
+            $crate::accel::primitive::Axes::XNeg => $($f).+::<2, 1, 0>($($arg),*),
+            $crate::accel::primitive::Axes::Y => $($f).+::<2, 0, 1>($($arg),*),
+            $crate::accel::primitive::Axes::YNeg => $($f).+::<0, 2, 1>($($arg),*),
+            $crate::accel::primitive::Axes::Z => $($f).+::<0, 1, 2>($($arg),*),
+            $crate::accel::primitive::Axes::ZNeg => $($f).+::<1, 0, 2>($($arg),*),
+        }
+    };
+}
+pub(crate) use with_axes;
 
 impl WatertightRay {
     pub(crate) fn new(org: Vec3, dir: Vec3) -> Self {
         let a = dir.abs();
-        // kz = index of the largest |dir| component (paper: max_dim(abs(dir))).
-        let kz = if a.x > a.y {
+        // kz = index of the largest |dir| component (paper: max_dim(abs(dir))),
+        // kx, ky the next two, swapped when dir[kz] < 0 to preserve the winding.
+        let (axes, dz, dx, dy) = if a.x > a.y {
             if a.x > a.z {
-                0
+                (Axes::X, dir.x, dir.y, dir.z)
             } else {
-                2
+                (Axes::Z, dir.z, dir.x, dir.y)
             }
         } else if a.y > a.z {
-            1
+            (Axes::Y, dir.y, dir.z, dir.x)
         } else {
-            2
+            (Axes::Z, dir.z, dir.x, dir.y)
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Swap kx and ky to preserve the winding direction of triangles.
-        if dir[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let (axes, dx, dy) = if dz < 0.0 {
+            let negated = match axes {
+                Axes::X => Axes::XNeg,
+                Axes::Y => Axes::YNeg,
+                _ => Axes::ZNeg,
+            };
+            (negated, dy, dx)
+        } else {
+            (axes, dx, dy)
+        };
         // Shear constants (paper §3: Sx = dx/dz, Sy = dy/dz, Sz = 1/dz).
-        let sz = 1.0 / dir[kz];
-        let sx = dir[kx] * sz;
-        let sy = dir[ky] * sz;
-        let mut row_x = Vec3::ZERO;
-        row_x[kx] = 1.0;
-        row_x[kz] = -sx;
-        let mut row_y = Vec3::ZERO;
-        row_y[ky] = 1.0;
-        row_y[kz] = -sy;
-        let mut row_z = Vec3::ZERO;
-        row_z[kz] = sz;
+        let sz = 1.0 / dz;
         Self {
             org,
-            row_x,
-            row_y,
-            row_z,
+            sx: dx * sz,
+            sy: dy * sz,
+            sz,
+            axes,
         }
+    }
+
+    /// [`WatertightRay::intersect`] for this ray's own permutation (one match per
+    /// call: for tests, not for traversal).
+    #[cfg(test)]
+    pub(crate) fn intersect_dyn(
+        &self,
+        v0: Vec3,
+        v1: Vec3,
+        v2: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, f32, f32)> {
+        with_axes!(self.axes, self.intersect(v0, v1, v2, t_min, t_max))
     }
 
     /// Returns `(t, b1, b2)` for a hit with `t_min <= t <= t_max`, where b1, b2 are
     /// the barycentric weights of `v1` and `v2`. Two-sided (no back-face culling).
+    /// `KX, KY, KZ` must be this ray's permutation ([`WatertightRay::axes`]).
     #[inline(always)]
-    pub(crate) fn intersect(
+    pub(crate) fn intersect<const KX: usize, const KY: usize, const KZ: usize>(
         &self,
         v0: Vec3,
         v1: Vec3,
@@ -83,13 +127,13 @@ impl WatertightRay {
         t_max: f32,
     ) -> Option<(f32, f32, f32)> {
         // Vertices relative to the ray origin.
-        let a = v0 - self.org;
-        let b = v1 - self.org;
-        let c = v2 - self.org;
+        let a = (v0 - self.org).to_array();
+        let b = (v1 - self.org).to_array();
+        let c = (v2 - self.org).to_array();
         // Shear and scale of the vertices (paper §3, Listing 1).
-        let (ax, ay) = (self.row_x.dot(a), self.row_y.dot(a));
-        let (bx, by) = (self.row_x.dot(b), self.row_y.dot(b));
-        let (cx, cy) = (self.row_x.dot(c), self.row_y.dot(c));
+        let (ax, ay) = (a[KX] - self.sx * a[KZ], a[KY] - self.sy * a[KZ]);
+        let (bx, by) = (b[KX] - self.sx * b[KZ], b[KY] - self.sy * b[KZ]);
+        let (cx, cy) = (c[KX] - self.sx * c[KZ], c[KY] - self.sy * c[KZ]);
         // Scaled barycentric coordinates = 2D edge functions (paper §3, eq. 3).
         // Rust never contracts `a*b - c*d` into an FMA, which is what makes the
         // edge function of a shared edge exactly anti-symmetric between the two
@@ -119,9 +163,7 @@ impl WatertightRay {
             return None;
         }
         // Scaled hit distance (paper eq. 5): T = U·Az + V·Bz + W·Cz.
-        let az = self.row_z.dot(a);
-        let bz = self.row_z.dot(b);
-        let cz = self.row_z.dot(c);
+        let (az, bz, cz) = (self.sz * a[KZ], self.sz * b[KZ], self.sz * c[KZ]);
         let t_scaled = u * az + v * bz + w * cz;
         let rcp_det = 1.0 / det;
         let t = t_scaled * rcp_det;
@@ -209,20 +251,20 @@ mod tests {
         );
         let o = Vec3::new(0.25, 0.5, 2.0);
         let wr = WatertightRay::new(o, -Vec3::Z);
-        let (t, b1, b2) = wr.intersect(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
+        let (t, b1, b2) = wr.intersect_dyn(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
         assert!((t - 2.0).abs() < 1e-6);
         assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
         // Same from below (other winding relative to the ray).
         let wr = WatertightRay::new(Vec3::new(0.25, 0.5, -3.0), Vec3::Z);
-        let (t, b1, b2) = wr.intersect(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
+        let (t, b1, b2) = wr.intersect_dyn(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
         assert!((t - 3.0).abs() < 1e-6);
         assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
         // Range limits.
-        assert!(wr.intersect(v0, v1, v2, 0.0, 2.9).is_none());
-        assert!(wr.intersect(v0, v1, v2, 3.1, 9.0).is_none());
+        assert!(wr.intersect_dyn(v0, v1, v2, 0.0, 2.9).is_none());
+        assert!(wr.intersect_dyn(v0, v1, v2, 3.1, 9.0).is_none());
         // Miss.
         let wr = WatertightRay::new(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z);
-        assert!(wr.intersect(v0, v1, v2, 0.0, f32::INFINITY).is_none());
+        assert!(wr.intersect_dyn(v0, v1, v2, 0.0, f32::INFINITY).is_none());
     }
 
     #[test]

@@ -1,0 +1,228 @@
+#!/usr/bin/env python3
+"""Ray throughput of gradtrace's BVH against Embree 4 on the same rays.
+
+    python3 scripts/bench_embree.py [--rounds 3] [--runs 15] [--measurement-time 2] [--no-cargo]
+
+Runs `cargo bench --bench accel` (closest_hit/*, shadow/*, obvhs_baseline_*) with
+GRADTRACE_ACCEL_RAYS set, so that the bench writes the Stanford bunny and its
+exact ray sets (coherent camera grid, incoherent random rays; the bench's own
+xorshift64* generators) to out/bench/accel_rays.bin; then traces the same rays
+with Embree 4 (PyPI `embreex`: one rtcIntersect1 / rtcOccluded1 per ray, in a C
+loop, on the calling thread) back to back, checks that both find the same
+number of hits, and prints the ratios. Writes out/bench/bench_embree.json and the
+table between the markers in benches/README.md.
+
+gradtrace: criterion's median time per pass over the ray set. Embree: median of
+--runs passes (`EmbreeScene.run` over all rays; the first pass, which commits
+the scene, i.e. builds Embree's BVH, is timed separately). One thread each. On a
+shared machine the load drifts between the two, so the script alternates them
+for --rounds rounds and reports the medians over rounds (and each round's ratio).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import struct
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import mitsuba_scene as ms  # noqa: E402
+
+ms.ensure_venv()
+
+import numpy as np  # noqa: E402
+from embreex import rtcore_scene as rtcs  # noqa: E402
+from embreex.mesh_construction import TriangleMesh  # noqa: E402
+
+OUT = ms.REPO / "out" / "bench"
+RAYS = OUT / "accel_rays.bin"
+CRITERION = ms.REPO / "target" / "criterion"
+README = ms.REPO / "benches" / "README.md"
+BEGIN, END = "<!-- bench_embree:begin -->", "<!-- bench_embree:end -->"
+# (criterion group, Embree query)
+QUERIES = [("closest_hit", "INTERSECT"), ("shadow", "OCCLUDED")]
+
+
+def read_dump(path: Path) -> tuple[np.ndarray, np.ndarray, list[dict]]:
+    data = path.read_bytes()
+    if data[:8] != b"GTRAYS1\0":
+        raise SystemExit(f"{path}: not a ray dump of benches/accel.rs")
+    pos = 8
+
+    def u32(n: int) -> tuple[int, ...]:
+        nonlocal pos
+        v = struct.unpack_from(f"<{n}I", data, pos)
+        pos += 4 * n
+        return v
+
+    def array(dtype: str, n: int) -> np.ndarray:
+        nonlocal pos
+        a = np.frombuffer(data, dtype=dtype, count=3 * n, offset=pos).reshape(n, 3).copy()
+        pos += 12 * n
+        return a
+
+    nv, nt = u32(2)
+    verts, tris = array("<f4", nv), array("<u4", nt)
+    sets = []
+    for _ in range(u32(1)[0]):
+        (name_len,) = u32(1)
+        name = data[pos : pos + name_len].decode()
+        pos += name_len
+        n, closest, any_hit = u32(3)
+        sets.append({"name": name, "origins": array("<f4", n), "dirs": array("<f4", n), "closest_hits": closest, "any_hits": any_hit})
+    return verts, tris, sets
+
+
+def run_ours(measurement_time: float) -> None:
+    OUT.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, GRADTRACE_ACCEL_RAYS=str(RAYS))
+    cmd = ["cargo", "bench", "--bench", "accel", "--", "--warm-up-time", "1", "--measurement-time", str(measurement_time), "closest_hit|shadow"]
+    print("$ " + " ".join(cmd), flush=True)
+    subprocess.run(cmd, cwd=ms.REPO, env=env, check=True)
+
+
+def criterion_median_s(group: str, bench: str) -> float:
+    est = json.loads((CRITERION / group / bench / "new" / "estimates.json").read_text())
+    return est["median"]["point_estimate"] * 1e-9
+
+
+def run_embree(verts: np.ndarray, tris: np.ndarray, sets: list[dict], runs: int) -> dict:
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, verts.astype(np.float32), tris.astype(np.int32))
+    results = {}
+    for s in sets:
+        o, d = np.ascontiguousarray(s["origins"]), np.ascontiguousarray(s["dirs"])
+        for group, query in QUERIES:
+            t0 = time.perf_counter()
+            first = scene.run(o, d, query=query)
+            first_s = time.perf_counter() - t0
+            times = []
+            for _ in range(runs):
+                t0 = time.perf_counter()
+                res = scene.run(o, d, query=query)
+                times.append(time.perf_counter() - t0)
+            assert np.array_equal(first, res)
+            hits = int(np.count_nonzero(res != -1))  # prim id, or 0 when occluded; -1: miss
+            results[(group, s["name"])] = {"median_s": statistics.median(times), "first_s": first_s, "hits": hits}
+    return results
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rounds", type=int, default=3, help="alternations of the cargo bench and Embree")
+    ap.add_argument("--runs", type=int, default=15, help="Embree passes per ray set and round")
+    ap.add_argument("--measurement-time", type=float, default=2.0, help="criterion seconds per bench")
+    ap.add_argument("--no-cargo", action="store_true", help="one round, reusing the last cargo bench run's figures and ray dump")
+    args = ap.parse_args()
+    rounds = []
+    for k in range(1 if args.no_cargo else args.rounds):
+        if not args.no_cargo:
+            run_ours(args.measurement_time)
+        verts, tris, sets = read_dump(RAYS)
+        embree = run_embree(verts, tris, sets, args.runs)
+        rounds.append(round_rows(sets, embree))
+        print(f"round {k + 1}: " + ", ".join(f"{r['bench']} {r['ratio']:.2f}x" for r in rounds[-1]), flush=True)
+    rows = []
+    for i, r in enumerate(rounds[0]):
+        per_round = [rr[i] for rr in rounds]
+        med = lambda key: statistics.median(x[key] for x in per_round)  # noqa: E731
+        row = dict(r)
+        for key in ("gradtrace_mrays_s", "embree_mrays_s", "ratio"):
+            row[key] = med(key)
+        row["ratios_per_round"] = [x["ratio"] for x in per_round]
+        if "obvhs_baseline_mrays_s" in r:
+            row["obvhs_baseline_mrays_s"] = med("obvhs_baseline_mrays_s")
+        rows.append(row)
+    meta = {
+        "triangles": len(tris),
+        "rounds": len(rounds),
+        "runs": args.runs,
+        "cpu": ms_cpu(),
+        "load_avg": os.getloadavg()[0],
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+    }
+    (OUT / "bench_embree.json").write_text(json.dumps({"meta": meta, "results": rows}, indent=2))
+    table = markdown(rows, meta)
+    write_readme(table)
+    print(table)
+    mismatch = [r["bench"] for r in rows if r["hits_gradtrace"] != r["hits_embree"]]
+    if mismatch:
+        print(f"note: hit counts differ for {mismatch} (see the table)", file=sys.stderr)
+    return 0
+
+
+def round_rows(sets: list[dict], embree: dict) -> list[dict]:
+    rows = []
+    for group, query in QUERIES:
+        for s in sets:
+            n = len(s["origins"])
+            ours_s = criterion_median_s(group, s["name"])
+            e = embree[(group, s["name"])]
+            row = {
+                "bench": f"{group}/{s['name']}",
+                "rays": n,
+                "gradtrace_mrays_s": n / ours_s * 1e-6,
+                "embree_mrays_s": n / e["median_s"] * 1e-6,
+                "ratio": e["median_s"] / ours_s,
+                "hits_gradtrace": s["closest_hits"] if query == "INTERSECT" else s["any_hits"],
+                "hits_embree": e["hits"],
+                "embree_first_pass_s": e["first_s"],
+            }
+            if group == "closest_hit":
+                try:
+                    row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
+                except FileNotFoundError:
+                    pass
+            rows.append(row)
+    return rows
+
+
+def ms_cpu() -> str:
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "unknown CPU"
+
+
+def markdown(rows: list[dict], meta: dict) -> str:
+    lines = [
+        f"Stanford bunny ({meta['triangles']:,} triangles), the `accel` bench's rays (65,536 per set), one thread; "
+        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray): median of {meta['runs']} passes; "
+        f"the two alternate for {meta['rounds']} rounds, medians over rounds (per-round ratios in brackets). "
+        f"{meta['cpu']}, measured {meta['date']}, load average {meta['load_avg']:.1f} (shared machine, loaded: compare within a row).",
+        "",
+        "| bench | gradtrace (Mrays/s) | Embree (Mrays/s) | gradtrace / Embree | hits (ours / Embree) | obvhs' own traversal (Mrays/s) |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        base = f"{r['obvhs_baseline_mrays_s']:.2f}" if "obvhs_baseline_mrays_s" in r else "—"
+        per_round = ", ".join(f"{x:.2f}" for x in r["ratios_per_round"])
+        lines.append(
+            f"| `{r['bench']}` | {r['gradtrace_mrays_s']:.2f} | {r['embree_mrays_s']:.2f} | {r['ratio']:.2f}× [{per_round}] | "
+            f"{r['hits_gradtrace']:,} / {r['hits_embree']:,} | {base} |"
+        )
+    return "\n".join(lines)
+
+
+def write_readme(table: str) -> None:
+    text = README.read_text()
+    block = f"{BEGIN}\n{table}\n{END}"
+    if BEGIN in text and END in text:
+        head, rest = text.split(BEGIN, 1)
+        text = head + block + rest.split(END, 1)[1]
+    else:
+        text = text.rstrip() + "\n\n" + block + "\n"
+    README.write_text(text)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
