@@ -291,8 +291,18 @@ fn transform_of(p: &Params) -> crate::Result<Xform> {
         }
         a
     };
-    Xform::new(affine)
-        .ok_or_else(|| p.err(None, "transform is singular (a zero scale?) or not finite"))
+    let det = Mat3::from(affine.matrix3).determinant();
+    if !det.is_finite() || !in_range(affine.translation.into()) {
+        return Err(p.err(
+            None,
+            format!(
+                "the transform is too large (determinant {det:e}, translation {}); coordinates \
+                 are limited to ±{MAX_MAGNITUDE:e} (scene::MAX_MAGNITUDE)",
+                Vec3::from(affine.translation)
+            ),
+        ));
+    }
+    Xform::new(affine).ok_or_else(|| p.err(None, "transform is singular (a zero scale?)"))
 }
 
 // ---------------------------------------------------------------------------
@@ -855,8 +865,7 @@ fn rect_geometry(p: &Params, k: &ShapeKeys) -> crate::Result<(Vec3, Vec3, Vec3)>
         (c, u, v)
     };
     for (key, e) in [("edge_u", u), ("edge_v", v)] {
-        // (Finite here, so `<=` is the exact negation of "has length".)
-        if e.length() <= 0.0 {
+        if e == Vec3::ZERO {
             return Err(p.err(Some(key), format!("`{key}` must have non-zero length")));
         }
     }
@@ -866,8 +875,9 @@ fn rect_geometry(p: &Params, k: &ShapeKeys) -> crate::Result<(Vec3, Vec3, Vec3)>
             "`edge_u` and `edge_v` are parallel: the quad has no area",
         ));
     }
-    // The renderer takes the normal from edge_u × edge_v; it must not underflow.
-    if u.cross(v).length() <= 0.0 {
+    // The renderer normalises edge_u × edge_v: its squared length must be a
+    // normal f32, or the normal is NaN.
+    if u.cross(v).length_squared() < f32::MIN_POSITIVE {
         return Err(p.err(None, "the quad is too small: its area underflows f32"));
     }
     Ok((c, u, v))
