@@ -22,7 +22,8 @@
 //!    `.*.gtmp-*` file whose lock it can take belongs to a dead process (locks
 //!    die with their process; a reused PID inherits nothing) and is removed. A
 //!    kill inside step 2's window therefore leaves a name only until the next
-//!    write to that directory.
+//!    write to that directory. (On a file system without `flock` the sweep
+//!    cannot tell a live writer from a dead one and leaves such names alone.)
 //! 4. Names carry 64 random bits and are created exclusively (retried on the
 //!    rare collision), so a leftover file, or a PID reused in a container, can
 //!    never block a later write.
@@ -231,7 +232,10 @@ fn create_temp(dir: &Path, file_name: &OsStr) -> std::io::Result<(File, Option<P
     #[cfg(target_os = "linux")]
     if !FORCE_NAMED.load(Ordering::SeqCst) {
         if let Some(file) = linux::open_anonymous(dir) {
-            file.try_lock().map_err(std::io::Error::from)?;
+            // Brand new and nameless: nobody else can hold it. The lock only
+            // matters for the moment it has a name; a file system without
+            // flock just forgoes the sweep's protection of that moment.
+            let _ = file.try_lock();
             return Ok((file, None));
         }
     }
@@ -253,7 +257,10 @@ fn create_named(dir: &Path, file_name: &OsStr) -> std::io::Result<(File, PathBuf
             }
             Err(e) => return Err(e),
         };
-        if file.try_lock().is_ok() && same_file(&file, &path) {
+        // Locked by us (or locks unsupported: then no sweeper can take it
+        // either), and still the file at that name.
+        let locked = !matches!(file.try_lock(), Err(std::fs::TryLockError::WouldBlock));
+        if locked && same_file(&file, &path) {
             return Ok((file, path));
         }
         last = Some(std::io::Error::other("the temporary file was taken over"));
@@ -444,7 +451,8 @@ impl StagedPair {
     }
 
     /// Renames the PNG, then the EXR, into place (see the module doc). An error
-    /// before the first rename leaves both previous files untouched.
+    /// before the first rename leaves both previous files untouched; one after
+    /// it leaves the detectable mismatch a kill there would.
     pub fn commit(self) -> crate::Result<()> {
         self.commit_observed(&mut |_| {})
     }
