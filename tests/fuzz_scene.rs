@@ -280,7 +280,8 @@ fn fuzz_scene_parser_briefly() {
     let start = Instant::now();
     let t = fuzz(&corpus, 1, 20_000, Duration::from_secs(3));
     assert_clean(&t, start.elapsed());
-    assert!(t.inputs >= 200, "too few inputs ({})", t.inputs);
+    // (Release builds run ~4000; a debug build on a busy machine far fewer.)
+    assert!(t.inputs >= 100, "too few inputs ({})", t.inputs);
 }
 
 /// The bundled scenes with their real assets (a few hundred mutants, the bunny
