@@ -21,7 +21,10 @@ pub enum Error {
         location: String,
         message: String,
     },
-    /// An OBJ/MTL or image referenced by the scene is malformed.
+    /// An input file is unusable: a scene file that is not a regular UTF-8 file
+    /// within the size limit, or an OBJ/MTL or image that is malformed. (While a
+    /// scene loads, asset errors become `Scene` errors at the key naming the
+    /// asset, with the asset's path in the message.)
     #[error("{path}: {message}")]
     Asset { path: PathBuf, message: String },
     /// Writing an output file failed; nothing was left at `path`.

@@ -1,33 +1,78 @@
-//! Atomic file replacement: write a temporary file next to the target, fsync it,
-//! then rename it over the target.
+//! Atomic file replacement that leaves no temporary file behind, whatever stops
+//! the process, and the EXR + PNG pair whose mismatch is always detectable.
 //!
-//! Why: a render can take minutes and may fail (or be interrupted) while an output
-//! is being encoded. Writing in place would leave a truncated file *and* destroy the
-//! previous good one. `rename(2)` within one directory is atomic on POSIX file
-//! systems, so a reader sees either the old file or the complete new one, never a
-//! mix. The temporary file lives in the target's own directory because a rename
-//! across file systems is not atomic (and fails with `EXDEV`).
+//! Why: a render can take minutes and may fail or be killed while an output is
+//! being encoded. Writing in place would leave a truncated file *and* destroy the
+//! previous good one; `rename(2)` within one directory is atomic, so a reader sees
+//! the old file or the complete new one, never a mix. The temporary file lives in
+//! the target's own directory because a rename across file systems is not atomic.
+//!
+//! # The scheme
+//!
+//! 1. [`stage`] writes into an **anonymous** file in the target's directory
+//!    (Linux: `open(dir, O_TMPFILE)`). It has no name, so when the process dies —
+//!    `SIGKILL`, `SIGTERM`, `SIGINT`, `SIGHUP`, a crash — the kernel frees it;
+//!    nothing is left and no signal handler is needed. It is fsynced before
+//!    [`stage`] returns.
+//! 2. [`Staged::commit`] names it, `linkat("/proc/self/fd/N", ".NAME.gtmp-RANDOM")`,
+//!    and renames that name over the target. Only between these two system
+//!    calls does a temporary name exist.
+//! 3. Every staged file holds an exclusive `flock` from the moment it exists
+//!    until the process ends. [`stage`] first sweeps the directory: a
+//!    `.*.gtmp-*` file whose lock it can take belongs to a dead process (locks
+//!    die with their process; a reused PID inherits nothing) and is removed. A
+//!    kill inside step 2's window therefore leaves a name only until the next
+//!    write to that directory. (On a file system without `flock` the sweep
+//!    cannot tell a live writer from a dead one and leaves such names alone.)
+//! 4. Names carry 64 random bits and are created exclusively (retried on the
+//!    rare collision), so a leftover file, or a PID reused in a container, can
+//!    never block a later write.
+//!
+//! Fallback (no `O_TMPFILE`: not Linux, a file system without it, or no
+//! `/proc`): the temporary file is named (`.NAME.gtmp-RANDOM`) from the start,
+//! locked at once, and swept as in step 3.
+//!
+//! # The EXR + PNG pair: mismatch detectable
+//!
+//! Two files cannot be renamed in one atomic step, so [`stage_pair`] makes a
+//! mismatch *detectable*: both files carry the same render id (a hash of the
+//! beauty pixels, the resolution and the exposure) — the EXR as the header
+//! attribute [`RENDER_ID_KEY`], the PNG as a `tEXt` chunk of that keyword — and
+//! [`StagedPair::commit`] renames the PNG first, the EXR last. A kill between the
+//! two leaves the new PNG beside the old EXR, and [`check_pair`] reports their
+//! ids as different; the EXR, the primary output, is always a complete file
+//! from one render.
 
+use super::OutputImage;
+use crate::math::Vec3;
 use crate::Error;
+use std::ffi::{OsStr, OsString};
 use std::fs::{File, OpenOptions};
+use std::hash::{BuildHasher, Hasher};
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Distinguishes temporary files of concurrent writers inside one process (the
-/// PID alone distinguishes processes).
-static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+/// What every temporary name contains: `.<target name>.gtmp-<16 hex digits>`.
+const TEMP_MARK: &str = ".gtmp-";
 
-/// A fully written and fsynced temporary file that has not yet replaced its target.
+/// The key of the render id: an EXR header attribute and a PNG `tEXt` keyword.
+pub const RENDER_ID_KEY: &str = "gradtrace.render_id";
+
+/// A fully written and fsynced file that has not yet replaced its target.
 ///
-/// Dropping it without [`Staged::commit`] removes the temporary file, so every
-/// early return (and even a panic) cleans up. Staging several files first and
-/// committing them afterwards lets a caller (the CLI writes an EXR and a PNG) make
-/// all fallible encoding happen before any visible output is touched.
+/// Dropping it without [`Staged::commit`] discards it (an anonymous file simply
+/// vanishes; a named fallback file is removed), so every early return, and even
+/// a panic, cleans up. Staging several files first and committing them
+/// afterwards makes all fallible encoding happen before any visible output is
+/// touched.
 #[derive(Debug)]
 pub struct Staged {
-    temp: PathBuf,
+    /// Open and exclusively locked for the life of this value.
+    file: File,
     target: PathBuf,
+    /// The temporary name, once it has one (from the start in the fallback).
+    temp: Option<PathBuf>,
     committed: bool,
 }
 
@@ -37,31 +82,53 @@ impl Staged {
         &self.target
     }
 
-    /// Renames the temporary file over the target. On failure the temporary file is
-    /// removed and the previous target (if any) is untouched.
-    pub fn commit(mut self) -> crate::Result<()> {
-        std::fs::rename(&self.temp, &self.target)
+    /// Gives the file its temporary name (a no-op in the named fallback).
+    fn name(&mut self) -> crate::Result<PathBuf> {
+        if let Some(t) = &self.temp {
+            return Ok(t.clone());
+        }
+        let temp = link_anonymous(&self.file, &self.target)
+            .map_err(|e| output_error(&self.target, format!("cannot name the new file: {e}")))?;
+        self.temp = Some(temp.clone());
+        Ok(temp)
+    }
+
+    /// Renames the named file over the target.
+    fn rename(&mut self) -> crate::Result<()> {
+        let temp = self.name()?;
+        std::fs::rename(&temp, &self.target)
             .map_err(|e| output_error(&self.target, format!("cannot replace the file: {e}")))?;
         self.committed = true;
-        // Make the rename itself durable. Best effort: some file systems refuse to
-        // fsync a directory, and the data is already safely in the new file.
-        if let Ok(dir) = File::open(parent_dir(&self.target)) {
-            let _ = dir.sync_all();
-        }
+        Ok(())
+    }
+
+    /// Puts the file in place of the target. On failure nothing is left of it
+    /// and the previous target (if any) is untouched.
+    pub fn commit(mut self) -> crate::Result<()> {
+        self.rename()?;
+        sync_dir(&self.target);
         Ok(())
     }
 }
 
 impl Drop for Staged {
     fn drop(&mut self) {
-        if !self.committed {
-            let _ = std::fs::remove_file(&self.temp);
+        if let (false, Some(t)) = (self.committed, &self.temp) {
+            let _ = std::fs::remove_file(t);
         }
     }
 }
 
-/// Writes a temporary file for `target` with `write`, flushes and fsyncs it. Any
-/// error (from `write` or from the file system) removes the temporary file.
+/// Makes the renames durable. Best effort: some file systems refuse to fsync a
+/// directory, and the data is already safely in the files.
+fn sync_dir(target: &Path) {
+    if let Ok(dir) = File::open(parent_dir(target)) {
+        let _ = dir.sync_all();
+    }
+}
+
+/// Writes a file for `target` with `write`, flushes and fsyncs it, without
+/// touching `target` (see the module doc). Any error discards the file.
 pub fn stage<F>(target: &Path, write: F) -> crate::Result<Staged>
 where
     F: FnOnce(&mut BufWriter<File>) -> Result<(), String>,
@@ -69,30 +136,28 @@ where
     let file_name = target
         .file_name()
         .ok_or_else(|| output_error(target, "the path does not name a file".into()))?;
-    let temp = parent_dir(target).join(format!(
-        ".{}.tmp-{}-{}",
-        file_name.to_string_lossy(),
-        std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    // `create_new` never clobbers a file we did not create ourselves.
-    let file = OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&temp)
+    let dir = parent_dir(target);
+    sweep_stale(dir);
+    let (file, temp) = create_temp(dir, file_name)
         .map_err(|e| output_error(target, format!("cannot create a temporary file: {e}")))?;
-    // From here on the guard owns the temporary file and removes it on any exit.
+    // From here on the guard owns the file and discards it on any exit.
     let staged = Staged {
-        temp,
+        file,
         target: target.to_path_buf(),
+        temp,
         committed: false,
     };
-    let mut writer = BufWriter::new(file);
+    let handle = staged
+        .file
+        .try_clone()
+        .map_err(|e| output_error(target, format!("cannot write: {e}")))?;
+    let mut writer = BufWriter::new(handle);
     write(&mut writer).map_err(|m| output_error(target, m))?;
-    let file = writer
+    let handle = writer
         .into_inner()
         .map_err(|e| output_error(target, format!("cannot write: {}", e.error())))?;
-    file.sync_all()
+    handle
+        .sync_all()
         .map_err(|e| output_error(target, format!("cannot sync to disk: {e}")))?;
     Ok(staged)
 }
@@ -117,5 +182,367 @@ pub(crate) fn output_error(path: &Path, message: String) -> Error {
     Error::Output {
         path: path.to_path_buf(),
         message,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Temporary files.
+// ---------------------------------------------------------------------------
+
+/// 64 bits that differ between processes (std's per-process random hash keys)
+/// and between calls (a counter and the clock).
+fn random_u64() -> u64 {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u64(COUNTER.fetch_add(1, Ordering::Relaxed));
+    h.write_u32(std::process::id());
+    if let Ok(t) = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH) {
+        h.write_u128(t.as_nanos());
+    }
+    h.finish()
+}
+
+fn temp_path(dir: &Path, file_name: &OsStr) -> PathBuf {
+    let mut name = OsString::from(".");
+    name.push(file_name);
+    name.push(format!("{TEMP_MARK}{:016x}", random_u64()));
+    dir.join(name)
+}
+
+fn is_temp_name(name: &OsStr) -> bool {
+    let name = name.to_string_lossy();
+    name.starts_with('.')
+        && name
+            .rsplit_once(TEMP_MARK)
+            .is_some_and(|(_, hex)| hex.len() == 16 && hex.bytes().all(|b| b.is_ascii_hexdigit()))
+}
+
+/// Test switch: forces the named fallback even where `O_TMPFILE` works.
+static FORCE_NAMED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Forces the portable named-temp-file scheme (for tests of the fallback).
+#[doc(hidden)]
+pub fn force_named_temp_files(on: bool) {
+    FORCE_NAMED.store(on, Ordering::SeqCst);
+}
+
+/// An exclusively locked new file: anonymous (`None`) where the system allows,
+/// else named.
+fn create_temp(dir: &Path, file_name: &OsStr) -> std::io::Result<(File, Option<PathBuf>)> {
+    #[cfg(target_os = "linux")]
+    if !FORCE_NAMED.load(Ordering::SeqCst) {
+        if let Some(file) = linux::open_anonymous(dir) {
+            // Brand new and nameless: nobody else can hold it. The lock only
+            // matters for the moment it has a name; a file system without
+            // flock just forgoes the sweep's protection of that moment.
+            let _ = file.try_lock();
+            return Ok((file, None));
+        }
+    }
+    create_named(dir, file_name).map(|(f, p)| (f, Some(p)))
+}
+
+/// The fallback: a new file under a random name, locked, and checked to still be
+/// the file at that name (a sweeper may have removed it between creation and
+/// lock, when it looked abandoned).
+fn create_named(dir: &Path, file_name: &OsStr) -> std::io::Result<(File, PathBuf)> {
+    let mut last = None;
+    for _ in 0..16 {
+        let path = temp_path(dir, file_name);
+        let file = match OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(f) => f,
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                last = Some(e);
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        // Locked by us (or locks unsupported: then no sweeper can take it
+        // either), and still the file at that name.
+        let locked = !matches!(file.try_lock(), Err(std::fs::TryLockError::WouldBlock));
+        if locked && same_file(&file, &path) {
+            return Ok((file, path));
+        }
+        last = Some(std::io::Error::other("the temporary file was taken over"));
+    }
+    Err(last.unwrap_or_else(|| std::io::Error::other("no free temporary name")))
+}
+
+#[cfg(unix)]
+fn same_file(file: &File, path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), std::fs::metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_file: &File, path: &Path) -> bool {
+    path.exists()
+}
+
+/// Names an anonymous file next to `target` (retrying on a name collision).
+fn link_anonymous(file: &File, target: &Path) -> std::io::Result<PathBuf> {
+    let dir = parent_dir(target);
+    let name = target.file_name().unwrap_or(OsStr::new("file"));
+    #[cfg(target_os = "linux")]
+    {
+        let mut last = None;
+        for _ in 0..16 {
+            let path = temp_path(dir, name);
+            match linux::link(file, &path) {
+                Ok(()) => return Ok(path),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last.unwrap_or_else(|| std::io::Error::other("no free temporary name")))
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = (file, dir, name);
+        Err(std::io::Error::other("anonymous files need Linux"))
+    }
+}
+
+/// The PID in a name of the scheme before this one, `.NAME.tmp-PID-N`.
+fn legacy_pid(name: &OsStr) -> Option<u32> {
+    let name = name.to_str()?;
+    let (_, tail) = name.strip_prefix('.')?.rsplit_once(".tmp-")?;
+    let (pid, n) = tail.split_once('-')?;
+    n.parse::<u64>().ok()?;
+    pid.parse().ok()
+}
+
+/// Whether a file of the old `.NAME.tmp-PID-N` scheme is certainly abandoned:
+/// this process never makes such names, and a PID with no /proc entry is dead.
+/// (A reused PID keeps it; harmless now that names never collide.)
+fn legacy_is_stale(pid: u32) -> bool {
+    pid == std::process::id()
+        || (Path::new("/proc/self").is_dir() && !Path::new("/proc").join(pid.to_string()).exists())
+}
+
+/// Removes the temporary files of dead writers in `dir`: those whose lock can be
+/// taken (and those of the old PID-named scheme whose writer is gone). Best
+/// effort; never fails the write that triggered it.
+fn sweep_stale(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        if legacy_pid(&entry.file_name()).is_some_and(legacy_is_stale) {
+            let _ = std::fs::remove_file(entry.path());
+            continue;
+        }
+        if !is_temp_name(&entry.file_name()) {
+            continue;
+        }
+        let path = entry.path();
+        let Ok(file) = File::open(&path) else {
+            continue;
+        };
+        if file.try_lock().is_ok() && same_file(&file, &path) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
+#[cfg(target_os = "linux")]
+mod linux {
+    use std::fs::{File, OpenOptions};
+    use std::os::unix::ffi::OsStrExt;
+    use std::os::unix::fs::OpenOptionsExt;
+    use std::os::unix::io::AsRawFd;
+    use std::path::Path;
+
+    /// `open(dir, O_TMPFILE | O_WRONLY, 0666)`; `None` where the file system (or
+    /// a missing `/proc`, needed to name it later) does not allow it.
+    pub(super) fn open_anonymous(dir: &Path) -> Option<File> {
+        if !Path::new("/proc/self/fd").is_dir() {
+            return None;
+        }
+        OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_TMPFILE)
+            .open(dir)
+            .ok()
+    }
+
+    /// `linkat(AT_FDCWD, "/proc/self/fd/N", AT_FDCWD, path, AT_SYMLINK_FOLLOW)`:
+    /// the documented way (open(2)) to give an `O_TMPFILE` file a name without
+    /// `CAP_DAC_READ_SEARCH`.
+    pub(super) fn link(file: &File, path: &Path) -> std::io::Result<()> {
+        let from = std::ffi::CString::new(format!("/proc/self/fd/{}", file.as_raw_fd()))?;
+        let to = std::ffi::CString::new(path.as_os_str().as_bytes())?;
+        // SAFETY: both pointers are NUL-terminated strings that outlive the call;
+        // linkat only reads them.
+        let r = unsafe {
+            libc::linkat(
+                libc::AT_FDCWD,
+                from.as_ptr(),
+                libc::AT_FDCWD,
+                to.as_ptr(),
+                libc::AT_SYMLINK_FOLLOW,
+            )
+        };
+        if r == 0 {
+            Ok(())
+        } else {
+            Err(std::io::Error::last_os_error())
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The EXR + PNG pair.
+// ---------------------------------------------------------------------------
+
+/// The render id of a beauty image: the first 128 bits (hex) of SHA-256 over the
+/// resolution, the exposure and the beauty's f32 bits. Deterministic, so that a
+/// re-render of the same image writes byte-identical files.
+pub fn render_id(beauty: &[Vec3], width: usize, height: usize, exposure: f32) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update((width as u64).to_le_bytes());
+    h.update((height as u64).to_le_bytes());
+    h.update(exposure.to_bits().to_le_bytes());
+    let mut buf = Vec::with_capacity(4096 * 12);
+    for chunk in beauty.chunks(4096) {
+        buf.clear();
+        for p in chunk {
+            for c in p.to_array() {
+                buf.extend_from_slice(&c.to_bits().to_le_bytes());
+            }
+        }
+        h.update(&buf);
+    }
+    h.finalize()[..16]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// An EXR and its PNG preview, staged under one render id.
+#[derive(Debug)]
+pub struct StagedPair {
+    exr: Staged,
+    png: Staged,
+    id: String,
+}
+
+/// The steps of [`StagedPair::commit`], for tests that stop the process
+/// between them.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairStep {
+    /// The PNG is in place; the EXR is still anonymous.
+    PngRenamed,
+    /// The EXR has its temporary name (the only moment one exists).
+    ExrNamed,
+    /// Both are in place.
+    ExrRenamed,
+}
+
+impl StagedPair {
+    /// The id both files carry.
+    pub fn render_id(&self) -> &str {
+        &self.id
+    }
+
+    /// Renames the PNG, then the EXR, into place (see the module doc). An error
+    /// before the first rename leaves both previous files untouched; one after
+    /// it leaves the detectable mismatch a kill there would.
+    pub fn commit(self) -> crate::Result<()> {
+        self.commit_observed(&mut |_| {})
+    }
+
+    /// [`StagedPair::commit`], calling `step` after each step.
+    #[doc(hidden)]
+    pub fn commit_observed(mut self, step: &mut dyn FnMut(PairStep)) -> crate::Result<()> {
+        self.png.rename()?;
+        step(PairStep::PngRenamed);
+        self.exr.name()?;
+        step(PairStep::ExrNamed);
+        self.exr.rename()?;
+        sync_dir(&self.exr.target);
+        if parent_dir(&self.png.target) != parent_dir(&self.exr.target) {
+            sync_dir(&self.png.target);
+        }
+        step(PairStep::ExrRenamed);
+        Ok(())
+    }
+}
+
+/// Encodes `image` as the EXR at `exr` and its beauty `R,G,B` (tone-mapped at
+/// `exposure`) as the PNG at `png`, both tagged with one render id, without
+/// touching either path; [`StagedPair::commit`] puts them in place. This is how
+/// a render's outputs should be written.
+pub fn stage_pair(
+    exr: &Path,
+    image: &OutputImage,
+    png: &Path,
+    beauty: &[Vec3],
+    exposure: f32,
+) -> crate::Result<StagedPair> {
+    let id = render_id(beauty, image.width, image.height, exposure);
+    let exr = super::exr::stage_exr_tagged(exr, image, Some(&id))?;
+    let png =
+        super::png::stage_png_tagged(png, beauty, image.width, image.height, exposure, Some(&id))?;
+    Ok(StagedPair { exr, png, id })
+}
+
+/// [`stage_pair`] then [`StagedPair::commit`]; returns the render id.
+pub fn write_pair(
+    exr: &Path,
+    image: &OutputImage,
+    png: &Path,
+    beauty: &[Vec3],
+    exposure: f32,
+) -> crate::Result<String> {
+    let pair = stage_pair(exr, image, png, beauty, exposure)?;
+    let id = pair.id.clone();
+    pair.commit()?;
+    Ok(id)
+}
+
+/// What [`check_pair`] found.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PairState {
+    /// Both files carry this render id: they come from one render.
+    Consistent(String),
+    /// The ids differ, or one file has none (written by something else, or an
+    /// older gradtrace): the two files must not be used together.
+    Mismatched {
+        exr: Option<String>,
+        png: Option<String>,
+    },
+}
+
+/// Compares the render ids of an EXR and its PNG (reading headers only).
+pub fn check_pair(exr: &Path, png: &Path) -> crate::Result<PairState> {
+    let e = super::exr::read_render_id(exr)?;
+    let p = super::png::read_render_id(png)?;
+    Ok(match (e, p) {
+        (Some(a), Some(b)) if a == b => PairState::Consistent(a),
+        (exr, png) => PairState::Mismatched { exr, png },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temp_names_are_recognised_and_unique() {
+        let a = temp_path(Path::new("d"), OsStr::new("out.exr"));
+        let b = temp_path(Path::new("d"), OsStr::new("out.exr"));
+        assert_ne!(a, b);
+        assert!(is_temp_name(a.file_name().unwrap()));
+        assert!(!is_temp_name(OsStr::new("out.exr")));
+        assert!(!is_temp_name(OsStr::new(".out.exr.tmp-12-0")));
+        assert!(!is_temp_name(OsStr::new(".out.gtmp-xyz")));
+        assert_eq!(legacy_pid(OsStr::new(".out.exr.tmp-123-0")), Some(123));
+        assert_eq!(legacy_pid(OsStr::new("out.exr")), None);
     }
 }

@@ -6,9 +6,10 @@
 //! Nuke and OpenImageIO group such channels into layers by the text before the
 //! last dot.
 
-use super::atomic::{output_error, stage, Staged};
+use super::atomic::{output_error, stage, Staged, RENDER_ID_KEY};
 use super::{Channel, OutputImage};
 use crate::Error;
+use exr::meta::attribute::AttributeValue;
 use exr::prelude::{
     read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
     ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
@@ -28,6 +29,16 @@ pub fn write_exr(path: &Path, image: &OutputImage) -> crate::Result<()> {
 /// Encodes `image` into a temporary file next to `path` without touching `path`;
 /// [`Staged::commit`] puts it in place. Same checks as [`write_exr`].
 pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
+    stage_exr_tagged(path, image, None)
+}
+
+/// [`stage_exr`] with the render id of an EXR + PNG pair as the header attribute
+/// [`RENDER_ID_KEY`] (see [`super::atomic`]).
+pub(crate) fn stage_exr_tagged(
+    path: &Path,
+    image: &OutputImage,
+    render_id: Option<&str>,
+) -> crate::Result<Staged> {
     validate(path, image)?;
     let mut list = SmallVec::new();
     for ch in &image.channels {
@@ -37,9 +48,18 @@ pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
             .ok_or_else(|| output_error(path, format!("bad channel name {:?}", ch.name)))?;
         list.push(AnyChannel::new(name, FlatSamples::F32(ch.data.clone())));
     }
+    let mut attributes = LayerAttributes::default();
+    if let Some(id) = render_id {
+        let text = |s: &str| {
+            Text::new_or_none(s).ok_or_else(|| output_error(path, format!("bad attribute {s:?}")))
+        };
+        attributes
+            .other
+            .insert(text(RENDER_ID_KEY)?, AttributeValue::Text(text(id)?));
+    }
     let layer = Layer::new(
         (image.width, image.height),
-        LayerAttributes::default(),
+        attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
@@ -57,6 +77,7 @@ pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
 /// (`part.channel`), so multi-part files map onto the same flat naming. All parts
 /// must share one resolution. Channel order is the file's (sorted by name).
 pub fn read_exr(path: &Path) -> crate::Result<OutputImage> {
+    check_header_size(path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -108,6 +129,54 @@ pub fn read_exr(path: &Path) -> crate::Result<OutputImage> {
         path: path.to_path_buf(),
         message: "the file holds no image part".into(),
     })
+}
+
+fn exr_error(path: &Path, e: exr::error::Error) -> Error {
+    match e {
+        exr::error::Error::Io(source) => Error::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        other => Error::Asset {
+            path: path.to_path_buf(),
+            message: format!("invalid EXR: {other}"),
+        },
+    }
+}
+
+/// Rejects, from the header alone, a file whose parts claim more than
+/// [`crate::scene::MAX_PIXELS`] pixels: the reader would allocate them before
+/// noticing the file is short, and an allocation failure aborts the process.
+fn check_header_size(path: &Path) -> crate::Result<()> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+    for h in &meta.headers {
+        let (w, ht) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
+        if w.saturating_mul(ht) > crate::scene::MAX_PIXELS {
+            return Err(Error::Asset {
+                path: path.to_path_buf(),
+                message: format!(
+                    "the header declares {w}×{ht} pixels, more than the {} supported",
+                    crate::scene::MAX_PIXELS
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The render id an EXR carries ([`RENDER_ID_KEY`]), from its header alone.
+pub(crate) fn read_render_id(path: &Path) -> crate::Result<Option<String>> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+    Ok(meta.headers.iter().find_map(|h| {
+        h.own_attributes
+            .other
+            .iter()
+            .find(|(k, _)| Text::eq(k, RENDER_ID_KEY))
+            .and_then(|(_, v)| match v {
+                AttributeValue::Text(t) => Some(t.to_string()),
+                _ => None,
+            })
+    }))
 }
 
 fn validate(path: &Path, image: &OutputImage) -> crate::Result<()> {

@@ -3,10 +3,8 @@
 //! and rounded to the nearest of 256 levels. No filmic curve on purpose: the PNG
 //! should show exactly what the EXR holds wherever it is in range.
 
-use super::atomic::{output_error, stage, Staged};
+use super::atomic::{output_error, stage, Staged, RENDER_ID_KEY};
 use crate::math::Vec3;
-use image::codecs::png::PngEncoder;
-use image::{ExtendedColorType, ImageEncoder};
 use std::path::Path;
 
 /// The sRGB opto-electronic transfer function (IEC 61966-2-1): linear [0,1] →
@@ -57,11 +55,40 @@ pub fn stage_png(
     height: usize,
     exposure: f32,
 ) -> crate::Result<Staged> {
+    stage_png_tagged(path, rgb, width, height, exposure, None)
+}
+
+/// [`stage_png`] with the render id of an EXR + PNG pair as a `tEXt` chunk
+/// [`RENDER_ID_KEY`] (see [`super::atomic`]). Encoded with the `png` crate
+/// directly, with the settings `image`'s PngEncoder uses (balanced
+/// compression, adaptive filter), which has no way to add a text chunk.
+pub(crate) fn stage_png_tagged(
+    path: &Path,
+    rgb: &[Vec3],
+    width: usize,
+    height: usize,
+    exposure: f32,
+    render_id: Option<&str>,
+) -> crate::Result<Staged> {
     let bytes = encode_srgb8(path, rgb, width, height, exposure)?;
     let (w, h) = (width as u32, height as u32);
     stage(path, |out| {
-        PngEncoder::new(out)
-            .write_image(&bytes, w, h, ExtendedColorType::Rgb8)
+        let mut encoder = png::Encoder::new(out, w, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Balanced);
+        encoder.set_filter(png::Filter::Adaptive);
+        if let Some(id) = render_id {
+            encoder
+                .add_text_chunk(RENDER_ID_KEY.into(), id.into())
+                .map_err(|e| format!("PNG encoder: {e}"))?;
+        }
+        let mut writer = encoder
+            .write_header()
+            .map_err(|e| format!("PNG encoder: {e}"))?;
+        writer
+            .write_image_data(&bytes)
+            .and_then(|()| writer.finish())
             .map_err(|e| format!("PNG encoder: {e}"))
     })
 }
@@ -92,10 +119,32 @@ pub fn stage_png_rgb8(
         }
     };
     stage(path, |out| {
-        PngEncoder::new(out)
-            .write_image(rgb8, w, h, ExtendedColorType::Rgb8)
+        use image::ImageEncoder;
+        image::codecs::png::PngEncoder::new(out)
+            .write_image(rgb8, w, h, image::ExtendedColorType::Rgb8)
             .map_err(|e| format!("PNG encoder: {e}"))
     })
+}
+
+/// The render id a PNG carries ([`RENDER_ID_KEY`]), from its chunks before the
+/// pixel data.
+pub(crate) fn read_render_id(path: &Path) -> crate::Result<Option<String>> {
+    let file = std::fs::File::open(path).map_err(|source| crate::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .map_err(|e| crate::Error::Asset {
+            path: path.to_path_buf(),
+            message: format!("invalid PNG: {e}"),
+        })?;
+    Ok(reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .find(|t| t.keyword == RENDER_ID_KEY)
+        .map(|t| t.text.clone()))
 }
 
 /// Validates the input and tone-maps it to interleaved 8-bit RGB.

@@ -192,6 +192,46 @@ pub fn bilinear_with_derivatives(
     (value, d_u, d_v)
 }
 
+/// The most texels an environment image may have (2²⁷, e.g. 16384 × 8192):
+/// dimensions are checked from the file's header *before* any pixel memory is
+/// allocated, so a header claiming 100000² pixels is an error, not an abort.
+pub const MAX_TEXELS: u64 = 1 << 27;
+
+fn check_dimensions(path: &Path, width: u64, height: u64) -> crate::Result<()> {
+    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_TEXELS {
+        return Err(crate::Error::Asset {
+            path: path.to_path_buf(),
+            message: format!(
+                "the header declares {width}×{height} texels; an environment image must have \
+                 between 1 and {MAX_TEXELS} (scene::environment::MAX_TEXELS)"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The EXR's header sizes, read without touching pixel data.
+fn check_exr_header(path: &Path) -> crate::Result<()> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| match e {
+        exr::error::Error::Io(source) => crate::Error::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        other => crate::Error::Asset {
+            path: path.to_path_buf(),
+            message: format!("invalid .exr image: {other}"),
+        },
+    })?;
+    for h in &meta.headers {
+        check_dimensions(
+            path,
+            h.layer_size.width() as u64,
+            h.layer_size.height() as u64,
+        )?;
+    }
+    Ok(())
+}
+
 /// Reads a lat-long environment image: `.hdr` (Radiance RGBE, via `image`) or
 /// `.exr` (RGB of the first layer, via `exr`). Row 0 is the zenith (see the
 /// convention above). Texels must be finite and non-negative: one NaN texel would
@@ -216,6 +256,10 @@ pub fn load_latlong(path: &Path, scale: f32) -> crate::Result<Environment> {
             if bytes.starts_with(b"#?RGBE\n") {
                 bytes.splice(0..6, b"#?RADIANCE".iter().copied());
             }
+            let header = image::codecs::hdr::HdrDecoder::new(bytes.as_slice())
+                .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
+                .metadata();
+            check_dimensions(path, header.width as u64, header.height as u64)?;
             let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Hdr)
                 .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
                 .into_rgb32f();
@@ -224,6 +268,7 @@ pub fn load_latlong(path: &Path, scale: f32) -> crate::Result<Environment> {
             (w, h, texels)
         }
         "exr" => {
+            check_exr_header(path)?;
             use exr::prelude::*;
             let img = read_first_rgba_layer_from_file(
                 path,

@@ -79,9 +79,13 @@ pub(super) fn is_degenerate(positions: &[Vec3], t: [u32; 3]) -> bool {
     let e2 = p2 - p0;
     // Zero area, or collinear to within f32 precision (sin of the angle between the
     // edges below ~1e-7): such a triangle has no usable normal or barycentrics.
-    let twice_area = e1.cross(e2).length();
+    let cross = e1.cross(e2);
+    let twice_area = cross.length();
     let scale = e1.length_squared().max(e2.length_squared());
-    !(twice_area > 0.0 && twice_area > 1e-7 * scale)
+    // The normal is cross / |cross|: |cross|² must be a normal f32 (a tiny
+    // triangle's underflows to 0 or a subnormal, and its normal to NaN).
+    let normalisable = cross.length_squared() >= f32::MIN_POSITIVE;
+    !(normalisable && twice_area > 0.0 && twice_area > 1e-7 * scale)
 }
 
 /// Splits `triangles` into kept and dropped (degenerate) ones. With `flip` the
@@ -221,5 +225,7 @@ mod tests {
         assert!(is_degenerate(&p, [0, 1, 3]), "collinear");
         assert!(is_degenerate(&p, [0, 1, 4]), "NaN");
         assert!(is_degenerate(&p, [0, 1, 9]), "out of range");
+        let tiny = [Vec3::ZERO, Vec3::X * 1e-20, Vec3::Y * 1e-20];
+        assert!(is_degenerate(&tiny, [0, 1, 2]), "normal underflows");
     }
 }

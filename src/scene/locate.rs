@@ -33,6 +33,7 @@ impl KeyPath {
     }
 }
 
+#[cfg(test)]
 pub(super) fn root(k: &str) -> KeyPath {
     KeyPath::default().key(k)
 }
@@ -116,7 +117,8 @@ pub(super) struct Ctx<'a> {
     pub(super) file: &'a Path,
     base: PathBuf,
     text: &'a str,
-    doc: Option<toml_edit::ImDocument<&'a str>>,
+    /// Parsed only when an error needs a location (loading a valid file skips it).
+    doc: std::cell::OnceCell<Option<toml_edit::ImDocument<&'a str>>>,
     /// Every asset resolved so far, in the order the file names them: the scene's
     /// inputs besides the file itself ([`super::Scene::sources`]).
     pub(super) assets: std::cell::RefCell<Vec<PathBuf>>,
@@ -129,9 +131,15 @@ impl<'a> Ctx<'a> {
             file: path,
             base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
             text,
-            doc: toml_edit::ImDocument::parse(text).ok(),
+            doc: std::cell::OnceCell::new(),
             assets: Default::default(),
         }
+    }
+
+    fn doc(&self) -> Option<&toml_edit::ImDocument<&'a str>> {
+        self.doc
+            .get_or_init(|| toml_edit::ImDocument::parse(self.text).ok())
+            .as_ref()
     }
 
     fn line_col(&self, offset: usize) -> (usize, usize) {
@@ -148,17 +156,37 @@ impl<'a> Ctx<'a> {
     /// Byte offset of `path`: its value, else its key, else the deepest ancestor
     /// that exists in the text (a missing key is reported at its table).
     fn offset_of(&self, path: &KeyPath) -> Option<usize> {
-        let doc = self.doc.as_ref()?;
+        self.offset_in(path, false)
+    }
+
+    /// As [`Ctx::offset_of`]; with `key_first` the last segment's key is
+    /// preferred to its value (an unknown key is reported where it is written).
+    fn offset_in(&self, path: &KeyPath, key_first: bool) -> Option<usize> {
+        let doc = self.doc()?;
         let mut node = Node::Table(doc.as_table());
         let mut best = None;
-        for seg in &path.0 {
+        for (i, seg) in path.0.iter().enumerate() {
             let Some((key_span, child)) = node.child(seg) else {
                 break;
             };
-            best = child.span().or(key_span).map(|s| s.start).or(best);
+            let span = if key_first && i + 1 == path.0.len() {
+                key_span.or(child.span())
+            } else {
+                child.span().or(key_span)
+            };
+            best = span.map(|s| s.start).or(best);
             node = child;
         }
         best
+    }
+
+    /// An error about the key at the end of `path` itself (not its value).
+    pub(super) fn key_err(&self, path: &KeyPath, message: impl Into<String>) -> crate::Error {
+        crate::Error::Scene {
+            path: self.file.to_path_buf(),
+            location: self.location(path, self.offset_in(path, true)),
+            message: message.into(),
+        }
     }
 
     /// The deepest key path whose key or value span contains `offset`.
@@ -175,7 +203,7 @@ impl<'a> Ctx<'a> {
             }
         }
         let mut best = (0, KeyPath::default());
-        if let Some(doc) = &self.doc {
+        if let Some(doc) = self.doc() {
             walk(
                 Node::Table(doc.as_table()),
                 &KeyPath::default(),
@@ -207,21 +235,9 @@ impl<'a> Ctx<'a> {
         let offset = e.span().map(|s| s.start);
         let path = offset.map(|o| self.path_at(o)).unwrap_or_default();
         let mut message = e.message().trim().replace('\n', "; ");
-        if message == "missing field `type`" {
-            // serde cannot list the choices of a field that is absent; we can.
-            let choices = match path.0.first() {
-                Some(Seg::Key(k)) if k == "shapes" => "`sphere`, `quad`, `cube`, `mesh`",
-                Some(Seg::Key(k)) if k == "lights" => "`sphere`, `rect`",
-                Some(Seg::Key(k)) if k == "materials" => {
-                    "`lambert`, `blinn_phong`, `cook_torrance`, `mirror`"
-                }
-                Some(Seg::Key(k)) if k == "bumps" => "`sinusoids`",
-                Some(Seg::Key(k)) if k == "environment" => "`constant`, `image`, `gaussian_sky`",
-                _ => "",
-            };
-            if !choices.is_empty() {
-                message = format!("{message}: expected one of {choices}");
-            }
+        if message.is_empty() {
+            // toml reports some syntax errors (`key =` with no value) without text.
+            message = "invalid TOML here: expected a value (a key needs `= value`)".into();
         }
         crate::Error::Scene {
             path: self.file.to_path_buf(),
@@ -230,16 +246,72 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Resolves an asset path relative to the scene file; a missing file is an
-    /// error at `at` naming the resolved path.
+    /// Resolves an asset path relative to the scene file; a missing file, a
+    /// folder or a device is an error at `at` naming the resolved path.
     pub(super) fn asset(&self, at: &KeyPath, file: &str) -> crate::Result<PathBuf> {
         let p = self.base.join(file);
-        if p.is_file() {
-            self.assets.borrow_mut().push(p.clone());
-            Ok(p)
-        } else {
-            Err(self.err(at, format!("file not found: {}", p.display())))
+        match std::fs::metadata(&p) {
+            Ok(m) if m.is_file() => {
+                self.assets.borrow_mut().push(p.clone());
+                Ok(p)
+            }
+            Ok(m) => Err(self.err(
+                at,
+                format!(
+                    "{} is {}, not a regular file; expected a file",
+                    p.display(),
+                    file_kind(&m)
+                ),
+            )),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                Err(self.err(at, format!("file not found: {}", p.display())))
+            }
+            Err(e) => Err(self.err(at, format!("cannot access {}: {e}", p.display()))),
         }
+    }
+
+    /// An error about an asset (OBJ, MTL, image) as an error of the scene key
+    /// `at` that names it: one message with the scene file, key, line and asset.
+    pub(super) fn in_scene(&self, at: &KeyPath, e: crate::Error) -> crate::Error {
+        match e {
+            crate::Error::Asset { path, message } => {
+                self.err(at, format!("{}: {message}", path.display()))
+            }
+            crate::Error::Io { path, source } => self.err(
+                at,
+                format!("{}: cannot read file: {source}", path.display()),
+            ),
+            other => other,
+        }
+    }
+}
+
+/// "a directory", "a character device", … for messages about non-regular files.
+pub(super) fn file_kind(m: &std::fs::Metadata) -> &'static str {
+    let t = m.file_type();
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_file() {
+        "a regular file"
+    } else {
+        "not a regular file"
     }
 }
 

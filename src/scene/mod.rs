@@ -9,6 +9,7 @@ pub mod environment;
 mod geometry;
 mod locate;
 mod obj;
+mod params;
 mod parse;
 
 use crate::brdf::Material;
@@ -18,6 +19,15 @@ use std::path::{Path, PathBuf};
 pub use bump::Bump;
 pub use camera::Camera;
 pub use environment::Environment;
+pub use parse::{MAX_PIXELS, MAX_SCENE_BYTES};
+
+/// The largest coordinate magnitude a scene may hold: every position, radius,
+/// extent (after transforms, OBJ vertices included) and camera coordinate lies
+/// within ±1e12, or loading fails naming the key and this limit. It keeps every
+/// product the renderer and the BVH form (squared distances, cross products of
+/// edges) far inside the f32 range (1e12² = 1e24 ≪ 3.4e38), which the
+/// acceleration structure relies on.
+pub const MAX_MAGNITUDE: f32 = 1e12;
 
 /// Loads a scene file and every asset it references. Errors name the file, the key
 /// (and line when known) and what was expected.

@@ -7,8 +7,9 @@
 use super::geometry::{filter_triangles, Xform};
 use crate::brdf::Material;
 use crate::math::{Vec2, Vec3};
+use std::cell::RefCell;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Kd when the MTL material does not give one (the MTL convention's default).
 const DEFAULT_KD: f32 = 0.8;
@@ -90,19 +91,54 @@ fn convert_material(path: &Path, m: &tobj::Material) -> crate::Result<ObjMateria
     })
 }
 
-/// Loads `path`, maps it through `xf` and drops degenerate triangles.
-pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<ObjMaterial>)> {
+/// Reads the OBJ at `path` with tobj, resolving each `mtllib` beside it as tobj
+/// does, but remembering which MTL file failed so the message can name it.
+fn read_obj(path: &Path) -> crate::Result<(Vec<tobj::Model>, Vec<tobj::Material>)> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ..Default::default()
     };
+    let file = std::fs::File::open(path).map_err(|source| crate::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let failed_mtl: RefCell<Option<(PathBuf, String)>> = RefCell::new(None);
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let load_mtl = |name: &Path| {
+        let mtl = dir.join(name);
+        let result = match std::fs::metadata(&mtl) {
+            Ok(m) if m.is_file() => tobj::load_mtl(&mtl).map_err(|e| (e, format!("{e}"))),
+            Ok(m) => Err((
+                tobj::LoadError::OpenFileFailed,
+                format!("it is {}, not a regular file", super::locate::file_kind(&m)),
+            )),
+            Err(e) => Err((tobj::LoadError::OpenFileFailed, e.to_string())),
+        };
+        result.map_err(|(e, why)| {
+            failed_mtl.borrow_mut().get_or_insert((mtl, why));
+            e
+        })
+    };
     let (models, materials) =
-        tobj::load_obj(path, &options).map_err(|e| asset_err(path, format!("invalid OBJ: {e}")))?;
+        tobj::load_obj_buf(&mut std::io::BufReader::new(file), &options, load_mtl)
+            .map_err(|e| asset_err(path, format!("invalid OBJ: {e}")))?;
     // tobj reports a missing or malformed `mtllib` separately; an OBJ without any
     // `mtllib` gives an empty list, which is fine (the scene then names a material).
+    let materials = materials.map_err(|e| match failed_mtl.take() {
+        Some((mtl, why)) => asset_err(
+            path,
+            format!("cannot load its MTL library {}: {why}", mtl.display()),
+        ),
+        None => asset_err(path, format!("cannot load its MTL library: {e}")),
+    })?;
+    Ok((models, materials))
+}
+
+/// Loads `path`, maps it through `xf` and drops degenerate triangles.
+pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<ObjMaterial>)> {
+    let (models, materials) = read_obj(path)?;
     let materials = materials
-        .map_err(|e| asset_err(path, format!("cannot load its MTL library: {e}")))?
         .iter()
         .map(|m| convert_material(path, m))
         .collect::<crate::Result<Vec<_>>>()?;

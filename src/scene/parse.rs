@@ -1,486 +1,366 @@
 //! Scene file (TOML) → [`Scene`]. The format is documented key by key in
 //! `scenes/README.md`.
 //!
-//! Two passes: serde turns the text into the `*Raw` structs below (so unknown keys,
-//! unknown `type` names and wrong value types are reported by serde, with the
-//! valid choices), then `Builder` checks values and references and produces the
-//! world-space scene. Every error is one `Error::Scene` whose location names the
-//! key path and its line/column (see `locate`).
+//! The TOML text becomes a `toml::Table`; every table of it is then read through
+//! a [`Params`] dictionary, whose typed getters check each value (finite
+//! numbers, exact array lengths, valid choices) and whose [`Params::finish`]
+//! reports any key the reader did not ask for. Shapes and lights share one
+//! path: a `[[lights]]` entry is a shape whose emission (`radiance`) is required
+//! and whose surface is the black `(lights)` material. Every error is one
+//! `Error::Scene` whose location names the key path and its line/column (see
+//! `locate`).
 
 use super::geometry::{self, Xform};
-use super::locate::{root, Ctx, KeyPath};
-use super::{bump::Sinusoid, SceneStats, Sphere};
+use super::locate::{Ctx, KeyPath};
+use super::params::{self, list, Params};
+use super::{bump::Sinusoid, SceneStats, Sphere, MAX_MAGNITUDE};
 use super::{obj, Bump, Camera, Environment, Integrator, Mesh, Rect, RenderSettings, Scene};
 use crate::brdf::Material;
 use crate::math::{Vec2, Vec3};
 use glam::{Affine3A, Mat3, Quat};
-use serde::de::Error as _;
-use serde::{Deserialize, Deserializer};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
+use std::io::Read;
 use std::path::Path;
+use toml::Value;
+
+/// The largest scene file accepted (16 MiB): scene files are a few kilobytes;
+/// the limit turns `gradtrace info /dev/zero` or a mistyped path to a huge
+/// file into one clear error instead of unbounded memory growth.
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+
+/// The largest image: both sides at most 65 536 and at most 2²⁸ pixels (a
+/// 16k × 16k render), so that the planes a render allocates stay addressable.
+pub const MAX_PIXELS: u64 = 1 << 28;
 
 pub(super) fn load_scene(path: &Path) -> crate::Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|source| crate::Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = read_scene_file(path)?;
     scene_from_str(&text, path)
 }
 
-pub(super) fn scene_from_str(text: &str, path: &Path) -> crate::Result<Scene> {
-    let ctx = Ctx::new(text, path);
-    let raw: FileRaw = toml::from_str(text).map_err(|e| ctx.toml_err(&e))?;
-    Builder::new(&ctx).build(raw)
+fn input_err(path: &Path, message: String) -> crate::Error {
+    crate::Error::Asset {
+        path: path.to_path_buf(),
+        message,
+    }
 }
 
-// ---------------------------------------------------------------------------
-// Raw (serde) types: the file format, one struct per table.
-// ---------------------------------------------------------------------------
+/// Reads the scene file, refusing what is not a regular file of at most
+/// [`MAX_SCENE_BYTES`] of UTF-8 (the read itself is bounded too: a file that
+/// grows, or a /proc file that reports size 0, cannot exceed the limit).
+fn read_scene_file(path: &Path) -> crate::Result<String> {
+    let io = |source| crate::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        let what = super::locate::file_kind(&meta);
+        return Err(input_err(
+            path,
+            format!("is {what}, not a regular file; expected a scene file (TOML)"),
+        ));
+    }
+    let too_big = || {
+        input_err(
+            path,
+            format!(
+                "is larger than {} MiB, the limit for scene files (scene::MAX_SCENE_BYTES)",
+                MAX_SCENE_BYTES >> 20
+            ),
+        )
+    };
+    if meta.len() > MAX_SCENE_BYTES {
+        return Err(too_big());
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(too_big());
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        input_err(
+            path,
+            format!(
+                "is not UTF-8 text (invalid byte at offset {}); expected a scene file (TOML)",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+pub(super) fn scene_from_str(text: &str, path: &Path) -> crate::Result<Scene> {
+    if text.len() as u64 > MAX_SCENE_BYTES {
+        return Err(input_err(
+            path,
+            format!(
+                "is larger than {} MiB, the limit for scene files (scene::MAX_SCENE_BYTES)",
+                MAX_SCENE_BYTES >> 20
+            ),
+        ));
+    }
+    let ctx = Ctx::new(text, path);
+    let doc: toml::Table = toml::from_str(text).map_err(|e| ctx.toml_err(&e))?;
+    let top = Params::new(&ctx, KeyPath::default(), &doc);
+    Builder::new(&ctx).build(&top)
+}
 
 type V3 = [f32; 3];
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FileRaw {
-    camera: CameraRaw,
-    #[serde(default)]
-    render: RenderRaw,
-    #[serde(default)]
-    materials: BTreeMap<String, MaterialRaw>,
-    #[serde(default)]
-    bumps: BTreeMap<String, BumpRaw>,
-    #[serde(default)]
-    shapes: Vec<ShapeRaw>,
-    #[serde(default)]
-    lights: Vec<LightRaw>,
-    environment: Option<EnvironmentRaw>,
+// ---------------------------------------------------------------------------
+// Value checks.
+// ---------------------------------------------------------------------------
+
+fn positive(p: &Params, key: &str, x: f32) -> crate::Result<f32> {
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(p.err(Some(key), format!("expected a positive number, got {x}")))
+    }
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CameraRaw {
-    from: V3,
-    to: V3,
-    #[serde(default = "default_up")]
-    up: V3,
-    /// Full vertical field of view in degrees.
-    fov: f32,
-    resolution: [u32; 2],
+fn non_negative(p: &Params, key: &str, x: f32) -> crate::Result<f32> {
+    if x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(p.err(
+            Some(key),
+            format!("expected a non-negative number, got {x}"),
+        ))
+    }
 }
 
-fn default_up() -> V3 {
-    [0.0, 1.0, 0.0]
+/// An optional RGB colour: three finite, non-negative numbers.
+fn colour(p: &Params, key: &'static str) -> crate::Result<Option<Vec3>> {
+    let Some(v) = p.f32s::<3>(key)? else {
+        return Ok(None);
+    };
+    if v.iter().any(|x| *x < 0.0) {
+        return Err(p.err(
+            Some(key),
+            format!("expected non-negative RGB values, got {v:?}"),
+        ));
+    }
+    Ok(Some(Vec3::from(v)))
 }
 
-#[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct RenderRaw {
-    spp: Option<u32>,
-    max_depth: Option<u32>,
-    seed: Option<u32>,
-    integrator: Option<IntegratorRaw>,
-    rr_depth: Option<u32>,
+/// Positions, radii, extents and camera coordinates must lie within
+/// ±[`MAX_MAGNITUDE`]; `points` are checked after every transform.
+fn within_range(
+    p: &Params,
+    key: Option<&str>,
+    what: &str,
+    points: impl IntoIterator<Item = Vec3>,
+) -> crate::Result<()> {
+    match points.into_iter().find(|&q| !in_range(q)) {
+        Some(q) => Err(p.err(key, out_of_range(what, q))),
+        None => Ok(()),
+    }
 }
 
-#[derive(Deserialize, Clone, Copy)]
-#[serde(rename_all = "snake_case")]
-enum IntegratorRaw {
-    Path,
-    Direct,
+/// Within ±[`MAX_MAGNITUDE`] (false for NaN).
+fn in_range(q: Vec3) -> bool {
+    q.abs().max_element() <= MAX_MAGNITUDE
 }
 
-#[derive(Deserialize, Clone, Copy, Debug)]
-#[serde(rename_all = "snake_case")]
-enum MaterialType {
-    Lambert,
-    BlinnPhong,
-    CookTorrance,
-    Mirror,
+fn out_of_range(what: &str, q: Vec3) -> String {
+    // Debug writes 3e38 where Display writes 39 digits.
+    let q = format!("[{:?}, {:?}, {:?}]", q.x, q.y, q.z);
+    format!(
+        "{what} {q} lies beyond ±{MAX_MAGNITUDE:e}, the largest coordinate magnitude \
+         supported (scene::MAX_MAGNITUDE)"
+    )
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MaterialRaw {
-    #[serde(rename = "type")]
-    kind: MaterialType,
-    albedo: Option<V3>,
-    kd: Option<V3>,
-    ks: Option<V3>,
-    exponent: Option<f32>,
-    reflectance: Option<V3>,
+/// Directions of the same quad test in unit length, so that neither huge nor
+/// tiny edges overflow or underflow the products.
+fn unit(v: Vec3) -> Vec3 {
+    (v / v.abs().max_element()).normalize()
 }
 
-#[derive(Deserialize, Clone, Copy)]
-#[serde(rename_all = "snake_case")]
-enum BumpType {
-    Sinusoids,
+fn perpendicular(u: Vec3, v: Vec3) -> bool {
+    unit(u).dot(unit(v)).abs() <= 1e-4
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct BumpRaw {
-    #[serde(rename = "type")]
-    _kind: BumpType,
-    terms: Vec<TermRaw>,
+/// `scale = s` (uniform) or `scale = [sx, sy, sz]`.
+fn scale_of(p: &Params) -> crate::Result<Vec3> {
+    let Some(v) = p.get("scale") else {
+        return Ok(Vec3::ONE);
+    };
+    let at = p.path("scale");
+    match v {
+        Value::Integer(_) | Value::Float(_) => Ok(Vec3::splat(params::number(p.ctx, &at, v)?)),
+        Value::Array(_) => Ok(Vec3::from(params::numbers::<3>(p.ctx, &at, v)?)),
+        other => Err(p.err(
+            Some("scale"),
+            format!("expected a number or [x, y, z] for `scale`, got {other}"),
+        )),
+    }
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct TermRaw {
-    amplitude: f32,
-    frequency: [f32; 2],
-    #[serde(default)]
-    phase: f32,
+/// `rotate = [axis_x, axis_y, axis_z, degrees]` or a list of them.
+fn rotations_of(p: &Params) -> crate::Result<Vec<[f32; 4]>> {
+    let Some(v) = p.get("rotate") else {
+        return Ok(Vec::new());
+    };
+    let at = p.path("rotate");
+    let bad = || {
+        p.err(
+            Some("rotate"),
+            format!("expected [axis_x, axis_y, axis_z, degrees] or a list of them for `rotate`, got {v}"),
+        )
+    };
+    let a = v.as_array().ok_or_else(bad)?;
+    if a.iter().all(Value::is_array) && !a.is_empty() {
+        a.iter()
+            .enumerate()
+            .map(|(i, r)| params::numbers::<4>(p.ctx, &at.index(i), r).map_err(|_| bad()))
+            .collect()
+    } else {
+        params::numbers::<4>(p.ctx, &at, v)
+            .map(|r| vec![r])
+            .map_err(|_| bad())
+    }
 }
 
-#[derive(Deserialize, Clone, Copy, Debug, PartialEq)]
-#[serde(rename_all = "snake_case")]
-enum ShapeType {
+/// A row-major 3×4 (or 4×4 with last row 0 0 0 1) affine matrix.
+fn matrix_of(p: &Params, v: &Value) -> crate::Result<Affine3A> {
+    let at = p.path("matrix");
+    let rows = match v.as_array() {
+        Some(a) if a.len() == 3 || a.len() == 4 => a,
+        _ => {
+            return Err(p.err(
+                Some("matrix"),
+                format!("expected 3 or 4 rows of 4 numbers, got {v}"),
+            ))
+        }
+    };
+    let rows = rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| params::numbers::<4>(p.ctx, &at.index(i), r))
+        .collect::<crate::Result<Vec<_>>>()?;
+    if rows.len() == 4 && rows[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(p.err(
+            Some("matrix"),
+            format!(
+                "the last row must be [0, 0, 0, 1] (affine transforms only), got {:?}",
+                rows[3]
+            ),
+        ));
+    }
+    let linear = Mat3::from_cols_array_2d(&[
+        [rows[0][0], rows[1][0], rows[2][0]],
+        [rows[0][1], rows[1][1], rows[2][1]],
+        [rows[0][2], rows[1][2], rows[2][2]],
+    ]);
+    Ok(Affine3A::from_mat3_translation(
+        linear,
+        Vec3::new(rows[0][3], rows[1][3], rows[2][3]),
+    ))
+}
+
+/// `transform = { scale, rotate, translate }` (applied in that order: scale,
+/// then each rotation in list order, then translate) or `transform = { matrix }`.
+fn transform_of(p: &Params) -> crate::Result<Xform> {
+    let scale = scale_of(p)?;
+    let rotations = rotations_of(p)?;
+    let translate = p.f32s::<3>("translate")?;
+    let matrix = p.get("matrix");
+    p.finish()?;
+    let affine = if let Some(m) = matrix {
+        if p.get("scale").is_some() || !rotations.is_empty() || translate.is_some() {
+            return Err(p.err(
+                Some("matrix"),
+                "give either `matrix` or `scale`/`rotate`/`translate`, not both",
+            ));
+        }
+        matrix_of(p, m)?
+    } else {
+        let mut a = Affine3A::from_scale(scale);
+        for r in &rotations {
+            let axis = Vec3::new(r[0], r[1], r[2]).normalize_or_zero();
+            if axis == Vec3::ZERO {
+                return Err(p.err(Some("rotate"), "rotation axis must be non-zero"));
+            }
+            a = Affine3A::from_quat(Quat::from_axis_angle(axis, r[3].to_radians())) * a;
+        }
+        if let Some(t) = translate {
+            a = Affine3A::from_translation(Vec3::from(t)) * a;
+        }
+        a
+    };
+    let det = Mat3::from(affine.matrix3).determinant();
+    if !det.is_finite() || !in_range(affine.translation.into()) {
+        return Err(p.err(
+            None,
+            format!(
+                "the transform is too large (determinant {det:e}, translation {}); coordinates \
+                 are limited to ±{MAX_MAGNITUDE:e} (scene::MAX_MAGNITUDE)",
+                Vec3::from(affine.translation)
+            ),
+        ));
+    }
+    Xform::new(affine).ok_or_else(|| p.err(None, "transform is singular (a zero scale?)"))
+}
+
+// ---------------------------------------------------------------------------
+// Shapes and lights: one path.
+// ---------------------------------------------------------------------------
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Geometry {
     Sphere,
     Quad,
     Cube,
     Mesh,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ShapeRaw {
-    #[serde(rename = "type")]
-    kind: ShapeType,
-    name: Option<String>,
-    material: Option<String>,
-    bump: Option<String>,
-    emission: Option<V3>,
+/// What distinguishes `[[lights]]` from `[[shapes]]`: a light is a shape whose
+/// emission is required (and called `radiance`), whose surface is the black
+/// `(lights)` material, and whose quad is called `rect`.
+struct Family {
+    types: &'static [(&'static str, Geometry)],
+    emission_key: &'static str,
+    light: bool,
+}
+
+const SHAPES: Family = Family {
+    types: &[
+        ("sphere", Geometry::Sphere),
+        ("quad", Geometry::Quad),
+        ("cube", Geometry::Cube),
+        ("mesh", Geometry::Mesh),
+    ],
+    emission_key: "emission",
+    light: false,
+};
+
+const LIGHTS: Family = Family {
+    types: &[("sphere", Geometry::Sphere), ("rect", Geometry::Quad)],
+    emission_key: "radiance",
+    light: true,
+};
+
+/// The keys of one shape entry, read and checked one by one (cross-key rules
+/// and requirements come after [`Params::finish`]).
+struct ShapeKeys<'a> {
+    geometry: Geometry,
+    name: Option<&'a str>,
+    material: Option<u32>,
+    bump: Option<u32>,
+    emission: Option<Vec3>,
     center: Option<V3>,
     radius: Option<f32>,
     corner: Option<V3>,
     edge_u: Option<V3>,
     edge_v: Option<V3>,
     size: Option<[f32; 2]>,
-    transform: Option<TransformRaw>,
-    file: Option<String>,
-    /// Mesh only: compute welded, area-weighted vertex normals (replacing any in
-    /// the file), so that a normal-less model is not shaded faceted.
+    transform: Option<Xform>,
+    file: Option<&'a str>,
     smooth_normals: Option<bool>,
 }
-
-#[derive(Deserialize, Clone, Copy, Debug, PartialEq)]
-#[serde(rename_all = "snake_case")]
-enum LightType {
-    Sphere,
-    Rect,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LightRaw {
-    #[serde(rename = "type")]
-    kind: LightType,
-    name: Option<String>,
-    radiance: V3,
-    center: Option<V3>,
-    radius: Option<f32>,
-    corner: Option<V3>,
-    edge_u: Option<V3>,
-    edge_v: Option<V3>,
-    size: Option<[f32; 2]>,
-    transform: Option<TransformRaw>,
-}
-
-#[derive(Deserialize, Clone, Copy, Debug)]
-#[serde(rename_all = "snake_case")]
-enum EnvironmentType {
-    Constant,
-    Image,
-    GaussianSky,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct EnvironmentRaw {
-    #[serde(rename = "type")]
-    kind: EnvironmentType,
-    radiance: Option<V3>,
-    file: Option<String>,
-    scale: Option<f32>,
-    direction: Option<V3>,
-    sharpness: Option<f32>,
-    peak: Option<V3>,
-    ambient: Option<V3>,
-}
-
-/// `transform = { scale, rotate, translate }` (applied in that order: scale, then
-/// each rotation in list order, then translate) or `transform = { matrix }`.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct TransformRaw {
-    scale: Option<ScaleRaw>,
-    rotate: Option<RotateRaw>,
-    translate: Option<V3>,
-    /// Row-major 3×4 or 4×4 (last row 0 0 0 1), as Mitsuba prints `to_world`.
-    matrix: Option<Vec<[f32; 4]>>,
-}
-
-/// `scale = s` (uniform) or `scale = [sx, sy, sz]`.
-struct ScaleRaw(V3);
-
-/// `rotate = [axis_x, axis_y, axis_z, degrees]` or a list of them.
-struct RotateRaw(Vec<[f32; 4]>);
-
-fn number(v: &toml::Value) -> Option<f32> {
-    match v {
-        toml::Value::Integer(i) => Some(*i as f32),
-        toml::Value::Float(f) => Some(*f as f32),
-        _ => None,
-    }
-}
-
-fn numbers<const N: usize>(v: &toml::Value) -> Option<[f32; N]> {
-    let a = v.as_array()?;
-    if a.len() != N {
-        return None;
-    }
-    let mut out = [0.0; N];
-    for (o, x) in out.iter_mut().zip(a) {
-        *o = number(x)?;
-    }
-    Some(out)
-}
-
-impl<'de> Deserialize<'de> for ScaleRaw {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = toml::Value::deserialize(d)?;
-        number(&v)
-            .map(|s| ScaleRaw([s; 3]))
-            .or_else(|| numbers::<3>(&v).map(ScaleRaw))
-            .ok_or_else(|| {
-                D::Error::custom(format!(
-                    "expected a number or [x, y, z] for `scale`, got {v}"
-                ))
-            })
-    }
-}
-
-impl<'de> Deserialize<'de> for RotateRaw {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = toml::Value::deserialize(d)?;
-        let single = numbers::<4>(&v).map(|r| vec![r]);
-        let list = || {
-            v.as_array()?
-                .iter()
-                .map(numbers::<4>)
-                .collect::<Option<Vec<_>>>()
-        };
-        single.or_else(list).map(RotateRaw).ok_or_else(|| {
-            D::Error::custom(format!(
-                "expected [axis_x, axis_y, axis_z, degrees] or a list of them for `rotate`, got {v}"
-            ))
-        })
-    }
-}
-
-// ---------------------------------------------------------------------------
-// Value checks.
-// ---------------------------------------------------------------------------
-
-fn list(names: &[&str]) -> String {
-    names
-        .iter()
-        .map(|n| format!("`{n}`"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-impl Ctx<'_> {
-    fn finite(&self, at: &KeyPath, x: f32) -> crate::Result<f32> {
-        if x.is_finite() {
-            Ok(x)
-        } else {
-            Err(self.err(at, format!("expected a finite number, got {x}")))
-        }
-    }
-
-    fn vec3(&self, at: &KeyPath, v: V3) -> crate::Result<Vec3> {
-        if v.iter().all(|x| x.is_finite()) {
-            Ok(Vec3::from(v))
-        } else {
-            Err(self.err(at, format!("expected three finite numbers, got {v:?}")))
-        }
-    }
-
-    fn colour(&self, at: &KeyPath, v: V3) -> crate::Result<Vec3> {
-        let c = self.vec3(at, v)?;
-        if c.min_element() < 0.0 {
-            return Err(self.err(at, format!("expected non-negative RGB values, got {v:?}")));
-        }
-        Ok(c)
-    }
-
-    fn positive(&self, at: &KeyPath, x: f32) -> crate::Result<f32> {
-        if self.finite(at, x)? > 0.0 {
-            Ok(x)
-        } else {
-            Err(self.err(at, format!("expected a positive number, got {x}")))
-        }
-    }
-
-    fn non_negative(&self, at: &KeyPath, x: f32) -> crate::Result<f32> {
-        if self.finite(at, x)? >= 0.0 {
-            Ok(x)
-        } else {
-            Err(self.err(at, format!("expected a non-negative number, got {x}")))
-        }
-    }
-
-    /// `present` keys must all be in `allowed` for this `type`.
-    fn only(
-        &self,
-        at: &KeyPath,
-        kind: &str,
-        present: &[(&str, bool)],
-        allowed: &[&str],
-    ) -> crate::Result<()> {
-        match present.iter().find(|(k, is)| *is && !allowed.contains(k)) {
-            Some((k, _)) => Err(self.err(
-                &at.key(k),
-                format!(
-                    "`{k}` does not apply to type = \"{kind}\"; its keys are {}",
-                    list(allowed)
-                ),
-            )),
-            None => Ok(()),
-        }
-    }
-
-    fn need<T>(&self, at: &KeyPath, kind: &str, key: &str, v: Option<T>) -> crate::Result<T> {
-        v.ok_or_else(|| self.err(at, format!("type = \"{kind}\" needs `{key}`")))
-    }
-
-    fn transform(&self, at: &KeyPath, t: Option<&TransformRaw>) -> crate::Result<Xform> {
-        let Some(t) = t else {
-            return Ok(Xform::identity());
-        };
-        let affine = if let Some(rows) = &t.matrix {
-            let m = at.key("matrix");
-            if t.scale.is_some() || t.rotate.is_some() || t.translate.is_some() {
-                return Err(self.err(
-                    &m,
-                    "give either `matrix` or `scale`/`rotate`/`translate`, not both",
-                ));
-            }
-            if !(rows.len() == 3 || rows.len() == 4) {
-                return Err(self.err(
-                    &m,
-                    format!("expected 3 or 4 rows of 4 numbers, got {} rows", rows.len()),
-                ));
-            }
-            if rows.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(self.err(&m, "expected finite numbers"));
-            }
-            if rows.len() == 4 && rows[3] != [0.0, 0.0, 0.0, 1.0] {
-                return Err(self.err(
-                    &m,
-                    format!(
-                        "the last row must be [0, 0, 0, 1] (affine transforms only), got {:?}",
-                        rows[3]
-                    ),
-                ));
-            }
-            let linear = Mat3::from_cols_array_2d(&[
-                [rows[0][0], rows[1][0], rows[2][0]],
-                [rows[0][1], rows[1][1], rows[2][1]],
-                [rows[0][2], rows[1][2], rows[2][2]],
-            ]);
-            Affine3A::from_mat3_translation(linear, Vec3::new(rows[0][3], rows[1][3], rows[2][3]))
-        } else {
-            let scale = match &t.scale {
-                Some(ScaleRaw(s)) => self.vec3(&at.key("scale"), *s)?,
-                None => Vec3::ONE,
-            };
-            let mut a = Affine3A::from_scale(scale);
-            if let Some(RotateRaw(rots)) = &t.rotate {
-                for r in rots {
-                    let rp = at.key("rotate");
-                    let axis = self.vec3(&rp, [r[0], r[1], r[2]])?.normalize_or_zero();
-                    let deg = self.finite(&rp, r[3])?;
-                    if axis == Vec3::ZERO {
-                        return Err(self.err(&rp, "rotation axis must be non-zero"));
-                    }
-                    a = Affine3A::from_quat(Quat::from_axis_angle(axis, deg.to_radians())) * a;
-                }
-            }
-            if let Some(tr) = t.translate {
-                a = Affine3A::from_translation(self.vec3(&at.key("translate"), tr)?) * a;
-            }
-            a
-        };
-        Xform::new(affine)
-            .ok_or_else(|| self.err(at, "transform is singular (a zero scale?) or not finite"))
-    }
-
-    /// The quad geometry keys shared by `quad` shapes and `rect` lights:
-    /// corner/edge_u/edge_v, or size (default [2, 2]) + transform.
-    #[allow(clippy::too_many_arguments)]
-    fn rect_geometry(
-        &self,
-        at: &KeyPath,
-        corner: Option<V3>,
-        edge_u: Option<V3>,
-        edge_v: Option<V3>,
-        size: Option<[f32; 2]>,
-        transform: Option<&TransformRaw>,
-    ) -> crate::Result<(Vec3, Vec3, Vec3)> {
-        let explicit = corner.is_some() || edge_u.is_some() || edge_v.is_some();
-        let (c, u, v) = if explicit {
-            if size.is_some() || transform.is_some() {
-                return Err(self.err(
-                    at,
-                    "give either `corner`/`edge_u`/`edge_v` or `size`/`transform`, not both",
-                ));
-            }
-            let need = |k: &str, v: Option<V3>| {
-                v.ok_or_else(|| {
-                    self.err(
-                        at,
-                        format!("`corner`, `edge_u` and `edge_v` go together; `{k}` is missing"),
-                    )
-                })
-            };
-            (
-                self.vec3(&at.key("corner"), need("corner", corner)?)?,
-                self.vec3(&at.key("edge_u"), need("edge_u", edge_u)?)?,
-                self.vec3(&at.key("edge_v"), need("edge_v", edge_v)?)?,
-            )
-        } else {
-            let s = size.unwrap_or([2.0, 2.0]);
-            let sp = at.key("size");
-            let s = Vec2::new(self.positive(&sp, s[0])?, self.positive(&sp, s[1])?);
-            let xf = self.transform(&at.key("transform"), transform)?;
-            geometry::rectangle_edges(&xf, s)
-        };
-        for (k, e) in [("edge_u", u), ("edge_v", v)] {
-            if e.length() <= 0.0 {
-                return Err(self.err(&at.key(k), format!("`{k}` must have non-zero length")));
-            }
-        }
-        // (Inputs are finite here, so `<=` is the exact negation of "has area".)
-        if u.cross(v).length() <= 1e-7 * u.length() * v.length() {
-            return Err(self.err(
-                at,
-                "`edge_u` and `edge_v` are parallel: the quad has no area",
-            ));
-        }
-        Ok((c, u, v))
-    }
-}
-
-fn perpendicular(u: Vec3, v: Vec3) -> bool {
-    u.dot(v).abs() <= 1e-4 * u.length() * v.length()
-}
-
-// ---------------------------------------------------------------------------
-// Raw → Scene.
-// ---------------------------------------------------------------------------
 
 /// Name of the black material given to the surfaces of `[[lights]]`.
 const LIGHT_MATERIAL: &str = "(lights)";
@@ -514,33 +394,38 @@ impl<'a> Builder<'a> {
         }
     }
 
-    fn build(mut self, raw: FileRaw) -> crate::Result<Scene> {
+    fn build(mut self, top: &Params) -> crate::Result<Scene> {
         let ctx = self.ctx;
-        let settings = self.settings(&raw.render)?;
-        let camera = self.camera(&raw.camera)?;
-        for (name, m) in &raw.materials {
-            let at = root("materials").key(name);
-            let material = self.material(&at, m)?;
-            self.add_material(name.clone(), material);
+        let camera = top.table("camera")?;
+        let render = top.table("render")?;
+        let materials = top.named_tables("materials")?;
+        let bumps = top.named_tables("bumps")?;
+        let shapes = top.tables("shapes")?.unwrap_or_default();
+        let lights = top.tables("lights")?.unwrap_or_default();
+        let environment = top.table("environment")?;
+        top.finish()?;
+        let settings = match &render {
+            Some(r) => settings(r)?,
+            None => RenderSettings::default(),
+        };
+        let camera = camera_of(&top.need("camera", camera)?)?;
+        for (name, m) in &materials {
+            let material = material_of(m)?;
+            self.add_material(name.to_string(), material);
         }
-        for (name, b) in &raw.bumps {
-            let at = root("bumps").key(name);
-            let bump = self.bump(&at, name, b)?;
+        for (name, b) in &bumps {
+            let bump = bump_of(name, b)?;
             self.bump_index
-                .insert(name.clone(), self.bumps.len() as u32);
+                .insert(name.to_string(), self.bumps.len() as u32);
             self.bumps.push(bump);
         }
-        for (i, s) in raw.shapes.iter().enumerate() {
-            self.shape(&root("shapes").index(i), s)?;
+        for s in &shapes {
+            self.shape(s, &SHAPES)?;
         }
-        for (i, l) in raw.lights.iter().enumerate() {
-            self.light(&root("lights").index(i), l)?;
+        for l in &lights {
+            self.shape(l, &LIGHTS)?;
         }
-        let environment = raw
-            .environment
-            .as_ref()
-            .map(|e| self.environment(&root("environment"), e))
-            .transpose()?;
+        let environment = environment.as_ref().map(environment_of).transpose()?;
         if self.meshes.is_empty() && self.spheres.is_empty() && environment.is_none() {
             return Err(ctx.err(
                 &KeyPath::default(),
@@ -576,308 +461,214 @@ impl<'a> Builder<'a> {
         id
     }
 
-    fn settings(&self, r: &RenderRaw) -> crate::Result<RenderSettings> {
-        let d = RenderSettings::default();
-        let at = root("render");
-        let spp = r.spp.unwrap_or(d.spp);
-        if spp == 0 {
-            return Err(self.ctx.err(
-                &at.key("spp"),
-                "expected at least 1 sample per pixel, got 0",
-            ));
+    fn light_material(&mut self) -> u32 {
+        match self.material_index.get(LIGHT_MATERIAL) {
+            Some(&id) => id,
+            None => self.add_material(
+                LIGHT_MATERIAL.into(),
+                Material::Lambert { albedo: Vec3::ZERO },
+            ),
         }
-        let max_depth = r.max_depth.unwrap_or(d.max_depth);
-        if max_depth == 0 {
-            return Err(self.ctx.err(
-                &at.key("max_depth"),
-                "expected at least 1 (1 = only directly visible emitters), got 0",
-            ));
-        }
-        Ok(RenderSettings {
-            spp,
-            max_depth,
-            seed: r.seed.unwrap_or(d.seed),
-            integrator: match r.integrator {
-                None => d.integrator,
-                Some(IntegratorRaw::Path) => Integrator::Path,
-                Some(IntegratorRaw::Direct) => Integrator::Direct,
-            },
-            rr_depth: r.rr_depth.unwrap_or(d.rr_depth),
-        })
     }
 
-    fn camera(&self, c: &CameraRaw) -> crate::Result<Camera> {
-        let ctx = self.ctx;
-        let at = root("camera");
-        let from = ctx.vec3(&at.key("from"), c.from)?;
-        let to = ctx.vec3(&at.key("to"), c.to)?;
-        let up = ctx.vec3(&at.key("up"), c.up)?;
-        let fov = ctx.finite(&at.key("fov"), c.fov)?;
-        if !(fov > 0.0 && fov < 180.0) {
-            return Err(ctx.err(
-                &at.key("fov"),
-                format!("expected the vertical field of view in degrees, in (0, 180), got {fov}"),
-            ));
-        }
-        let [w, h] = c.resolution;
-        if w == 0 || h == 0 {
-            return Err(ctx.err(
-                &at.key("resolution"),
-                format!("expected [width, height] of at least 1 pixel each, got [{w}, {h}]"),
-            ));
-        }
-        Camera::new(from, to, up, fov, w, h).map_err(|m| ctx.err(&at, m))
-    }
-
-    fn material(&self, at: &KeyPath, m: &MaterialRaw) -> crate::Result<Material> {
-        let ctx = self.ctx;
-        let present = [
-            ("albedo", m.albedo.is_some()),
-            ("kd", m.kd.is_some()),
-            ("ks", m.ks.is_some()),
-            ("exponent", m.exponent.is_some()),
-            ("reflectance", m.reflectance.is_some()),
-        ];
-        let kind = match m.kind {
-            MaterialType::Lambert => "lambert",
-            MaterialType::BlinnPhong => "blinn_phong",
-            MaterialType::CookTorrance => "cook_torrance",
-            MaterialType::Mirror => "mirror",
+    /// The id of the material or bump named at `key`, if the key is present.
+    fn lookup(&self, p: &Params, key: &'static str, what: &str) -> crate::Result<Option<u32>> {
+        let Some(name) = p.string(key)? else {
+            return Ok(None);
         };
-        let colour = |key: &str, v: Option<V3>| -> crate::Result<Vec3> {
-            ctx.colour(&at.key(key), ctx.need(at, kind, key, v)?)
+        let index = if what == "bump" {
+            &self.bump_index
+        } else {
+            &self.material_index
         };
-        Ok(match m.kind {
-            MaterialType::Lambert => {
-                ctx.only(at, kind, &present, &["albedo"])?;
-                Material::Lambert {
-                    albedo: colour("albedo", m.albedo)?,
-                }
-            }
-            MaterialType::BlinnPhong | MaterialType::CookTorrance => {
-                ctx.only(at, kind, &present, &["kd", "ks", "exponent"])?;
-                let kd = colour("kd", m.kd)?;
-                let ks = colour("ks", m.ks)?;
-                let exponent = ctx.non_negative(
-                    &at.key("exponent"),
-                    ctx.need(at, kind, "exponent", m.exponent)?,
-                )?;
-                if matches!(m.kind, MaterialType::BlinnPhong) {
-                    Material::BlinnPhong { kd, ks, exponent }
-                } else {
-                    Material::CookTorrance { kd, ks, exponent }
-                }
-            }
-            MaterialType::Mirror => {
-                ctx.only(at, kind, &present, &["reflectance"])?;
-                Material::Mirror {
-                    reflectance: colour("reflectance", m.reflectance)?,
-                }
-            }
-        })
-    }
-
-    fn bump(&self, at: &KeyPath, name: &str, b: &BumpRaw) -> crate::Result<Bump> {
-        let ctx = self.ctx;
-        if b.terms.is_empty() {
-            return Err(ctx.err(&at.key("terms"), "expected at least one term"));
+        if let Some(&id) = index.get(name) {
+            return Ok(Some(id));
         }
-        let mut terms = Vec::with_capacity(b.terms.len());
-        for (i, t) in b.terms.iter().enumerate() {
-            let tp = at.key("terms").index(i);
-            terms.push(Sinusoid {
-                amplitude: ctx.finite(&tp.key("amplitude"), t.amplitude)?,
-                frequency: Vec2::new(
-                    ctx.finite(&tp.key("frequency"), t.frequency[0])?,
-                    ctx.finite(&tp.key("frequency"), t.frequency[1])?,
-                ),
-                phase: ctx.finite(&tp.key("phase"), t.phase)?,
-            });
+        let mut names: Vec<&str> = index
+            .keys()
+            .map(String::as_str)
+            .filter(|n| *n != LIGHT_MATERIAL)
+            .collect();
+        names.sort_unstable();
+        let defined = if names.is_empty() {
+            format!("no [{what}s.NAME] table is defined")
+        } else {
+            format!("defined {what}s: {}", list(&names))
+        };
+        Err(p.err(Some(key), format!("undefined {what} `{name}`; {defined}")))
+    }
+
+    /// Reads every key of one `[[shapes]]`/`[[lights]]` entry, in the order its
+    /// messages list them, then runs the unread-key check.
+    fn read_shape<'p>(&self, p: &Params<'p>, fam: &Family) -> crate::Result<ShapeKeys<'p>> {
+        let geometry = p.kind(fam.types)?;
+        let name = p.string("name")?;
+        let (material, bump) = if fam.light {
+            (None, None)
+        } else {
+            (
+                self.lookup(p, "material", "material")?,
+                self.lookup(p, "bump", "bump")?,
+            )
+        };
+        let emission = colour(p, fam.emission_key)?;
+        let mut k = ShapeKeys {
+            geometry,
+            name,
+            material,
+            bump,
+            emission,
+            center: None,
+            radius: None,
+            corner: None,
+            edge_u: None,
+            edge_v: None,
+            size: None,
+            transform: None,
+            file: None,
+            smooth_normals: None,
+        };
+        if geometry == Geometry::Sphere {
+            k.center = p.f32s::<3>("center")?;
+            k.radius = p.f32("radius")?;
         }
-        Ok(Bump {
-            name: name.to_string(),
-            terms,
-        })
+        if geometry == Geometry::Quad {
+            k.corner = p.f32s::<3>("corner")?;
+            k.edge_u = p.f32s::<3>("edge_u")?;
+            k.edge_v = p.f32s::<3>("edge_v")?;
+            k.size = p.f32s::<2>("size")?;
+        }
+        if geometry == Geometry::Mesh {
+            k.file = p.string("file")?;
+        }
+        if geometry != Geometry::Sphere {
+            k.transform = p
+                .table("transform")?
+                .as_ref()
+                .map(transform_of)
+                .transpose()?;
+        }
+        if geometry == Geometry::Mesh {
+            k.smooth_normals = p.bool("smooth_normals")?;
+        }
+        p.finish()?;
+        Ok(k)
     }
 
-    fn lookup(
-        &self,
-        at: &KeyPath,
-        what: &str,
-        name: &str,
-        index: &HashMap<String, u32>,
-    ) -> crate::Result<u32> {
-        index.get(name).copied().ok_or_else(|| {
-            let mut names: Vec<&str> = index
-                .keys()
-                .map(String::as_str)
-                .filter(|n| *n != LIGHT_MATERIAL)
-                .collect();
-            names.sort_unstable();
-            let defined = if names.is_empty() {
-                format!("no [{what}s.NAME] table is defined")
-            } else {
-                format!("defined {what}s: {}", list(&names))
-            };
-            self.ctx
-                .err(at, format!("undefined {what} `{name}`; {defined}"))
-        })
-    }
-
-    fn shape(&mut self, at: &KeyPath, s: &ShapeRaw) -> crate::Result<()> {
-        let ctx = self.ctx;
+    /// One `[[shapes]]` or `[[lights]]` entry.
+    fn shape(&mut self, p: &Params, fam: &Family) -> crate::Result<()> {
         let object_id = self.object_names.len() as u32 + 1;
-        let present = [
-            ("center", s.center.is_some()),
-            ("radius", s.radius.is_some()),
-            ("corner", s.corner.is_some()),
-            ("edge_u", s.edge_u.is_some()),
-            ("edge_v", s.edge_v.is_some()),
-            ("size", s.size.is_some()),
-            ("transform", s.transform.is_some()),
-            ("file", s.file.is_some()),
-            ("smooth_normals", s.smooth_normals.is_some()),
-        ];
-        const COMMON: [&str; 4] = ["name", "material", "bump", "emission"];
-        let keys = |extra: &[&'static str]| -> Vec<&'static str> {
-            COMMON.iter().chain(extra).copied().collect()
+        let k = self.read_shape(p, fam)?;
+        let (material, emission) = if fam.light {
+            let radiance = p.need("radiance", k.emission)?;
+            (Some(self.light_material()), Some(radiance))
+        } else {
+            (k.material, k.emission)
         };
-        let kind = match s.kind {
-            ShapeType::Sphere => "sphere",
-            ShapeType::Quad => "quad",
-            ShapeType::Cube => "cube",
-            ShapeType::Mesh => "mesh",
-        };
-        let emission = match s.emission {
-            Some(e) => Some(ctx.colour(&at.key("emission"), e)?),
-            None => None,
-        };
-        let bump = match &s.bump {
-            Some(b) => Some(self.lookup(&at.key("bump"), "bump", b, &self.bump_index)?),
-            None => None,
-        };
-        let material = match &s.material {
-            Some(m) => {
-                Some(self.lookup(&at.key("material"), "material", m, &self.material_index)?)
-            }
-            None => None,
-        };
-        let need_material = || ctx.need(at, kind, "material", material);
-        let name = s.name.clone();
-
-        match s.kind {
-            ShapeType::Sphere => {
-                ctx.only(at, kind, &present, &keys(&["center", "radius"]))?;
-                let center =
-                    ctx.vec3(&at.key("center"), ctx.need(at, kind, "center", s.center)?)?;
-                let radius =
-                    ctx.positive(&at.key("radius"), ctx.need(at, kind, "radius", s.radius)?)?;
-                if let Some(b) = bump {
-                    self.check_sphere_bump(&at.key("bump"), b)?;
+        let prefix = if fam.light { "light" } else { p.kind_name() };
+        let mut name = k
+            .name
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("{prefix}{object_id}"));
+        let need_material = || p.need("material", material);
+        match k.geometry {
+            Geometry::Sphere => {
+                let center = Vec3::from(p.need("center", k.center)?);
+                let radius = positive(p, "radius", p.need("radius", k.radius)?)?;
+                within_range(p, Some("center"), "the centre", [center])?;
+                let r = Vec3::splat(radius);
+                within_range(
+                    p,
+                    Some("radius"),
+                    "the sphere's extent",
+                    [center - r, center + r],
+                )?;
+                if let Some(b) = k.bump {
+                    self.check_sphere_bump(p, b)?;
                 }
                 self.spheres.push(Sphere {
-                    name: name.clone().unwrap_or_else(|| format!("sphere{object_id}")),
+                    name: name.clone(),
                     center,
                     radius,
                     material: need_material()?,
                     emission: emission.unwrap_or(Vec3::ZERO),
-                    bump,
+                    bump: k.bump,
                     object_id,
                 });
             }
-            ShapeType::Quad => {
-                ctx.only(
-                    at,
-                    kind,
-                    &present,
-                    &keys(&["corner", "edge_u", "edge_v", "size", "transform"]),
-                )?;
-                let (c, u, v) = ctx.rect_geometry(
-                    at,
-                    s.corner,
-                    s.edge_u,
-                    s.edge_v,
-                    s.size,
-                    s.transform.as_ref(),
-                )?;
+            Geometry::Quad => {
+                let (c, u, v) = rect_geometry(p, &k)?;
                 let emission = emission.unwrap_or(Vec3::ZERO);
-                if emission != Vec3::ZERO && !perpendicular(u, v) {
-                    return Err(ctx.err(
-                        at,
-                        "an emitting quad must be a rectangle: `edge_u` and `edge_v` must be perpendicular",
+                if (fam.light || emission != Vec3::ZERO) && !perpendicular(u, v) {
+                    let what = if fam.light {
+                        "a rect light"
+                    } else {
+                        "an emitting quad"
+                    };
+                    return Err(p.err(
+                        None,
+                        format!(
+                            "{what} must be a rectangle: `edge_u` and `edge_v` must be perpendicular"
+                        ),
                     ));
                 }
                 let material = need_material()?;
                 self.push_quad(
-                    name.clone().unwrap_or_else(|| format!("quad{object_id}")),
+                    name.clone(),
                     (c, u, v),
                     material,
                     emission,
-                    bump,
+                    k.bump,
                     object_id,
                 );
             }
-            ShapeType::Cube => {
-                ctx.only(at, kind, &present, &keys(&["transform"]))?;
-                let xf = ctx.transform(&at.key("transform"), s.transform.as_ref())?;
+            Geometry::Cube => {
+                let xf = k.transform.unwrap_or_else(Xform::identity);
                 let g = geometry::cube(&xf);
+                within_range(
+                    p,
+                    Some("transform"),
+                    "the cube corner",
+                    g.positions.iter().copied(),
+                )?;
                 self.meshes.push(Mesh {
-                    name: name.clone().unwrap_or_else(|| format!("cube{object_id}")),
+                    name: name.clone(),
                     positions: g.positions,
                     normals: Vec::new(),
                     uvs: g.uvs,
                     triangles: g.triangles,
                     material: need_material()?,
                     emission: emission.unwrap_or(Vec3::ZERO),
-                    bump,
+                    bump: k.bump,
                     rect: None,
                     object_id,
                 });
             }
-            ShapeType::Mesh => {
-                ctx.only(
-                    at,
-                    kind,
-                    &present,
-                    &keys(&["file", "transform", "smooth_normals"]),
-                )?;
-                let fp = at.key("file");
-                let file = ctx.asset(&fp, &ctx.need(at, kind, "file", s.file.clone())?)?;
-                let xf = ctx.transform(&at.key("transform"), s.transform.as_ref())?;
-                let stem = file
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_else(|| format!("mesh{object_id}"));
-                let shape_name = name.clone().unwrap_or(stem);
-                let smooth = s.smooth_normals.unwrap_or(false);
-                self.push_obj(
-                    at,
-                    &file,
-                    &xf,
-                    &shape_name,
-                    smooth,
-                    material,
-                    emission,
-                    bump,
-                    object_id,
-                )?;
-                self.object_names.push(shape_name);
-                return Ok(());
+            Geometry::Mesh => {
+                let file = self.ctx.asset(&p.path("file"), p.need("file", k.file)?)?;
+                if k.name.is_none() {
+                    if let Some(stem) = file.file_stem() {
+                        name = stem.to_string_lossy().into_owned();
+                    }
+                }
+                let xf = k.transform.unwrap_or_else(Xform::identity);
+                let surface = (material, emission, k.bump);
+                let smooth = k.smooth_normals.unwrap_or(false);
+                self.push_obj(p, &file, &xf, &name, smooth, surface, object_id)?;
             }
         }
-        self.object_names
-            .push(name.unwrap_or_else(|| format!("{kind}{object_id}")));
+        self.object_names.push(name);
         Ok(())
     }
 
     /// On a sphere u = φ/2π wraps from 1 back to 0 at the φ = 0 seam, so a term
     /// sin(2π(f_u u + f_v v) + φ₀) is continuous there only for an integer f_u; a
     /// fractional one would crease the surface along a meridian.
-    fn check_sphere_bump(&self, at: &KeyPath, b: u32) -> crate::Result<()> {
+    fn check_sphere_bump(&self, p: &Params, b: u32) -> crate::Result<()> {
         let bump = &self.bumps[b as usize];
         if let Some(t) = bump.terms.iter().find(|t| t.frequency.x.fract() != 0.0) {
-            return Err(self.ctx.err(
-                at,
+            return Err(p.err(
+                Some("bump"),
                 format!(
                     "bump `{}` is on a sphere, where frequency[0] (f_u) must be an integer so that \
                      the height is continuous across the φ = 0 seam; got {}",
@@ -916,21 +707,22 @@ impl<'a> Builder<'a> {
         });
     }
 
+    /// The meshes of one OBJ file. `surface` = the shape's (material, emission,
+    /// bump), each overriding the MTL's when given.
     #[allow(clippy::too_many_arguments)]
     fn push_obj(
         &mut self,
-        at: &KeyPath,
+        p: &Params,
         file: &Path,
         xf: &Xform,
         shape_name: &str,
         smooth: bool,
-        material: Option<u32>,
-        emission: Option<Vec3>,
-        bump: Option<u32>,
+        (material, emission, bump): (Option<u32>, Option<Vec3>, Option<u32>),
         object_id: u32,
     ) -> crate::Result<()> {
-        let ctx = self.ctx;
-        let (meshes, mtl) = obj::load(file, xf)?;
+        let at = p.path("file");
+        let (meshes, mtl) = obj::load(file, xf).map_err(|e| self.ctx.in_scene(&at, e))?;
+        check_obj_range(p, file, &meshes)?;
         // MTL materials join the scene's list as "<shape>/<mtl name>", only when used.
         let mut mtl_ids: Vec<Option<u32>> = vec![None; mtl.len()];
         let mut any_kept = false;
@@ -954,8 +746,8 @@ impl<'a> Builder<'a> {
                     }
                 },
                 (None, None) => {
-                    return Err(ctx.err(
-                        at,
+                    return Err(p.err(
+                        None,
                         format!(
                             "object `{}` of {} has no MTL material; give the shape a `material`",
                             m.name,
@@ -965,8 +757,8 @@ impl<'a> Builder<'a> {
                 }
             };
             if bump.is_some() && m.uvs.is_empty() {
-                return Err(ctx.err(
-                    &at.key("bump"),
+                return Err(p.err(
+                    Some("bump"),
                     format!(
                         "a bump map needs texture coordinates (vt), but object `{}` of {} has none",
                         m.name,
@@ -1001,160 +793,288 @@ impl<'a> Builder<'a> {
             });
         }
         if !any_kept {
-            return Err(ctx.err(
-                &at.key("file"),
+            return Err(p.err(
+                Some("file"),
                 format!("{} contains no (non-degenerate) triangles", file.display()),
             ));
         }
         Ok(())
     }
+}
 
-    fn light_material(&mut self) -> u32 {
-        match self.material_index.get(LIGHT_MATERIAL) {
-            Some(&id) => id,
-            None => self.add_material(
-                LIGHT_MATERIAL.into(),
-                Material::Lambert { albedo: Vec3::ZERO },
+/// Every OBJ vertex, after the shape's transform, within ±[`MAX_MAGNITUDE`]. NaN
+/// vertices are left to the degenerate-triangle filter, as documented.
+fn check_obj_range(p: &Params, file: &Path, meshes: &[obj::ObjMesh]) -> crate::Result<()> {
+    for m in meshes {
+        let bad = m
+            .positions
+            .iter()
+            .position(|&q| !q.is_nan() && !in_range(q));
+        if let Some(i) = bad {
+            let what = format!(
+                "{}: vertex {} of object `{}`, after the shape's transform,",
+                file.display(),
+                i + 1,
+                m.name
+            );
+            return Err(p.err(Some("file"), out_of_range(&what, m.positions[i])));
+        }
+    }
+    Ok(())
+}
+
+/// The quad geometry keys shared by `quad` shapes and `rect` lights:
+/// corner/edge_u/edge_v, or size (default [2, 2]) + transform.
+fn rect_geometry(p: &Params, k: &ShapeKeys) -> crate::Result<(Vec3, Vec3, Vec3)> {
+    let explicit = k.corner.is_some() || k.edge_u.is_some() || k.edge_v.is_some();
+    let (c, u, v) = if explicit {
+        if k.size.is_some() || k.transform.is_some() {
+            return Err(p.err(
+                None,
+                "give either `corner`/`edge_u`/`edge_v` or `size`/`transform`, not both",
+            ));
+        }
+        let need = |key: &str, v: Option<V3>| {
+            v.map(Vec3::from).ok_or_else(|| {
+                p.err(
+                    None,
+                    format!("`corner`, `edge_u` and `edge_v` go together; `{key}` is missing"),
+                )
+            })
+        };
+        let (c, u, v) = (
+            need("corner", k.corner)?,
+            need("edge_u", k.edge_u)?,
+            need("edge_v", k.edge_v)?,
+        );
+        within_range(p, Some("corner"), "the corner", [c])?;
+        within_range(p, Some("edge_u"), "the vertex", [c + u])?;
+        within_range(p, Some("edge_v"), "the vertex", [c + v, c + u + v])?;
+        (c, u, v)
+    } else {
+        let s = k.size.unwrap_or([2.0, 2.0]);
+        let s = Vec2::new(positive(p, "size", s[0])?, positive(p, "size", s[1])?);
+        let xf = k.transform.unwrap_or_else(Xform::identity);
+        let (c, u, v) = geometry::rectangle_edges(&xf, s);
+        let key = if k.transform.is_some() {
+            "transform"
+        } else {
+            "size"
+        };
+        within_range(p, Some(key), "the vertex", [c, c + u, c + v, c + u + v])?;
+        (c, u, v)
+    };
+    for (key, e) in [("edge_u", u), ("edge_v", v)] {
+        if e == Vec3::ZERO {
+            return Err(p.err(Some(key), format!("`{key}` must have non-zero length")));
+        }
+    }
+    if unit(u).cross(unit(v)).length() <= 1e-7 {
+        return Err(p.err(
+            None,
+            "`edge_u` and `edge_v` are parallel: the quad has no area",
+        ));
+    }
+    // The renderer normalises edge_u × edge_v: its squared length must be a
+    // normal f32, or the normal is NaN.
+    if u.cross(v).length_squared() < f32::MIN_POSITIVE {
+        return Err(p.err(None, "the quad is too small: its area underflows f32"));
+    }
+    Ok((c, u, v))
+}
+
+// ---------------------------------------------------------------------------
+// The other tables.
+// ---------------------------------------------------------------------------
+
+fn settings(p: &Params) -> crate::Result<RenderSettings> {
+    let d = RenderSettings::default();
+    let spp = p.u32("spp")?;
+    let max_depth = p.u32("max_depth")?;
+    let seed = p.u32("seed")?;
+    let integrator = p.choice(
+        "integrator",
+        &[("path", Integrator::Path), ("direct", Integrator::Direct)],
+    )?;
+    let rr_depth = p.u32("rr_depth")?;
+    p.finish()?;
+    let spp = spp.unwrap_or(d.spp);
+    if spp == 0 {
+        return Err(p.err(Some("spp"), "expected at least 1 sample per pixel, got 0"));
+    }
+    let max_depth = max_depth.unwrap_or(d.max_depth);
+    if max_depth == 0 {
+        return Err(p.err(
+            Some("max_depth"),
+            "expected at least 1 (1 = only directly visible emitters), got 0",
+        ));
+    }
+    Ok(RenderSettings {
+        spp,
+        max_depth,
+        seed: seed.unwrap_or(d.seed),
+        integrator: integrator.unwrap_or(d.integrator),
+        rr_depth: rr_depth.unwrap_or(d.rr_depth),
+    })
+}
+
+fn camera_of(p: &Params) -> crate::Result<Camera> {
+    let from = p.f32s::<3>("from")?;
+    let to = p.f32s::<3>("to")?;
+    let up = p.f32s::<3>("up")?;
+    let fov = p.f32("fov")?;
+    let resolution = p.u32_pair("resolution")?;
+    p.finish()?;
+    let from = Vec3::from(p.need("from", from)?);
+    let to = Vec3::from(p.need("to", to)?);
+    let up = Vec3::from(up.unwrap_or([0.0, 1.0, 0.0]));
+    let fov = p.need("fov", fov)?;
+    let [w, h] = p.need("resolution", resolution)?;
+    within_range(p, Some("from"), "the camera position", [from])?;
+    within_range(p, Some("to"), "the look-at point", [to])?;
+    within_range(p, Some("up"), "the up vector", [up])?;
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(p.err(
+            Some("fov"),
+            format!("expected the vertical field of view in degrees, in (0, 180), got {fov}"),
+        ));
+    }
+    if w == 0 || h == 0 {
+        return Err(p.err(
+            Some("resolution"),
+            format!("expected [width, height] of at least 1 pixel each, got [{w}, {h}]"),
+        ));
+    }
+    if w > 65536 || h > 65536 || w as u64 * h as u64 > MAX_PIXELS {
+        return Err(p.err(
+            Some("resolution"),
+            format!(
+                "[{w}, {h}] is too large: at most 65536 pixels a side and {MAX_PIXELS} pixels in all"
             ),
-        }
+        ));
     }
+    Camera::new(from, to, up, fov, w, h).map_err(|m| p.err(None, m))
+}
 
-    fn light(&mut self, at: &KeyPath, l: &LightRaw) -> crate::Result<()> {
-        let ctx = self.ctx;
-        let object_id = self.object_names.len() as u32 + 1;
-        let radiance = ctx.colour(&at.key("radiance"), l.radiance)?;
-        let present = [
-            ("center", l.center.is_some()),
-            ("radius", l.radius.is_some()),
-            ("corner", l.corner.is_some()),
-            ("edge_u", l.edge_u.is_some()),
-            ("edge_v", l.edge_v.is_some()),
-            ("size", l.size.is_some()),
-            ("transform", l.transform.is_some()),
-        ];
-        let name = l
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("light{object_id}"));
-        match l.kind {
-            LightType::Sphere => {
-                let kind = "sphere";
-                ctx.only(
-                    at,
-                    kind,
-                    &present,
-                    &["name", "radiance", "center", "radius"],
-                )?;
-                let center =
-                    ctx.vec3(&at.key("center"), ctx.need(at, kind, "center", l.center)?)?;
-                let radius =
-                    ctx.positive(&at.key("radius"), ctx.need(at, kind, "radius", l.radius)?)?;
-                let material = self.light_material();
-                self.spheres.push(Sphere {
-                    name: name.clone(),
-                    center,
-                    radius,
-                    material,
-                    emission: radiance,
-                    bump: None,
-                    object_id,
-                });
-            }
-            LightType::Rect => {
-                let kind = "rect";
-                ctx.only(
-                    at,
-                    kind,
-                    &present,
-                    &[
-                        "name",
-                        "radiance",
-                        "corner",
-                        "edge_u",
-                        "edge_v",
-                        "size",
-                        "transform",
-                    ],
-                )?;
-                let (c, u, v) = ctx.rect_geometry(
-                    at,
-                    l.corner,
-                    l.edge_u,
-                    l.edge_v,
-                    l.size,
-                    l.transform.as_ref(),
-                )?;
-                if !perpendicular(u, v) {
-                    return Err(ctx.err(
-                        at,
-                        "a rect light must be a rectangle: `edge_u` and `edge_v` must be perpendicular",
-                    ));
-                }
-                let material = self.light_material();
-                self.push_quad(name.clone(), (c, u, v), material, radiance, None, object_id);
+fn material_of(p: &Params) -> crate::Result<Material> {
+    #[derive(Clone, Copy)]
+    enum Kind {
+        Lambert,
+        BlinnPhong,
+        CookTorrance,
+        Mirror,
+    }
+    let kind = p.kind(&[
+        ("lambert", Kind::Lambert),
+        ("blinn_phong", Kind::BlinnPhong),
+        ("cook_torrance", Kind::CookTorrance),
+        ("mirror", Kind::Mirror),
+    ])?;
+    Ok(match kind {
+        Kind::Lambert => {
+            let albedo = colour(p, "albedo")?;
+            p.finish()?;
+            Material::Lambert {
+                albedo: p.need("albedo", albedo)?,
             }
         }
-        self.object_names.push(name);
-        Ok(())
-    }
+        Kind::BlinnPhong | Kind::CookTorrance => {
+            let kd = colour(p, "kd")?;
+            let ks = colour(p, "ks")?;
+            let exponent = p.f32("exponent")?;
+            p.finish()?;
+            let kd = p.need("kd", kd)?;
+            let ks = p.need("ks", ks)?;
+            let exponent = non_negative(p, "exponent", p.need("exponent", exponent)?)?;
+            if matches!(kind, Kind::BlinnPhong) {
+                Material::BlinnPhong { kd, ks, exponent }
+            } else {
+                Material::CookTorrance { kd, ks, exponent }
+            }
+        }
+        Kind::Mirror => {
+            let reflectance = colour(p, "reflectance")?;
+            p.finish()?;
+            Material::Mirror {
+                reflectance: p.need("reflectance", reflectance)?,
+            }
+        }
+    })
+}
 
-    fn environment(&self, at: &KeyPath, e: &EnvironmentRaw) -> crate::Result<Environment> {
-        let ctx = self.ctx;
-        let present = [
-            ("radiance", e.radiance.is_some()),
-            ("file", e.file.is_some()),
-            ("scale", e.scale.is_some()),
-            ("direction", e.direction.is_some()),
-            ("sharpness", e.sharpness.is_some()),
-            ("peak", e.peak.is_some()),
-            ("ambient", e.ambient.is_some()),
-        ];
-        Ok(match e.kind {
-            EnvironmentType::Constant => {
-                let kind = "constant";
-                ctx.only(at, kind, &present, &["radiance"])?;
-                Environment::Constant {
-                    radiance: ctx.colour(
-                        &at.key("radiance"),
-                        ctx.need(at, kind, "radiance", e.radiance)?,
-                    )?,
-                }
-            }
-            EnvironmentType::Image => {
-                let kind = "image";
-                ctx.only(at, kind, &present, &["file", "scale"])?;
-                let file = ctx.asset(
-                    &at.key("file"),
-                    &ctx.need(at, kind, "file", e.file.clone())?,
-                )?;
-                let scale = ctx.non_negative(&at.key("scale"), e.scale.unwrap_or(1.0))?;
-                super::environment::load_latlong(&file, scale)?
-            }
-            EnvironmentType::GaussianSky => {
-                let kind = "gaussian_sky";
-                ctx.only(
-                    at,
-                    kind,
-                    &present,
-                    &["direction", "sharpness", "peak", "ambient"],
-                )?;
-                let dp = at.key("direction");
-                let direction = ctx
-                    .vec3(&dp, e.direction.unwrap_or([0.0, 1.0, 0.0]))?
-                    .normalize_or_zero();
-                if direction == Vec3::ZERO {
-                    return Err(ctx.err(&dp, "expected a non-zero direction"));
-                }
-                Environment::GaussianSky {
-                    direction,
-                    sharpness: ctx.non_negative(
-                        &at.key("sharpness"),
-                        ctx.need(at, kind, "sharpness", e.sharpness)?,
-                    )?,
-                    peak: ctx.colour(&at.key("peak"), ctx.need(at, kind, "peak", e.peak)?)?,
-                    ambient: ctx.colour(&at.key("ambient"), e.ambient.unwrap_or([0.0; 3]))?,
-                }
-            }
-        })
+fn bump_of(name: &str, p: &Params) -> crate::Result<Bump> {
+    p.kind(&[("sinusoids", ())])?;
+    let terms = p.tables("terms")?;
+    p.finish()?;
+    let terms = p.need("terms", terms)?;
+    if terms.is_empty() {
+        return Err(p.err(Some("terms"), "expected at least one term"));
     }
+    let mut out = Vec::with_capacity(terms.len());
+    for t in &terms {
+        let amplitude = t.f32("amplitude")?;
+        let frequency = t.f32s::<2>("frequency")?;
+        let phase = t.f32("phase")?;
+        t.finish()?;
+        out.push(Sinusoid {
+            amplitude: t.need("amplitude", amplitude)?,
+            frequency: Vec2::from(t.need("frequency", frequency)?),
+            phase: phase.unwrap_or(0.0),
+        });
+    }
+    Ok(Bump {
+        name: name.to_string(),
+        terms: out,
+    })
+}
+
+fn environment_of(p: &Params) -> crate::Result<Environment> {
+    #[derive(Clone, Copy)]
+    enum Kind {
+        Constant,
+        Image,
+        GaussianSky,
+    }
+    let kind = p.kind(&[
+        ("constant", Kind::Constant),
+        ("image", Kind::Image),
+        ("gaussian_sky", Kind::GaussianSky),
+    ])?;
+    Ok(match kind {
+        Kind::Constant => {
+            let radiance = colour(p, "radiance")?;
+            p.finish()?;
+            Environment::Constant {
+                radiance: p.need("radiance", radiance)?,
+            }
+        }
+        Kind::Image => {
+            let file = p.string("file")?;
+            let scale = p.f32("scale")?;
+            p.finish()?;
+            let at = p.path("file");
+            let file = p.ctx.asset(&at, p.need("file", file)?)?;
+            let scale = non_negative(p, "scale", scale.unwrap_or(1.0))?;
+            super::environment::load_latlong(&file, scale).map_err(|e| p.ctx.in_scene(&at, e))?
+        }
+        Kind::GaussianSky => {
+            let direction = p.f32s::<3>("direction")?;
+            let sharpness = p.f32("sharpness")?;
+            let peak = colour(p, "peak")?;
+            let ambient = colour(p, "ambient")?;
+            p.finish()?;
+            let direction = Vec3::from(direction.unwrap_or([0.0, 1.0, 0.0]));
+            within_range(p, Some("direction"), "the direction", [direction])?;
+            let direction = direction.normalize_or_zero();
+            if direction == Vec3::ZERO {
+                return Err(p.err(Some("direction"), "expected a non-zero direction"));
+            }
+            Environment::GaussianSky {
+                direction,
+                sharpness: non_negative(p, "sharpness", p.need("sharpness", sharpness)?)?,
+                peak: p.need("peak", peak)?,
+                ambient: ambient.unwrap_or(Vec3::ZERO),
+            }
+        }
+    })
 }
