@@ -285,6 +285,7 @@ impl RenderArgs {
                 vis_refine: self.vis_refine,
                 far_light: self.far_light,
                 gradient_spp: self.gradient_spp,
+                ..Default::default()
             },
             adaptive,
             threads: c.threads,
