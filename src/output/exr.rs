@@ -9,11 +9,34 @@
 use super::atomic::{output_error, stage, Staged};
 use super::{Channel, OutputImage};
 use crate::Error;
+use exr::meta::attribute::AttributeValue;
 use exr::prelude::{
-    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
-    ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
+    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes,
+    IntegerBounds, Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text,
+    WritableImage,
 };
 use std::path::Path;
+
+/// Where an EXR's planes sit in the full image, and where they came from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExrHeader {
+    /// The full image's size (the display window); (0, 0): the planes' own size.
+    pub display: (usize, usize),
+    /// The data window's top-left pixel inside the display window.
+    pub origin: (usize, usize),
+    /// String attributes, e.g. (`gradtrace.spp`, `64`).
+    pub attributes: Vec<(String, String)>,
+}
+
+impl ExrHeader {
+    /// The value of string attribute `name`.
+    pub fn get(&self, name: &str) -> Option<&str> {
+        self.attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+    }
+}
 
 /// Writes `image` as one EXR file, atomically (see [`super::atomic`]).
 ///
@@ -28,7 +51,18 @@ pub fn write_exr(path: &Path, image: &OutputImage) -> crate::Result<()> {
 /// Encodes `image` into a temporary file next to `path` without touching `path`;
 /// [`Staged::commit`] puts it in place. Same checks as [`write_exr`].
 pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
+    stage_exr_with_header(path, image, &ExrHeader::default())
+}
+
+/// [`stage_exr`] with a data window inside a larger display window (a tile of an
+/// image: viewers and `merge` place it) and string attributes in the header.
+pub fn stage_exr_with_header(
+    path: &Path,
+    image: &OutputImage,
+    header: &ExrHeader,
+) -> crate::Result<Staged> {
     validate(path, image)?;
+    let (attributes, display) = header_attributes(path, image, header)?;
     let mut list = SmallVec::new();
     for ch in &image.channels {
         // `validate` checked the name; `new_or_none` cannot fail here, but a
@@ -39,11 +73,11 @@ pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
     }
     let layer = Layer::new(
         (image.width, image.height),
-        LayerAttributes::default(),
+        attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
-    let exr_image = Image::from_layer(layer);
+    let exr_image = Image::new(ImageAttributes::new(display), layer);
     stage(path, |w| {
         exr_image
             .write()
@@ -57,6 +91,58 @@ pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
 /// (`part.channel`), so multi-part files map onto the same flat naming. All parts
 /// must share one resolution. Channel order is the file's (sorted by name).
 pub fn read_exr(path: &Path) -> crate::Result<OutputImage> {
+    read_exr_with_header(path).map(|(image, _)| image)
+}
+
+/// The layer attributes (data window position, string attributes) and the
+/// display window of `header`, checked: the data window inside the display
+/// window, attribute names printable ASCII (values Latin-1; other characters
+/// become `?`).
+fn header_attributes(
+    path: &Path,
+    image: &OutputImage,
+    header: &ExrHeader,
+) -> crate::Result<(LayerAttributes, IntegerBounds)> {
+    let display = match header.display {
+        (0, 0) => (image.width, image.height),
+        d => d,
+    };
+    let (x0, y0) = header.origin;
+    if x0 + image.width > display.0 || y0 + image.height > display.1 || display.0 > i32::MAX as usize || display.1 > i32::MAX as usize {
+        return Err(output_error(
+            path,
+            format!(
+                "data window {}x{} at ({x0}, {y0}) does not fit the {}x{} display window",
+                image.width, image.height, display.0, display.1
+            ),
+        ));
+    }
+    let mut attributes = LayerAttributes {
+        layer_position: exr::math::Vec2(x0 as i32, y0 as i32),
+        ..LayerAttributes::default()
+    };
+    for (name, value) in &header.attributes {
+        if name.is_empty() || name.len() > 255 || !name.bytes().all(|b| b.is_ascii_graphic()) {
+            return Err(output_error(
+                path,
+                format!("attribute name {name:?} must be 1-255 printable ASCII characters"),
+            ));
+        }
+        let latin1: String = value
+            .chars()
+            .map(|c| if (c as u32) < 256 { c } else { '?' })
+            .collect();
+        let (Some(n), Some(v)) = (Text::new_or_none(name), Text::new_or_none(&latin1)) else {
+            return Err(output_error(path, format!("attribute {name:?} is not text")));
+        };
+        attributes.other.insert(n, AttributeValue::Text(v));
+    }
+    Ok((attributes, IntegerBounds::from_dimensions(display)))
+}
+
+/// [`read_exr`] with the header: the display window, where the data window sits
+/// in it, and every string attribute (sorted by name).
+pub fn read_exr_with_header(path: &Path) -> crate::Result<(OutputImage, ExrHeader)> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -104,10 +190,30 @@ pub fn read_exr(path: &Path) -> crate::Result<OutputImage> {
             });
         }
     }
-    out.ok_or_else(|| Error::Asset {
+    let out = out.ok_or_else(|| Error::Asset {
         path: path.to_path_buf(),
         message: "the file holds no image part".into(),
-    })
+    })?;
+    let display = &image.attributes.display_window;
+    let mut header = ExrHeader {
+        display: (display.size.width(), display.size.height()),
+        ..ExrHeader::default()
+    };
+    if let Some(layer) = image.layer_data.first() {
+        let p = layer.attributes.layer_position - display.position;
+        header.origin = (p.x().max(0) as usize, p.y().max(0) as usize);
+    }
+    let others = image.layer_data.iter().map(|l| &l.attributes.other);
+    for other in others.chain([&image.attributes.other]) {
+        for (name, value) in other {
+            if let AttributeValue::Text(t) = value {
+                header.attributes.push((name.to_string(), t.to_string()));
+            }
+        }
+    }
+    header.attributes.sort();
+    header.attributes.dedup();
+    Ok((out, header))
 }
 
 fn validate(path: &Path, image: &OutputImage) -> crate::Result<()> {

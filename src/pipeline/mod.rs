@@ -9,6 +9,7 @@ pub mod compare;
 pub mod output_set;
 pub mod preview;
 pub mod progress;
+pub mod merge;
 pub mod render;
 
 use crate::accel::Accel;

@@ -2,7 +2,7 @@
 //! [`OutputImage`], and the EXR + PNG pair written as a set through `output`.
 
 use crate::output::names::*;
-use crate::output::{self, OutputImage};
+use crate::output::{self, ExrHeader, OutputImage};
 use crate::reconstruct::Reconstruction;
 use crate::render::RenderOutput;
 use crate::{Error, Result};
@@ -38,6 +38,12 @@ pub fn image_of_render(render: &RenderOutput) -> OutputImage {
         for (name, plane) in GRAD_TERMS.iter().zip(terms) {
             img.push_scalar(name, plane.clone());
         }
+    }
+    if let Some(spp) = &render.spp_map {
+        img.push_scalar(super::merge::SAMPLES_SPP, spp.clone());
+    }
+    if let Some(m) = &render.merge {
+        super::merge::push_merge_planes(&mut img, m);
     }
     img
 }
@@ -105,12 +111,23 @@ pub fn write_output_set(
     exr: &Path,
     png: &Path,
 ) -> Result<()> {
+    write_output_set_with_header(image, &ExrHeader::default(), beauty, exr, png)
+}
+
+/// [`write_output_set`] with an EXR header (data window, provenance attributes).
+pub fn write_output_set_with_header(
+    image: &OutputImage,
+    header: &ExrHeader,
+    beauty: &[Vec3],
+    exr: &Path,
+    png: &Path,
+) -> Result<()> {
     let dir = exr.parent().filter(|d| !d.as_os_str().is_empty());
     let created = match dir {
         Some(d) => create_dirs(d)?,
         None => Vec::new(),
     };
-    let staged = output::stage_exr(exr, image).and_then(|e| {
+    let staged = output::stage_exr_with_header(exr, image, header).and_then(|e| {
         output::stage_png(png, beauty, image.width, image.height, 0.0).map(|p| (e, p))
     });
     let result = staged.and_then(|(e, p)| {
