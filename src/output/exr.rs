@@ -11,9 +11,8 @@ use super::{Channel, OutputImage};
 use crate::Error;
 use exr::meta::attribute::AttributeValue;
 use exr::prelude::{
-    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes,
-    IntegerBounds, Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text,
-    WritableImage,
+    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds,
+    Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
 };
 use std::path::Path;
 
@@ -108,7 +107,11 @@ fn header_attributes(
         d => d,
     };
     let (x0, y0) = header.origin;
-    if x0 + image.width > display.0 || y0 + image.height > display.1 || display.0 > i32::MAX as usize || display.1 > i32::MAX as usize {
+    if x0 + image.width > display.0
+        || y0 + image.height > display.1
+        || display.0 > i32::MAX as usize
+        || display.1 > i32::MAX as usize
+    {
         return Err(output_error(
             path,
             format!(
@@ -133,7 +136,10 @@ fn header_attributes(
             .map(|c| if (c as u32) < 256 { c } else { '?' })
             .collect();
         let (Some(n), Some(v)) = (Text::new_or_none(name), Text::new_or_none(&latin1)) else {
-            return Err(output_error(path, format!("attribute {name:?} is not text")));
+            return Err(output_error(
+                path,
+                format!("attribute {name:?} is not text"),
+            ));
         };
         attributes.other.insert(n, AttributeValue::Text(v));
     }

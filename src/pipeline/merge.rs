@@ -177,7 +177,11 @@ pub fn run(job: &MergeJob) -> Result<MergeSummary> {
         tiles,
         width: merged.image.width,
         height: merged.image.height,
-        spp: merged.header.get(attr::SPP).and_then(|s| s.parse().ok()).unwrap_or(0),
+        spp: merged
+            .header
+            .get(attr::SPP)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0),
         exr,
         png,
     })
@@ -258,14 +262,17 @@ fn check_same_render(parts: &[Part]) -> Result<()> {
     };
     for p in parts {
         for (name, what) in [
-            (attr::SCENE_SHA256, "scene (scene file or assets differ)"),
-            (attr::SETTINGS, "settings"),
-            (attr::SEED, "seed"),
+            (
+                attr::SCENE_SHA256,
+                "a different scene (scene file or assets differ)",
+            ),
+            (attr::SETTINGS, "different settings"),
+            (attr::SEED, "a different seed"),
         ] {
             let (a, b) = (p.attr(name)?, first.attr(name)?);
             if a != b {
                 return Err(p.error(format!(
-                    "rendered with a different {what} than {}: {name} is {a:?} here, {b:?} there",
+                    "rendered with {what} than {}: {name} is {a:?} here, {b:?} there",
                     first.path.display()
                 )));
             }

@@ -6,10 +6,10 @@
 
 pub mod adaptive;
 pub mod compare;
+pub mod merge;
 pub mod output_set;
 pub mod preview;
 pub mod progress;
-pub mod merge;
 pub mod render;
 
 use crate::accel::Accel;

@@ -230,7 +230,7 @@ fn run_full(
 /// The samples a resumed render adds: from where `prev` ends up to `--spp`, after
 /// checking that `prev` is a render of this scene with these settings.
 fn resume_range(scene: &Scene, opts: &RenderOptions, prev: &Part) -> Result<(u32, u32)> {
-    let err = |message: String| Error::Merge {
+    let err = |message: String| Error::Asset {
         path: prev.path.clone(),
         message,
     };
@@ -359,7 +359,10 @@ fn run_adaptive(
             attr::SEED.into(),
             job.options.seed.unwrap_or(scene.settings.seed).to_string(),
         ),
-        (attr::RENDER_TIME_S.into(), format!("{:.3}", out.stats.wall_s)),
+        (
+            attr::RENDER_TIME_S.into(),
+            format!("{:.3}", out.stats.wall_s),
+        ),
     ];
     attributes.sort();
     let header = ExrHeader {

@@ -151,7 +151,10 @@ pub fn render_noise_adaptive(
         let report = |_: usize| {};
         let planned: usize = (0..w * h).map(|p| plan(p).len()).sum();
         film.add_samples(&ctx, &plan, &|| false, &report);
-        progress(traced.fetch_add(planned, Ordering::Relaxed) + planned, budget);
+        progress(
+            traced.fetch_add(planned, Ordering::Relaxed) + planned,
+            budget,
+        );
         for p in 0..w * h {
             if active[p] {
                 counts[p] = next[p];
@@ -161,7 +164,7 @@ pub fn render_noise_adaptive(
         film.for_each(|p, acc| {
             if active[p] && counts[p] < settings.max_spp {
                 let (i, a) = acc.mean_and_half();
-                unconverged[p] = !(pixel_error(i, a) < threshold);
+                unconverged[p] = pixel_error(i, a) >= threshold;
             }
         });
         active = dilate(&unconverged, w, h);
