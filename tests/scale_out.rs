@@ -657,3 +657,192 @@ fn noise_adaptive_sampling_spends_samples_on_noise_stops_at_the_threshold_and_be
         .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)));
     assert_eq!(one.spp_map, out.spp_map);
 }
+
+/// Runs `script` (in scripts/) with `args`, the test binary as GRADTRACE and
+/// `path_prefix` first on PATH; panics on failure.
+fn run_script(script: &str, args: &[&str], path_prefix: Option<&Path>) -> String {
+    let mut cmd = Command::new("bash");
+    cmd.arg(root().join("scripts").join(script))
+        .args(args)
+        .env("GRADTRACE", BIN);
+    if let Some(dir) = path_prefix {
+        let path = std::env::var("PATH").unwrap_or_default();
+        cmd.env("PATH", format!("{}:{path}", dir.display()));
+    }
+    let out = cmd.output().expect("bash runs");
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    println!("$ {script} {}\n{text}", args.join(" "));
+    assert!(out.status.success(), "{script} failed: {text}");
+    text
+}
+
+/// The whole render the cluster scripts' results are compared with.
+const CLUSTER_FLAGS: [&str; 8] = [
+    "--width", "40", "--height", "30", "--spp", "6", "--seed", "5",
+];
+
+fn whole_render(dir: &Path) -> OutputImage {
+    let full = dir.join("whole.exr");
+    let scene = root().join("scenes/cornell.toml");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "--out",
+        full.to_str().unwrap(),
+    ];
+    args.extend(CLUSTER_FLAGS);
+    assert!(gradtrace(&args).status.success());
+    read_exr(&full).unwrap()
+}
+
+/// Tiles bit for bit; sample ranges within 4ε on the beauty.
+fn assert_matches_whole(merged: &Path, whole: &OutputImage, split: &str) {
+    let merged = read_exr(merged).unwrap();
+    if split == "tiles" {
+        let diff = differing_channels(whole, &merged);
+        assert!(diff.is_empty(), "tiles: channels differ: {diff:?}");
+    } else {
+        for c in ["R", "G", "B"] {
+            let w = plane(whole, c);
+            check_within(c, plane(&merged, c), w, |i| 4.0 * EPS * w[i] as f64);
+        }
+    }
+}
+
+fn on_path(tool: &str) -> bool {
+    Command::new("sh")
+        .args(["-c", &format!("command -v {tool}")])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+#[test]
+fn gnu_parallel_script_renders_parts_that_merge_to_the_whole_render() {
+    if !on_path("parallel") {
+        // CI installs GNU parallel (.ci/run); elsewhere it is optional.
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have GNU parallel"
+        );
+        println!("skipped: GNU parallel is not installed");
+        return;
+    }
+    let dir = temp_dir("parallel");
+    let whole = whole_render(&dir);
+    let scene = root().join("scenes/cornell.toml");
+    for (split, n) in [("tiles", "4"), ("samples", "3")] {
+        let out = dir.join(split);
+        let mut args = vec![
+            scene.to_str().unwrap(),
+            n,
+            "--split",
+            split,
+            "--out",
+            out.to_str().unwrap(),
+            "--jobs",
+            "2",
+            "--",
+        ];
+        args.extend(CLUSTER_FLAGS);
+        run_script("parallel_render.sh", &args, None);
+        assert_matches_whole(&out.join("cornell.exr"), &whole, split);
+        println!("GNU parallel, {n} {split}: merged equals the whole render");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A stand-in `sbatch`: logs its arguments, runs an array script once per task
+/// (SLURM_ARRAY_TASK_ID set) and any other script once, prints a job id.
+const FAKE_SBATCH: &str = r#"#!/usr/bin/env bash
+set -euo pipefail
+log="$(dirname "$0")/sbatch.log"
+echo "$*" >> "$log"
+id=$(( $(wc -l < "$log") + 100 ))
+script="${@: -1}"
+array=""
+for a in "$@"; do case $a in --array=*) array=${a#--array=} ;; esac; done
+if [ -n "$array" ]; then
+    for ((k = ${array%-*}; k <= ${array#*-}; k++)); do SLURM_ARRAY_TASK_ID=$k bash "$script" >&2; done
+else
+    bash "$script" >&2
+fi
+echo "$id"
+"#;
+
+#[test]
+fn slurm_script_submits_a_job_array_and_a_dependent_merge() {
+    let dir = temp_dir("slurm");
+    let whole = whole_render(&dir);
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let fake = bin.join("sbatch");
+    std::fs::write(&fake, FAKE_SBATCH).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let scene = root().join("scenes/cornell.toml");
+    for (split, n) in [("tiles", "3"), ("samples", "2")] {
+        let _ = std::fs::remove_file(bin.join("sbatch.log"));
+        let out = dir.join(split);
+        let mut args = vec![
+            scene.to_str().unwrap(),
+            n,
+            "--split",
+            split,
+            "--out",
+            out.to_str().unwrap(),
+            "--",
+        ];
+        args.extend(CLUSTER_FLAGS);
+        run_script("slurm_render.sh", &args, Some(&bin));
+        let log = std::fs::read_to_string(bin.join("sbatch.log")).unwrap();
+        let calls: Vec<&str> = log.lines().collect();
+        let last = (n.parse::<u32>().unwrap() - 1).to_string();
+        assert_eq!(calls.len(), 2, "{log}");
+        assert!(
+            calls[0].starts_with(&format!("--parsable --array=0-{last} ")),
+            "{log}"
+        );
+        assert!(calls[0].ends_with("render.sbatch"), "{log}");
+        assert!(
+            calls[1].starts_with("--parsable --dependency=afterok:101 "),
+            "{log}"
+        );
+        assert!(calls[1].ends_with("merge.sbatch"), "{log}");
+        assert_matches_whole(&out.join("cornell.exr"), &whole, split);
+        println!("fake sbatch, {n} {split}: {log}merged equals the whole render");
+    }
+    // A real single-node cluster where .ci/run could start one
+    // (scripts/slurm_local_cluster.sh exports SLURM_CONF).
+    if std::env::var_os("GRADTRACE_REAL_SLURM").is_some() {
+        let out = dir.join("real");
+        let mut args = vec![
+            scene.to_str().unwrap(),
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+            "--",
+        ];
+        args.extend(CLUSTER_FLAGS);
+        args.extend(["--threads", "1"]);
+        run_script("slurm_render.sh", &args, None);
+        let merged = out.join("cornell.exr");
+        let start = std::time::Instant::now();
+        while !merged.exists() && start.elapsed().as_secs() < 300 {
+            std::thread::sleep(std::time::Duration::from_millis(500));
+        }
+        assert!(
+            merged.exists(),
+            "the Slurm merge job wrote nothing in 300 s (logs: {})",
+            out.join("logs").display()
+        );
+        // The merge job renames its output into place: complete once it exists.
+        assert_matches_whole(&merged, &whole, "tiles");
+        println!("real Slurm, 3 tiles: merged equals the whole render");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
