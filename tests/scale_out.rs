@@ -846,3 +846,43 @@ fn slurm_script_submits_a_job_array_and_a_dependent_merge() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn ctrl_c_during_a_time_limited_render_writes_the_finished_passes() {
+    let dir = temp_dir("sigint");
+    let exr = dir.join("interrupted.exr");
+    let scene = root().join("scenes/cornell.toml");
+    let mut child = Command::new(BIN)
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "40",
+            "--height",
+            "30",
+        ])
+        .args([
+            "--time-limit",
+            "60",
+            "--quiet",
+            "--out",
+            exr.to_str().unwrap(),
+        ])
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{status:?}");
+    let (_, h) = read_exr_with_header(&exr).unwrap();
+    let spp: u32 = h.get("gradtrace.spp").unwrap().parse().unwrap();
+    let t: f64 = h.get("gradtrace.render_time_s").unwrap().parse().unwrap();
+    println!("interrupted after {t:.2} s with {spp} spp");
+    assert!(spp >= 1 && t < 30.0, "{spp} spp after {t} s");
+    assert_eq!(h.get("gradtrace.spp_range").unwrap(), format!("0:{spp}"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
