@@ -449,6 +449,29 @@ fn a_time_limited_render_equals_the_fixed_render_at_the_spp_it_reached_and_resum
         let w = plane(&want, c);
         check_within(c, plane(&resumed, c), w, |i| 4.0 * EPS * w[i] as f64);
     }
+    // A tile's sample range resumed stays that tile.
+    let tile = dir.join("tile.exr");
+    render_to(
+        scene,
+        &tile,
+        &["--tile", "1/3", "--spp", "3", "--spp-range", "0:3"],
+    );
+    render_to(
+        scene,
+        &tile,
+        &["--resume", tile.to_str().unwrap(), "--spp", "7"],
+    );
+    let (resumed, h) = read_exr_with_header(&tile).unwrap();
+    assert_eq!(
+        (h.origin, h.display, h.get("gradtrace.spp_range")),
+        ((0, 10), (40, 30), Some("0:7"))
+    );
+    render_to(scene, &fixed, &["--tile", "1/3", "--spp", "7"]);
+    let want = read_exr(&fixed).unwrap();
+    for c in ["R", "G", "B"] {
+        let w = plane(&want, c);
+        check_within(c, plane(&resumed, c), w, |i| 4.0 * EPS * w[i] as f64);
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -199,6 +199,24 @@ pub struct Merged {
 /// channels; sample ranges of a tile disjoint and contiguous, the same for every
 /// tile; tiles covering the image exactly once), then the combination.
 pub fn merge_parts(parts: &[Part], out: &Path, command: &str) -> Result<Merged> {
+    merge(parts, out, command, true)
+}
+
+/// Sample ranges of one tile (or of the whole image) merged into that tile:
+/// what `render --resume` does with the file it continues.
+pub fn merge_sample_ranges(parts: &[Part], out: &Path, command: &str) -> Result<Merged> {
+    if let Some(p) = parts.iter().find(|p| p.window() != parts[0].window()) {
+        return Err(p.error(format!(
+            "covers pixels {} but {} covers {}",
+            p.window(),
+            parts[0].path.display(),
+            parts[0].window()
+        )));
+    }
+    merge(parts, out, command, false)
+}
+
+fn merge(parts: &[Part], out: &Path, command: &str, whole_image: bool) -> Result<Merged> {
     let first = parts.first().ok_or_else(|| Error::Merge {
         path: out.to_path_buf(),
         message: "no parts given".into(),
@@ -227,8 +245,13 @@ pub fn merge_parts(parts: &[Part], out: &Path, command: &str) -> Result<Merged> 
     }
     let (range, _) = range.expect("at least one part");
     let display = first.display();
-    check_coverage(&groups, display, out)?;
-    let image = assemble(&tiles, display);
+    let (image, origin) = if whole_image {
+        check_coverage(&groups, display, out)?;
+        (assemble(&tiles, display), (0, 0))
+    } else {
+        let (_, image) = tiles.pop().expect("one tile");
+        (image, first.header.origin)
+    };
     let seconds: f64 = parts
         .iter()
         .filter_map(|p| p.header.get(attr::RENDER_TIME_S)?.parse::<f64>().ok())
@@ -246,7 +269,7 @@ pub fn merge_parts(parts: &[Part], out: &Path, command: &str) -> Result<Merged> 
     attributes.sort();
     let header = ExrHeader {
         display,
-        origin: (0, 0),
+        origin,
         attributes,
     };
     Ok(Merged { image, header })

@@ -3,7 +3,7 @@
 //! run's provenance in the EXR header.
 
 use super::adaptive::render_adaptive;
-use super::merge::{attr, merge_parts, Part};
+use super::merge::{attr, merge_sample_ranges, Part};
 use super::output_set::{
     image_of_reconstruction, image_of_render, output_paths, write_output_set_with_header,
 };
@@ -204,7 +204,7 @@ fn run_full(
                 image,
                 header,
             };
-            let merged = merge_parts(&[prev.clone(), new], exr, &job.command)?;
+            let merged = merge_sample_ranges(&[prev.clone(), new], exr, &job.command)?;
             (merged.image, merged.header)
         }
     };

@@ -36,8 +36,9 @@ pub struct NoiseAdaptive {
     pub max_spp: u32,
     /// Samples between two checks (Cycles: 16).
     pub check_every: u32,
-    /// Stop after the round that crosses this wall time (the image is then
-    /// time-dependent, no longer a function of the seed alone).
+    /// Stop at this wall time: the round under way is abandoned (only the first
+    /// round always completes). The image then depends on the machine's speed,
+    /// no longer on the seed alone.
     pub time_limit: Option<Duration>,
 }
 
@@ -150,7 +151,13 @@ pub fn render_noise_adaptive(
         };
         let report = |_: usize| {};
         let planned: usize = (0..w * h).map(|p| plan(p).len()).sum();
-        film.add_samples(&ctx, &plan, &|| false, &report);
+        // Every round but the first is abandoned when it overruns the time limit,
+        // so that an equal-time comparison is one.
+        let first_round = counts.iter().all(|&c| c == 0);
+        let over = || !first_round && settings.time_limit.is_some_and(|t| start.elapsed() > t);
+        if !film.add_samples(&ctx, &plan, &over, &report) {
+            break;
+        }
         progress(
             traced.fetch_add(planned, Ordering::Relaxed) + planned,
             budget,
