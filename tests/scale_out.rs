@@ -13,7 +13,8 @@
 //! - variance of the mean: Chan's formula from f32 part means mᵢ and variances:
 //!   |ΔV| ≤ 4ε·V + Σ nᵢ(2|dᵢ|e + e²)/(N(N−1)) + 2⁻⁵⁰(N·V + I²)/(N − 1), with
 //!   dᵢ = mᵢ − m, e = 2ε·max mᵢ (the parts' rounded means) and the last term the
-//!   one-pass render's own f64 cancellation.
+//!   one-pass render's own f64 cancellation;
+//! - each plus 4·2⁻¹⁴⁹ (f32's subnormal step) where values are subnormal.
 
 use gradtrace::output::{read_exr, read_exr_with_header, OutputImage};
 use gradtrace::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
@@ -162,7 +163,8 @@ fn check_within(name: &str, got: &[f32], want: &[f32], bound: impl Fn(usize) -> 
     let mut worst = 0.0f64;
     for i in 0..want.len() {
         let d = (got[i] as f64 - want[i] as f64).abs();
-        let b = bound(i).max(f64::MIN_POSITIVE);
+        // Plus a few of f32's subnormal steps (2⁻¹⁴⁹), where relative bounds end.
+        let b = bound(i) + 4.0 * 2f64.powi(-149);
         worst = worst.max(d / b);
         assert!(
             d <= b,
@@ -283,6 +285,22 @@ fn merged_sample_ranges_equal_the_full_render_within_rounding() {
                 bound,
             ));
         }
+        // Term magnitudes |(ℓu, ℓv)| from the merged mean luminances ℓ: off by at
+        // most the bound of ℓu plus that of ℓv.
+        for term in ["sv", "dv", "cdv", "vis", "indirect"] {
+            let name = format!("grad.{term}.Y");
+            let (u, v) = (
+                format!("merge.grad.{term}.u"),
+                format!("merge.grad.{term}.v"),
+            );
+            let bound = |i: usize| (nn + 8.0) * EPS * (s_abs(&u, i) + s_abs(&v, i));
+            checks.push(check_within(
+                &name,
+                plane(&merged, &name),
+                plane(&full, &name),
+                bound,
+            ));
+        }
         // Unit normals: each coordinate of the sum is off by ≤ (N + 2)ε·N, so the
         // normalised one by ≤ 2(N + 2)ε / |mean normal|.
         let len = plane(&merged, "merge.normal_len");
@@ -301,6 +319,11 @@ fn merged_sample_ranges_equal_the_full_render_within_rounding() {
             .filter(|c| c == "object.id")
             .collect();
         assert!(diff.is_empty(), "object ids differ");
+        let all: Vec<String> = checks
+            .iter()
+            .map(|c| format!("{} {:.2}", c.name, c.worst))
+            .collect();
+        println!("{label}: |Δ|/bound per channel: {}", all.join(", "));
         let worst = checks
             .iter()
             .max_by(|a, b| a.worst.total_cmp(&b.worst))
@@ -666,6 +689,32 @@ fn noise_adaptive_sampling_spends_samples_on_noise_stops_at_the_threshold_and_be
         e_adaptive < 0.8 * e_uniform,
         "adaptive {e_adaptive} vs uniform {e_uniform}"
     );
+
+    // A pixel that stopped at n samples holds exactly the uniform n-spp pixel:
+    // the same sample indices, summed in the same order.
+    let at_16 = render(
+        &scene,
+        &accel,
+        &RenderOptions {
+            spp: Some(16),
+            ..opts.clone()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let stopped: Vec<usize> = (0..spp.len()).filter(|&i| spp[i] == 16.0).collect();
+    assert!(
+        stopped.len() > spp.len() / 4,
+        "{} pixels stopped at 16",
+        stopped.len()
+    );
+    for &i in &stopped {
+        assert_eq!(
+            out.beauty[i].to_array().map(f32::to_bits),
+            at_16.beauty[i].to_array().map(f32::to_bits),
+            "pixel {i}"
+        );
+    }
 
     // The same image for any thread count.
     let one = rayon::ThreadPoolBuilder::new()
