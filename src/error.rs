@@ -33,6 +33,12 @@ pub enum Error {
     /// Render options are inconsistent (e.g. zero samples per pixel).
     #[error("invalid option {option}: {message}")]
     Option { option: String, message: String },
+    /// Parts of a split render do not fit together; `path` names the part.
+    #[error("{path}: cannot merge: {message}")]
+    Merge { path: PathBuf, message: String },
+    /// The run was interrupted (Ctrl-C) before it had anything to write.
+    #[error("interrupted {0}")]
+    Interrupted(String),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -11,15 +11,19 @@ use gradtrace::pipeline::compare::{self, CompareOptions};
 use gradtrace::pipeline::diff::{DiffMetric, DiffOptions};
 use gradtrace::pipeline::{self, progress::ProgressMode};
 use gradtrace::reconstruct::Interpolation;
-use gradtrace::render::RenderOptions;
+use gradtrace::render::noise_adaptive::NoiseAdaptive;
+use gradtrace::render::{Crop, Passes, RenderOptions};
 use gradtrace::scene::Integrator;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
 
 #[derive(Parser, Debug)]
 #[command(
     name = "gradtrace",
-    version,
+    version = pipeline::render::VERSION,
     about = "CPU path tracer: renders a TOML scene file to a multi-layer EXR and a PNG"
 )]
 struct Cli {
@@ -41,6 +45,23 @@ enum Command {
     /// Compare two EXRs' beauty (R, G, B): RMSE, relMSE, FLIP and an error-map
     /// PNG; exit status 1 when --threshold is exceeded.
     Diff(DiffArgs),
+    /// Merge the parts of a split render (tiles from --tile/--crop, sample ranges
+    /// from --spp-range) into the whole image: tiles are checked to cover it
+    /// exactly once, sample ranges combined weighted by their sample counts.
+    Merge(MergeArgs),
+}
+
+#[derive(Args, Debug)]
+struct MergeArgs {
+    /// The parts (EXR files written by `gradtrace render`).
+    #[arg(required = true, value_name = "PARTS")]
+    parts: Vec<PathBuf>,
+    /// The merged EXR; the PNG is written next to it with the same stem.
+    #[arg(long, value_name = "FULL.exr")]
+    out: PathBuf,
+    /// No summary line.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -170,7 +191,76 @@ struct RenderArgs {
     #[arg(long, value_parser = interpolation(), value_name = "KIND", requires = "strategy")]
     interpolation: Option<Interpolation>,
     #[command(flatten)]
+    split: SplitArgs,
+    #[command(flatten)]
     common: CommonArgs,
+}
+
+/// How a render is split across machines and time.
+#[derive(Args, Debug)]
+struct SplitArgs {
+    /// Render only tile K of N (0-based; N bands of rows); the EXR's data window
+    /// is the tile inside the full image, for `gradtrace merge`.
+    #[arg(long, value_name = "K/N", value_parser = parse_tile, conflicts_with_all = ["crop", "strategy"])]
+    tile: Option<(u32, u32)>,
+    /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 (like pbrt-v4's --pixelbounds).
+    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop, conflicts_with = "strategy")]
+    crop: Option<Crop>,
+    /// Render only sample indices A..B−1 of every pixel (of --spp); disjoint
+    /// ranges are pieces of one render, combined by `gradtrace merge`.
+    #[arg(long, value_name = "A:B", value_parser = parse_spp_range, conflicts_with = "strategy")]
+    spp_range: Option<(u32, u32)>,
+    /// Render in passes of doubling sample count until SECONDS have passed (at most
+    /// --spp, default 2^20), then write the samples reached; Ctrl-C writes the
+    /// passes finished so far.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, conflicts_with_all = ["strategy", "spp_range"])]
+    time_limit: Option<f64>,
+    /// Continue the render in FILE.exr (written with --time-limit or --spp-range)
+    /// up to --spp or --time-limit; writes FILE.exr unless --out says otherwise.
+    #[arg(long, value_name = "FILE.exr", conflicts_with_all = ["strategy", "spp_range", "tile", "crop", "noise_threshold"])]
+    resume: Option<PathBuf>,
+    /// Cycles-style per-pixel adaptive sampling: a pixel stops when its noise
+    /// estimate falls below this (Blender's "Noise Threshold", e.g. 0.01); --spp
+    /// is the most samples a pixel gets [default: 1024]. Writes `samples.spp`.
+    #[arg(long, value_name = "F", conflicts_with_all = ["strategy", "spp_range", "tile", "crop"])]
+    noise_threshold: Option<f32>,
+    /// With --noise-threshold: samples every pixel takes before its first check
+    /// [default: Cycles' max(4, 16 / threshold^0.3)].
+    #[arg(long, value_name = "N", requires = "noise_threshold", value_parser = clap::value_parser!(u32).range(1..))]
+    min_spp: Option<u32>,
+}
+
+fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{s:?}: expected K/N with 0 ≤ K < N, e.g. 3/8");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    (k < n).then_some((k, n)).ok_or_else(bad)
+}
+
+fn parse_crop(s: &str) -> Result<Crop, String> {
+    let bad = || format!("{s:?}: expected x0,y0,x1,y1 in pixels with x0 < x1, y0 < y1");
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|t| t.trim().parse().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let [x0, y0, x1, y1] = v[..] else {
+        return Err(bad());
+    };
+    (x0 < x1 && y0 < y1)
+        .then_some(Crop { x0, y0, x1, y1 })
+        .ok_or_else(bad)
+}
+
+fn parse_spp_range(s: &str) -> Result<(u32, u32), String> {
+    gradtrace::pipeline::merge::parse_range(s)
+        .ok_or_else(|| format!("{s:?}: expected A:B with A < B, e.g. 0:256"))
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 && t < 1e9 => Ok(t),
+        _ => Err(format!("{s:?}: expected a positive number of seconds")),
+    }
 }
 
 /// The options every rendering command takes.
@@ -327,6 +417,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 );
             }
         }
+        Command::Merge(args) => {
+            let job = pipeline::merge::MergeJob {
+                parts: args.parts,
+                out: args.out,
+                command: command_line(),
+            };
+            let summary = pipeline::merge::run(&job)?;
+            if !args.quiet {
+                println!("{summary}");
+            }
+        }
         Command::Compare(args) => {
             let dir = args
                 .out
@@ -344,8 +445,53 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// This process's command line, for the EXR header (arguments with spaces quoted).
+fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if a.is_empty() || a.contains(char::is_whitespace) {
+                format!("{a:?}")
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A flag that Ctrl-C sets (a second Ctrl-C exits at once), for renders in passes.
+fn cancel_on_ctrl_c() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let set = flag.clone();
+    let installed = ctrlc::set_handler(move || {
+        if set.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("interrupted: writing the passes finished so far (Ctrl-C again to abort)");
+    });
+    if installed.is_err() {
+        eprintln!("warning: cannot catch Ctrl-C; an interrupt will write nothing");
+    }
+    flag
+}
+
 impl RenderArgs {
     fn into_job(self) -> pipeline::render::RenderJob {
+        let sp = self.split;
+        let time_limit = sp.time_limit.map(Duration::from_secs_f64);
+        let passes = Passes {
+            time_limit: time_limit.filter(|_| sp.noise_threshold.is_none()),
+            cancel: (sp.time_limit.is_some() || sp.resume.is_some()).then(cancel_on_ctrl_c),
+        };
+        let noise_adaptive = sp.noise_threshold.map(|t| {
+            let max_spp = self.common.spp.unwrap_or(1024);
+            let mut s = NoiseAdaptive::new(t, max_spp);
+            if let Some(m) = sp.min_spp {
+                s.min_spp = m;
+            }
+            s.time_limit = time_limit;
+            s
+        });
         let adaptive = self.strategy.map(|s| {
             let settings = Settings::new(s, self.budget.unwrap_or(0.17));
             let interpolation = self.interpolation.unwrap_or(Interpolation::Gradient);
@@ -365,7 +511,15 @@ impl RenderArgs {
                 vis_refine: self.vis_refine,
                 far_light: self.far_light,
                 gradient_spp: self.gradient_spp,
+                crop: sp.crop,
+                sample_range: sp.spp_range,
+                merge_planes: false,
             },
+            tile: sp.tile,
+            passes,
+            resume: sp.resume,
+            noise_adaptive,
+            command: command_line(),
             adaptive,
             denoise: self.denoise,
             threads: c.threads,

@@ -99,6 +99,7 @@ fn child_entry() {
             let pair = atomic::stage_pair(
                 &dir.join("out.exr"),
                 &img,
+                &Default::default(),
                 &dir.join("out.png"),
                 &beauty,
                 0.0,

@@ -137,6 +137,7 @@ fn image_of_render_names_every_plane() {
         object_id: Some(vec![6.0; n]),
         gradients: None,
         stats: RenderStats::default(),
+        ..Default::default()
     };
     let img = image_of_render(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();

@@ -481,12 +481,13 @@ impl StagedPair {
 pub fn stage_pair(
     exr: &Path,
     image: &OutputImage,
+    header: &super::ExrHeader,
     png: &Path,
     beauty: &[Vec3],
     exposure: f32,
 ) -> crate::Result<StagedPair> {
     let id = render_id(beauty, image.width, image.height, exposure);
-    let exr = super::exr::stage_exr_tagged(exr, image, Some(&id))?;
+    let exr = super::exr::stage_exr_tagged(exr, image, header, &id)?;
     let png =
         super::png::stage_png_tagged(png, beauty, image.width, image.height, exposure, Some(&id))?;
     Ok(StagedPair { exr, png, id })
@@ -500,7 +501,14 @@ pub fn write_pair(
     beauty: &[Vec3],
     exposure: f32,
 ) -> crate::Result<String> {
-    let pair = stage_pair(exr, image, png, beauty, exposure)?;
+    let pair = stage_pair(
+        exr,
+        image,
+        &super::ExrHeader::default(),
+        png,
+        beauty,
+        exposure,
+    )?;
     let id = pair.id.clone();
     pair.commit()?;
     Ok(id)

@@ -11,10 +11,31 @@ use super::{Channel, OutputImage};
 use crate::Error;
 use exr::meta::attribute::AttributeValue;
 use exr::prelude::{
-    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
-    ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
+    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds,
+    Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
 };
 use std::path::Path;
+
+/// Where an EXR's planes sit in the full image, and where they came from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExrHeader {
+    /// The full image's size (the display window); (0, 0): the planes' own size.
+    pub display: (usize, usize),
+    /// The data window's top-left pixel inside the display window.
+    pub origin: (usize, usize),
+    /// String attributes, e.g. (`gradtrace.spp`, `64`).
+    pub attributes: Vec<(String, String)>,
+}
+
+impl ExrHeader {
+    /// The value of string attribute `name`.
+    pub fn get(&self, name: &str) -> Option<&str> {
+        self.attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+    }
+}
 
 /// Writes `image` as one EXR file, atomically (see [`super::atomic`]).
 ///
@@ -29,17 +50,18 @@ pub fn write_exr(path: &Path, image: &OutputImage) -> crate::Result<()> {
 /// Encodes `image` into a temporary file next to `path` without touching `path`;
 /// [`Staged::commit`] puts it in place. Same checks as [`write_exr`].
 pub fn stage_exr(path: &Path, image: &OutputImage) -> crate::Result<Staged> {
-    stage_exr_tagged(path, image, None)
+    stage_exr_with_header(path, image, &ExrHeader::default())
 }
 
-/// [`stage_exr`] with the render id of an EXR + PNG pair as the header attribute
-/// [`RENDER_ID_KEY`] (see [`super::atomic`]).
-pub(crate) fn stage_exr_tagged(
+/// [`stage_exr`] with a data window inside a larger display window (a tile of an
+/// image: viewers and `merge` place it) and string attributes in the header.
+pub fn stage_exr_with_header(
     path: &Path,
     image: &OutputImage,
-    render_id: Option<&str>,
+    header: &ExrHeader,
 ) -> crate::Result<Staged> {
     validate(path, image)?;
+    let (attributes, display) = header_attributes(path, image, header)?;
     let mut list = SmallVec::new();
     for ch in &image.channels {
         // `validate` checked the name; `new_or_none` cannot fail here, but a
@@ -48,22 +70,13 @@ pub(crate) fn stage_exr_tagged(
             .ok_or_else(|| output_error(path, format!("bad channel name {:?}", ch.name)))?;
         list.push(AnyChannel::new(name, FlatSamples::F32(ch.data.clone())));
     }
-    let mut attributes = LayerAttributes::default();
-    if let Some(id) = render_id {
-        let text = |s: &str| {
-            Text::new_or_none(s).ok_or_else(|| output_error(path, format!("bad attribute {s:?}")))
-        };
-        attributes
-            .other
-            .insert(text(RENDER_ID_KEY)?, AttributeValue::Text(text(id)?));
-    }
     let layer = Layer::new(
         (image.width, image.height),
         attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
-    let exr_image = Image::from_layer(layer);
+    let exr_image = Image::new(ImageAttributes::new(display), layer);
     stage(path, |w| {
         exr_image
             .write()
@@ -72,11 +85,85 @@ pub(crate) fn stage_exr_tagged(
     })
 }
 
+/// [`stage_exr_with_header`] with the render id of an EXR + PNG pair as the
+/// header attribute [`RENDER_ID_KEY`] (see [`super::atomic`]).
+pub(crate) fn stage_exr_tagged(
+    path: &Path,
+    image: &OutputImage,
+    header: &ExrHeader,
+    render_id: &str,
+) -> crate::Result<Staged> {
+    let mut header = header.clone();
+    header
+        .attributes
+        .push((RENDER_ID_KEY.to_string(), render_id.to_string()));
+    stage_exr_with_header(path, image, &header)
+}
+
 /// Reads every channel of every part of an EXR file as f32 (f16 and u32 samples
 /// are converted). Channels of a named part get the part's name as a prefix
 /// (`part.channel`), so multi-part files map onto the same flat naming. All parts
 /// must share one resolution. Channel order is the file's (sorted by name).
 pub fn read_exr(path: &Path) -> crate::Result<OutputImage> {
+    read_exr_with_header(path).map(|(image, _)| image)
+}
+
+/// The layer attributes (data window position, string attributes) and the
+/// display window of `header`, checked: the data window inside the display
+/// window, attribute names printable ASCII (values Latin-1; other characters
+/// become `?`).
+fn header_attributes(
+    path: &Path,
+    image: &OutputImage,
+    header: &ExrHeader,
+) -> crate::Result<(LayerAttributes, IntegerBounds)> {
+    let display = match header.display {
+        (0, 0) => (image.width, image.height),
+        d => d,
+    };
+    let (x0, y0) = header.origin;
+    if x0 + image.width > display.0
+        || y0 + image.height > display.1
+        || display.0 > i32::MAX as usize
+        || display.1 > i32::MAX as usize
+    {
+        return Err(output_error(
+            path,
+            format!(
+                "data window {}x{} at ({x0}, {y0}) does not fit the {}x{} display window",
+                image.width, image.height, display.0, display.1
+            ),
+        ));
+    }
+    let mut attributes = LayerAttributes {
+        layer_position: exr::math::Vec2(x0 as i32, y0 as i32),
+        ..LayerAttributes::default()
+    };
+    for (name, value) in &header.attributes {
+        if name.is_empty() || name.len() > 255 || !name.bytes().all(|b| b.is_ascii_graphic()) {
+            return Err(output_error(
+                path,
+                format!("attribute name {name:?} must be 1-255 printable ASCII characters"),
+            ));
+        }
+        let latin1: String = value
+            .chars()
+            .map(|c| if (c as u32) < 256 { c } else { '?' })
+            .collect();
+        let (Some(n), Some(v)) = (Text::new_or_none(name), Text::new_or_none(&latin1)) else {
+            return Err(output_error(
+                path,
+                format!("attribute {name:?} is not text"),
+            ));
+        };
+        attributes.other.insert(n, AttributeValue::Text(v));
+    }
+    Ok((attributes, IntegerBounds::from_dimensions(display)))
+}
+
+/// [`read_exr`] with the header: the display window, where the data window sits
+/// in it, and every string attribute (sorted by name).
+pub fn read_exr_with_header(path: &Path) -> crate::Result<(OutputImage, ExrHeader)> {
     check_header_size(path)?;
     let image = read()
         .no_deep_data()
@@ -125,10 +212,30 @@ pub fn read_exr(path: &Path) -> crate::Result<OutputImage> {
             });
         }
     }
-    out.ok_or_else(|| Error::Asset {
+    let out = out.ok_or_else(|| Error::Asset {
         path: path.to_path_buf(),
         message: "the file holds no image part".into(),
-    })
+    })?;
+    let display = &image.attributes.display_window;
+    let mut header = ExrHeader {
+        display: (display.size.width(), display.size.height()),
+        ..ExrHeader::default()
+    };
+    if let Some(layer) = image.layer_data.first() {
+        let p = layer.attributes.layer_position - display.position;
+        header.origin = (p.x().max(0) as usize, p.y().max(0) as usize);
+    }
+    let others = image.layer_data.iter().map(|l| &l.attributes.other);
+    for other in others.chain([&image.attributes.other]) {
+        for (name, value) in other {
+            if let AttributeValue::Text(t) = value {
+                header.attributes.push((name.to_string(), t.to_string()));
+            }
+        }
+    }
+    header.attributes.sort();
+    header.attributes.dedup();
+    Ok((out, header))
 }
 
 fn exr_error(path: &Path, e: exr::error::Error) -> Error {

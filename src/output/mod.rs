@@ -12,7 +12,9 @@ pub mod report;
 
 use crate::math::Vec3;
 
-pub use self::exr::{read_exr, stage_exr, write_exr};
+pub use self::exr::{
+    read_exr, read_exr_with_header, stage_exr, stage_exr_with_header, write_exr, ExrHeader,
+};
 pub use self::png::{
     srgb_oetf, stage_png, stage_png_rgb8, to_srgb8, write_png, write_png_exposure,
 };

@@ -8,6 +8,7 @@ pub mod adaptive;
 pub mod compare;
 pub mod diff;
 pub mod memory;
+pub mod merge;
 pub mod output_set;
 pub mod preview;
 pub mod progress;
@@ -66,11 +67,8 @@ pub fn info(path: &Path) -> Result<String> {
     ))
 }
 
-/// The renderer's version: the crate version and, when the build knew it, the git
-/// commit (`GRADTRACE_GIT_COMMIT`, set by `build.rs`), e.g. `0.1.0 (4342f2c)`.
+/// The renderer's version: the crate version and the git commit it was built
+/// from (`build.rs`), e.g. `0.1.0 (4342f2c)`, as `--version` prints it.
 pub fn version() -> String {
-    match option_env!("GRADTRACE_GIT_COMMIT") {
-        Some(c) if !c.is_empty() => format!("{} ({c})", env!("CARGO_PKG_VERSION")),
-        _ => env!("CARGO_PKG_VERSION").to_string(),
-    }
+    render::VERSION.to_string()
 }

@@ -2,7 +2,7 @@
 //! [`OutputImage`], and the EXR + PNG pair written as a set through `output`.
 
 use crate::output::names::*;
-use crate::output::{self, OutputImage};
+use crate::output::{self, ExrHeader, OutputImage};
 use crate::reconstruct::Reconstruction;
 use crate::render::RenderOutput;
 use crate::{Error, Result};
@@ -38,6 +38,12 @@ pub fn image_of_render(render: &RenderOutput) -> OutputImage {
         for (name, plane) in GRAD_TERMS.iter().zip(terms) {
             img.push_scalar(name, plane.clone());
         }
+    }
+    if let Some(spp) = &render.spp_map {
+        img.push_scalar(super::merge::SAMPLES_SPP, spp.clone());
+    }
+    if let Some(m) = &render.merge {
+        super::merge::push_merge_planes(&mut img, m);
     }
     img
 }
@@ -95,12 +101,23 @@ pub fn output_paths(out: Option<&Path>, scene_stem: &str) -> Result<(PathBuf, Pa
 }
 
 /// Writes `image` to `exr` and its beauty `beauty` tone-mapped to `png` as one
-/// set: both files are encoded to temporary files first and renamed into place
-/// only when both encodes succeeded, so a failure of either leaves every previous
-/// output untouched. Creates the output directory when missing and removes what
+/// set: both files are encoded to anonymous temporary files first and put in
+/// place only when both encodes succeeded, so a failure of either leaves every
+/// previous output untouched; both carry one render id. Creates the output directory when missing and removes what
 /// it created again if the write then fails.
 pub fn write_output_set(
     image: &OutputImage,
+    beauty: &[Vec3],
+    exr: &Path,
+    png: &Path,
+) -> Result<()> {
+    write_output_set_with_header(image, &ExrHeader::default(), beauty, exr, png)
+}
+
+/// [`write_output_set`] with an EXR header (data window, provenance attributes).
+pub fn write_output_set_with_header(
+    image: &OutputImage,
+    header: &ExrHeader,
     beauty: &[Vec3],
     exr: &Path,
     png: &Path,
@@ -110,13 +127,10 @@ pub fn write_output_set(
         Some(d) => create_dirs(d)?,
         None => Vec::new(),
     };
-    let staged = output::stage_exr(exr, image).and_then(|e| {
-        output::stage_png(png, beauty, image.width, image.height, 0.0).map(|p| (e, p))
-    });
-    let result = staged.and_then(|(e, p)| {
-        e.commit()?;
-        p.commit()
-    });
+    // One render id in both files, the PNG renamed first: a kill between the two
+    // renames leaves a pair that `output::atomic::check_pair` reports as mismatched.
+    let result = output::atomic::stage_pair(exr, image, header, png, beauty, 0.0)
+        .and_then(|pair| pair.commit());
     if result.is_err() {
         // Innermost first; `remove_dir` only removes empty directories.
         for d in created.iter().rev() {

@@ -1,20 +1,38 @@
-//! `gradtrace render`: scene file → BVH → full or adaptive render → EXR + PNG.
+//! `gradtrace render`: scene file → BVH → full (whole, a tile, a sample range,
+//! time-limited, resumed), noise-adaptive or adaptive render → EXR + PNG with the
+//! run's provenance in the EXR header.
 
 use super::adaptive::render_adaptive;
-use super::output_set::{image_of_reconstruction, image_of_render, output_paths, write_output_set};
+use super::merge::{attr, merge_sample_ranges, Part};
+use super::output_set::{
+    image_of_reconstruction, image_of_render, output_paths, write_output_set_with_header,
+};
 use super::progress::{Phase, ProgressMode};
 use super::{memory, with_threads};
 use crate::adaptive::Settings;
 use crate::denoise;
 use crate::math::Vec3;
-use crate::output::{names::RGB, OutputImage};
+use crate::output::names::RGB;
+use crate::output::{ExrHeader, OutputImage};
 use crate::reconstruct::Interpolation;
-use crate::render::{self, RenderOptions, RenderOutput};
+use crate::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
+use crate::render::{self, Crop, Passes, RenderOptions, RenderOutput};
+use crate::scene::Scene;
 use crate::{Error, Result};
-use std::borrow::Cow;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// The crate version and the git commit it was built from (`build.rs`).
+pub const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (",
+    env!("GRADTRACE_GIT_COMMIT"),
+    ")"
+);
+
+/// The sample cap of a `--time-limit` render without `--spp`.
+pub const TIME_LIMIT_MAX_SPP: u32 = 1 << 20;
 
 /// One `render` run as the command line describes it.
 #[derive(Clone, Debug)]
@@ -25,14 +43,25 @@ pub struct RenderJob {
     pub options: RenderOptions,
     /// Adaptive sampling: where the samples go and how pixels are rebuilt.
     pub adaptive: Option<(Settings, Interpolation)>,
-    /// Full renders: denoise the beauty with OIDN (`denoise::denoise`).
-    pub denoise: bool,
     /// Worker threads (default: all cores); never changes the image.
     pub threads: Option<u32>,
     /// Refuse runs estimated to need more bytes than this (default: 90 % of the
     /// memory available).
     pub max_memory: Option<u64>,
+    /// Full renders: denoise the beauty with OIDN (`denoise::denoise`).
+    pub denoise: bool,
     pub progress: ProgressMode,
+    /// Time limit and cancel flag (Ctrl-C) of a render in passes.
+    pub passes: Passes,
+    /// Continue the render in this EXR (a `--time-limit` or `--spp-range` output)
+    /// up to `--spp` or the time limit; the default `--out`.
+    pub resume: Option<PathBuf>,
+    /// Per-pixel adaptive sample counts (Cycles' sampler) instead of a fixed spp.
+    pub noise_adaptive: Option<NoiseAdaptive>,
+    /// Render only tile K of N (bands of rows, [`Crop::tile`]).
+    pub tile: Option<(u32, u32)>,
+    /// The command line, recorded in the EXR header.
+    pub command: String,
 }
 
 /// What a run did, for the one summary line.
@@ -51,8 +80,14 @@ pub enum SummaryKind {
         spp: u32,
         seconds: f64,
         rays: u64,
-        /// Wall time of the denoiser, when it ran.
+        /// The denoiser's wall time, with `--denoise`.
         denoise_s: Option<f64>,
+    },
+    NoiseAdaptive {
+        mean_spp: f64,
+        max_spp: u32,
+        seconds: f64,
+        rays: u64,
     },
     Adaptive {
         settings: Settings,
@@ -73,16 +108,21 @@ impl fmt::Display for RenderSummary {
                 rays,
                 denoise_s,
             } => {
-                let rate = if *seconds > 0.0 {
-                    format!("{:.2} Mrays/s", *rays as f64 / seconds / 1e6)
-                } else {
-                    "- Mrays/s".into()
-                };
-                write!(f, "{spp} spp, {seconds:.3} s, {rate}")?;
+                write!(f, "{spp} spp, {seconds:.3} s, {}", rate(*rays, *seconds))?;
                 if let Some(d) = denoise_s {
                     write!(f, ", denoised in {d:.3} s")?;
                 }
             }
+            SummaryKind::NoiseAdaptive {
+                mean_spp,
+                max_spp,
+                seconds,
+                rays,
+            } => write!(
+                f,
+                "noise-adaptive: mean {mean_spp:.1} spp (at most {max_spp}), {seconds:.3} s, {}",
+                rate(*rays, *seconds)
+            )?,
             SummaryKind::Adaptive {
                 settings,
                 samples,
@@ -105,27 +145,27 @@ impl fmt::Display for RenderSummary {
     }
 }
 
+fn rate(rays: u64, seconds: f64) -> String {
+    if seconds > 0.0 {
+        format!("{:.2} Mrays/s", rays as f64 / seconds / 1e6)
+    } else {
+        "- Mrays/s".into()
+    }
+}
+
 /// Renders `job.scene` and writes the EXR + PNG set. The output paths are settled
-/// before any work, so a bad `--out` costs nothing.
+/// before any work, so a bad `--out` costs nothing; so are the resume file and the
+/// crop and sample range (checked against the scene before tracing).
 pub fn run(job: &RenderJob) -> Result<RenderSummary> {
     let stem = job
         .scene
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let (exr, png) = output_paths(job.out.as_deref(), &stem)?;
-    if job.adaptive.is_some() && job.options.gradients {
-        return Err(Error::Option {
-            option: "--gradients".into(),
-            message: "adaptive renders (--strategy) compute the gradient at their samples and \
-                      reconstruct with it; the per-pixel grad.* layers come from full renders: \
-                      drop --gradients or --strategy"
-                .into(),
-        });
-    }
-    if job.denoise {
-        check_denoise(job)?;
-    }
+    let out = job.out.as_deref().or(job.resume.as_deref());
+    let (exr, png) = output_paths(out, &stem)?;
+    let resume = job.resume.as_deref().map(Part::read).transpose()?;
+    check_combinations(job)?;
     let scene = crate::scene::load(&job.scene)?;
     let (w, h) = job.options.resolution_of(&scene);
     let pixels = u64::from(w) * u64::from(h);
@@ -136,58 +176,249 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
     let what = format!("a {w}x{h} render");
     memory::check(bytes, job.max_memory, &what, "--width/--height/--budget")?;
     let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-    with_threads(job.threads, || match &job.adaptive {
-        None => {
-            let phase = Phase::new(job.progress, "render", w as u64 * h as u64, "pixels");
-            let out = render::render(&scene, &accel, &job.options, &phase.callback())?;
-            drop(phase);
-            let (image, beauty, denoise_s) = full_image(&out, job.denoise)?;
-            write_output_set(&image, &beauty, &exr, &png)?;
-            Ok(RenderSummary {
-                width: out.width,
-                height: out.height,
-                exr,
-                png,
-                kind: SummaryKind::Full {
-                    spp: out.spp,
-                    seconds: out.stats.wall_time.as_secs_f64(),
-                    rays: out.stats.rays,
-                    denoise_s,
-                },
-            })
+    with_threads(job.threads, || {
+        if let Some((settings, interpolation)) = &job.adaptive {
+            return run_adaptive(job, &scene, &accel, settings, *interpolation, &exr, &png);
         }
-        Some((settings, interpolation)) => {
-            let phase = Phase::new(job.progress, settings.strategy.name(), 0, "samples");
-            let out = render_adaptive(
-                &scene,
-                &accel,
-                &job.options,
-                settings,
-                *interpolation,
-                &phase.callback(),
-            )?;
-            drop(phase);
-            let rec = &out.reconstruction;
-            let mut image = image_of_reconstruction(rec);
-            if job.options.aovs {
-                add_aovs(&mut image, &scene, &accel, &job.options)?;
-            }
-            write_output_set(&image, &rec.image, &exr, &png)?;
-            Ok(RenderSummary {
-                width: rec.width,
-                height: rec.height,
-                exr,
-                png,
-                kind: SummaryKind::Adaptive {
-                    settings: *settings,
-                    samples: out.samples.samples.len(),
-                    seconds: out.stats.wall_s,
-                    quadtree_s: out.stats.quadtree_s,
-                    reconstruct_s: out.stats.reconstruct_s,
-                },
-            })
+        if let Some(settings) = &job.noise_adaptive {
+            return run_noise_adaptive(job, &scene, &accel, settings, &exr, &png);
         }
+        run_full(job, &scene, &accel, resume.as_ref(), &exr, &png)
     })?
+}
+
+/// A full render (or a tile, a sample range, a time-limited or resumed one).
+fn run_full(
+    job: &RenderJob,
+    scene: &Scene,
+    accel: &crate::accel::Accel,
+    resume: Option<&Part>,
+    exr: &Path,
+    png: &Path,
+) -> Result<RenderSummary> {
+    let mut opts = job.options.clone();
+    let progressive = job.passes.time_limit.is_some() || resume.is_some();
+    if progressive || opts.sample_range.is_some() {
+        opts.merge_planes = true;
+    }
+    if job.passes.time_limit.is_some() && opts.spp.is_none() {
+        opts.spp = Some(TIME_LIMIT_MAX_SPP);
+    }
+    let (w, h) = opts.resolution_of(scene);
+    if let Some((k, n)) = job.tile {
+        let crop = Crop::tile(k, n, w, h).map_err(|message| Error::Option {
+            option: "--tile".into(),
+            message,
+        })?;
+        opts.crop = Some(crop);
+    }
+    if let Some(prev) = resume {
+        opts.sample_range = Some(resume_range(scene, &opts, prev)?);
+        opts.crop = Some(prev.window());
+    }
+    let phase = match job.passes.time_limit {
+        Some(_) => Phase::new(job.progress, "render", 0, "ms"),
+        None => Phase::new(job.progress, "render", w as u64 * h as u64, "pixels"),
+    };
+    let out = render::render_passes(scene, accel, &opts, &job.passes, &phase.callback())?;
+    drop(phase);
+    let header = provenance(scene, &opts, &job.command, &out)?;
+    let (image, denoised, denoise_s) = full_image(&out, job.denoise)?;
+    let (image, header) = match resume {
+        None => (image, header),
+        Some(prev) => {
+            let new = Part {
+                path: PathBuf::from("(this render)"),
+                image,
+                header,
+            };
+            let merged = merge_sample_ranges(&[prev.clone(), new], exr, &job.command)?;
+            (merged.image, merged.header)
+        }
+    };
+    let beauty = match denoised {
+        Some(clean) => clean,
+        None => image.vec3("", RGB).unwrap_or_default(),
+    };
+    write_output_set_with_header(&image, &header, &beauty, exr, png)?;
+    let spp = header
+        .get(attr::SPP)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(out.spp);
+    Ok(RenderSummary {
+        width: image.width,
+        height: image.height,
+        exr: exr.to_path_buf(),
+        png: png.to_path_buf(),
+        kind: SummaryKind::Full {
+            spp,
+            seconds: out.stats.wall_time.as_secs_f64(),
+            rays: out.stats.rays,
+            denoise_s,
+        },
+    })
+}
+
+/// The samples a resumed render adds: from where `prev` ends up to `--spp`, after
+/// checking that `prev` is a render of this scene with these settings.
+fn resume_range(scene: &Scene, opts: &RenderOptions, prev: &Part) -> Result<(u32, u32)> {
+    let err = |message: String| Error::Asset {
+        path: prev.path.clone(),
+        message,
+    };
+    let hash = scene.content_hash()?;
+    if prev.attr(attr::SCENE_SHA256)? != hash {
+        return Err(err(format!(
+            "cannot resume: rendered from a different scene than {} (scene or assets changed)",
+            scene.path.display()
+        )));
+    }
+    let key = opts.settings_key(scene)?;
+    if prev.attr(attr::SETTINGS)? != key {
+        return Err(err(format!(
+            "cannot resume: rendered with other settings ({:?}, now {key:?})",
+            prev.attr(attr::SETTINGS)?
+        )));
+    }
+    let seed = opts.seed.unwrap_or(scene.settings.seed).to_string();
+    if prev.attr(attr::SEED)? != seed {
+        return Err(err(format!(
+            "cannot resume: rendered with seed {}, now {seed}",
+            prev.attr(attr::SEED)?
+        )));
+    }
+    let (_, end) = prev.range()?;
+    let spp = opts.spp.unwrap_or(scene.settings.spp);
+    if end >= spp {
+        return Err(err(format!(
+            "already holds samples up to {end}, and --spp is {spp}: raise --spp (or add --time-limit) to continue"
+        )));
+    }
+    Ok((end, spp))
+}
+
+/// The EXR header of a render: the provenance attributes and, for a tile, its
+/// place in the full image.
+pub fn provenance(
+    scene: &Scene,
+    opts: &RenderOptions,
+    command: &str,
+    out: &RenderOutput,
+) -> Result<ExrHeader> {
+    let seed = opts.seed.unwrap_or(scene.settings.seed);
+    let range = (out.first_sample, out.first_sample + out.spp);
+    let mut attributes: Vec<(String, String)> = vec![
+        (attr::VERSION.into(), VERSION.into()),
+        (attr::COMMAND.into(), command.into()),
+        (attr::SCENE_SHA256.into(), scene.content_hash()?),
+        (attr::SPP.into(), out.spp.to_string()),
+        (attr::SPP_RANGE.into(), format!("{}:{}", range.0, range.1)),
+        (attr::SEED.into(), seed.to_string()),
+        (
+            attr::RENDER_TIME_S.into(),
+            format!("{:.3}", out.stats.wall_time.as_secs_f64()),
+        ),
+        (attr::SETTINGS.into(), opts.settings_key(scene)?),
+    ];
+    attributes.sort();
+    Ok(ExrHeader {
+        display: out.display,
+        origin: out.origin,
+        attributes,
+    })
+}
+
+fn run_noise_adaptive(
+    job: &RenderJob,
+    scene: &Scene,
+    accel: &crate::accel::Accel,
+    settings: &NoiseAdaptive,
+    exr: &Path,
+    png: &Path,
+) -> Result<RenderSummary> {
+    let (w, h) = job.options.resolution_of(scene);
+    let total = w as u64 * h as u64 * settings.max_spp as u64;
+    let phase = Phase::new(job.progress, "noise-adaptive", total, "samples");
+    let out = render_noise_adaptive(scene, accel, &job.options, settings, &phase.callback())?;
+    drop(phase);
+    let opts = RenderOptions {
+        spp: Some(settings.max_spp),
+        ..job.options.clone()
+    };
+    let header = provenance(scene, &opts, &job.command, &out)?;
+    write_output_set_with_header(&image_of_render(&out), &header, &out.beauty, exr, png)?;
+    let counts = out.spp_map.as_deref().unwrap_or(&[]);
+    let mean_spp = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len().max(1) as f64;
+    Ok(RenderSummary {
+        width: out.width,
+        height: out.height,
+        exr: exr.to_path_buf(),
+        png: png.to_path_buf(),
+        kind: SummaryKind::NoiseAdaptive {
+            mean_spp,
+            max_spp: out.spp,
+            seconds: out.stats.wall_time.as_secs_f64(),
+            rays: out.stats.rays,
+        },
+    })
+}
+
+fn run_adaptive(
+    job: &RenderJob,
+    scene: &Scene,
+    accel: &crate::accel::Accel,
+    settings: &Settings,
+    interpolation: Interpolation,
+    exr: &Path,
+    png: &Path,
+) -> Result<RenderSummary> {
+    let phase = Phase::new(job.progress, settings.strategy.name(), 0, "samples");
+    let out = render_adaptive(
+        scene,
+        accel,
+        &job.options,
+        settings,
+        interpolation,
+        &phase.callback(),
+    )?;
+    drop(phase);
+    let rec = &out.reconstruction;
+    let mut attributes = vec![
+        (attr::VERSION.into(), VERSION.into()),
+        (attr::COMMAND.into(), job.command.clone()),
+        (attr::SCENE_SHA256.into(), scene.content_hash()?),
+        (
+            attr::SEED.into(),
+            job.options.seed.unwrap_or(scene.settings.seed).to_string(),
+        ),
+        (
+            attr::RENDER_TIME_S.into(),
+            format!("{:.3}", out.stats.wall_s),
+        ),
+    ];
+    attributes.sort();
+    let header = ExrHeader {
+        attributes,
+        ..ExrHeader::default()
+    };
+    let mut image = image_of_reconstruction(rec);
+    if job.options.aovs {
+        add_aovs(&mut image, scene, accel, &job.options)?;
+    }
+    write_output_set_with_header(&image, &header, &rec.image, exr, png)?;
+    Ok(RenderSummary {
+        width: rec.width,
+        height: rec.height,
+        exr: exr.to_path_buf(),
+        png: png.to_path_buf(),
+        kind: SummaryKind::Adaptive {
+            settings: *settings,
+            samples: out.samples.samples.len(),
+            seconds: out.stats.wall_s,
+            quadtree_s: out.stats.quadtree_s,
+            reconstruct_s: out.stats.reconstruct_s,
+        },
+    })
 }
 
 /// The AOV layers of an adaptive render (normal, depth, albedo, object id), from
@@ -220,32 +451,53 @@ fn add_aovs(
     Ok(())
 }
 
-/// Fails before any work where `--denoise` cannot run.
-fn check_denoise(job: &RenderJob) -> Result<()> {
-    let message = if job.adaptive.is_some() {
-        "denoises full renders only, not --strategy reconstructions"
-    } else if !denoise::available() {
-        denoise::unavailable_reason()
-    } else {
-        return Ok(());
+/// Fails before any work on options that do not go together.
+fn check_combinations(job: &RenderJob) -> Result<()> {
+    let bad = |option: &str, message: &str| {
+        Err(Error::Option {
+            option: option.into(),
+            message: message.into(),
+        })
     };
-    Err(Error::Option {
-        option: "--denoise".into(),
-        message: message.into(),
-    })
+    if job.adaptive.is_some() && job.options.gradients {
+        return bad(
+            "--gradients",
+            "adaptive renders (--strategy) compute the gradient at their samples and \
+             reconstruct with it; the per-pixel grad.* layers come from full renders: \
+             drop --gradients or --strategy",
+        );
+    }
+    if job.denoise {
+        if job.adaptive.is_some() || job.noise_adaptive.is_some() {
+            return bad(
+                "--denoise",
+                "denoises full renders only, not --strategy reconstructions",
+            );
+        }
+        if job.resume.is_some() || job.options.sample_range.is_some() {
+            return bad(
+                "--denoise",
+                "denoise the merged render, not one of its sample ranges",
+            );
+        }
+        if !denoise::available() {
+            return bad("--denoise", denoise::unavailable_reason());
+        }
+    }
+    Ok(())
 }
 
 /// The render's planes; with `denoise` the OIDN-denoised beauty (guided by the
-/// albedo and normal AOVs when rendered) becomes `R,G,B`, the noisy one stays
-/// as `noisy.R/G/B`; returns the planes, the beauty for the PNG and the
+/// albedo and normal AOVs when rendered) becomes `R,G,B`, the noisy one stays as
+/// `noisy.R/G/B`; returns the planes, the denoised beauty for the PNG and the
 /// denoiser's wall time.
 fn full_image(
     out: &RenderOutput,
     denoise: bool,
-) -> Result<(OutputImage, Cow<'_, [Vec3]>, Option<f64>)> {
+) -> Result<(OutputImage, Option<Vec<Vec3>>, Option<f64>)> {
     let mut image = image_of_render(out);
     if !denoise {
-        return Ok((image, Cow::Borrowed(&out.beauty), None));
+        return Ok((image, None, None));
     }
     let t0 = Instant::now();
     let (albedo, normal) = (out.albedo.as_deref(), out.normal.as_deref());
@@ -259,5 +511,5 @@ fn full_image(
         ch.name = format!("noisy.{}", ch.name);
     }
     image.push_vec3("", RGB, &clean);
-    Ok((image, Cow::Owned(clean), Some(seconds)))
+    Ok((image, Some(clean), Some(seconds)))
 }

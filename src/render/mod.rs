@@ -5,19 +5,22 @@
 pub mod gradients;
 pub mod interaction;
 pub mod lights;
+pub mod noise_adaptive;
 pub mod path;
 pub mod point;
 
 use crate::accel::Accel;
 use crate::math::sampler::PixelSampler;
-use crate::math::{finite_or_zero, Vec2, Vec3};
+use crate::math::{finite_or_zero, luminance, Vec2, Vec3};
 use crate::scene::{Integrator, Scene};
 use gradients::geometry::unit_direction_derivatives;
 use gradients::GradientSample;
 use lights::LightSet;
 use path::{PathTracer, SampleResult};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Options for one render; `None` fields fall back to the scene's `[render]` table.
@@ -50,9 +53,37 @@ pub struct RenderOptions {
     /// steers placement and interpolation and needs far fewer samples than a
     /// converged radiance, so this bounds its cost (default: all of them, up to 16).
     pub gradient_spp: Option<u32>,
+    /// Full renders: trace only these pixels; the planes cover the crop, and every
+    /// pixel gets the random numbers it has in the whole image.
+    pub crop: Option<Crop>,
+    /// Full renders: trace only sample indices A..B of every pixel's `spp` (the
+    /// sampler is addressed by index, so disjoint ranges are pieces of one render).
+    pub sample_range: Option<(u32, u32)>,
+    /// Keep what an exact merge of sample ranges needs ([`MergePlanes`]).
+    pub merge_planes: bool,
 }
 
 impl RenderOptions {
+    /// Every setting that changes what a pixel's samples are, resolved against the
+    /// scene (but not `spp`, the crop or the sample range): parts of one render
+    /// share it, so `merge` compares it.
+    pub fn settings_key(&self, scene: &Scene) -> crate::Result<String> {
+        let setup = Setup::new(scene, self)?;
+        let integrator = self.integrator.unwrap_or(scene.settings.integrator);
+        Ok(format!(
+            "integrator={} max_depth={} rr_depth={} resolution={}x{} aovs={} gradients={} lines={:?} far_light={:?}",
+            integrator.name(),
+            setup.max_depth,
+            setup.rr_depth,
+            setup.camera.width,
+            setup.camera.height,
+            self.aovs,
+            self.gradients,
+            setup.lines.map(|l| (l.n_theta, l.refine)),
+            self.far_light,
+        ))
+    }
+
     /// The image size this render will have: the override, else the camera's.
     pub fn resolution_of(&self, scene: &Scene) -> (u32, u32) {
         self.resolution
@@ -60,8 +91,9 @@ impl RenderOptions {
     }
 }
 
-/// What a render produced: row-major planes, top row first.
-#[derive(Clone, Debug)]
+/// What a render produced: row-major planes, top row first, covering the crop
+/// at `origin` of the `display`-sized image (all of it unless cropped).
+#[derive(Clone, Debug, Default)]
 pub struct RenderOutput {
     pub width: usize,
     pub height: usize,
@@ -75,6 +107,16 @@ pub struct RenderOutput {
     pub object_id: Option<Vec<f32>>,
     pub gradients: Option<GradientPlanes>,
     pub stats: RenderStats,
+    /// The planes' top-left pixel in the full image.
+    pub origin: (usize, usize),
+    /// The full image's size; (0, 0) means the planes' own (`width`, `height`).
+    pub display: (usize, usize),
+    /// The samples rendered are indices `first_sample..first_sample + spp`.
+    pub first_sample: u32,
+    /// Present when asked for ([`RenderOptions::merge_planes`]).
+    pub merge: Option<MergePlanes>,
+    /// Samples per pixel where they differ (noise-adaptive renders): `samples.spp`.
+    pub spp_map: Option<Vec<f32>>,
 }
 
 /// Per-pixel analytic image gradients (direct illumination and the indirect term; pixel units; u to
@@ -250,76 +292,405 @@ impl Setup {
     }
 }
 
-/// Renders the scene. Deterministic for a fixed seed, whatever the thread count:
-/// every random number is addressed by (pixel, sample, dimension, seed).
+/// A rectangle of pixels of the full image, half-open (x0 ≤ x < x1, y0 ≤ y < y1),
+/// like pbrt-v4's `--pixelbounds`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Crop {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl Crop {
+    /// The whole `w`×`h` image.
+    pub fn full(w: u32, h: u32) -> Self {
+        Self {
+            x0: 0,
+            y0: 0,
+            x1: w,
+            y1: h,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// Tile `k` of `n` (0-based) of a `w`×`h` image: `n` bands of whole rows, of
+    /// heights differing by at most one, so that the tiles cover the image exactly
+    /// once whatever `n` is (up to the image height).
+    pub fn tile(k: u32, n: u32, w: u32, h: u32) -> Result<Self, String> {
+        if n == 0 || k >= n {
+            return Err(format!("{k}/{n}: expected K/N with 0 ≤ K < N"));
+        }
+        if n > h {
+            return Err(format!(
+                "{k}/{n}: the image has only {h} rows, so at most {h} tiles"
+            ));
+        }
+        let row = |i: u32| (i as u64 * h as u64 / n as u64) as u32;
+        Ok(Self {
+            x0: 0,
+            y0: row(k),
+            x1: w,
+            y1: row(k + 1),
+        })
+    }
+
+    /// Ok when the crop is non-empty and lies inside a `w`×`h` image.
+    pub fn check_inside(&self, w: u32, h: u32) -> Result<(), String> {
+        if self.x0 >= self.x1 || self.y0 >= self.y1 {
+            return Err(format!("{self}: empty (expected x0 < x1 and y0 < y1)"));
+        }
+        if self.x1 > w || self.y1 > h {
+            return Err(format!("{self}: outside the {w}x{h} image"));
+        }
+        Ok(())
+    }
+}
+
+impl std::fmt::Display for Crop {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+/// What merging sample ranges needs beyond the planes a viewer sees: each is a
+/// statistic from which the full render's value follows exactly (up to rounding).
+#[derive(Clone, Debug, Default)]
+pub struct MergePlanes {
+    /// Samples whose camera ray hit a surface (the depth mean's denominator).
+    pub hits: Vec<f32>,
+    /// |Σ normal| / n: the length of the mean normal before it was normalised.
+    pub normal_len: Vec<f32>,
+    /// Luminance of the mean ∂/∂u and ∂/∂v of each gradient term, in the order of
+    /// [`GRAD_TERM_LUMINANCES`] (the term magnitudes are not linear in the samples).
+    pub grad_terms: Option<Vec<[f32; 10]>>,
+}
+
+/// Names of [`MergePlanes::grad_terms`]' entries: (term, u or v).
+pub const GRAD_TERM_LUMINANCES: [&str; 10] = [
+    "sv.u",
+    "sv.v",
+    "dv.u",
+    "dv.v",
+    "cdv.u",
+    "cdv.v",
+    "vis.u",
+    "vis.v",
+    "indirect.u",
+    "indirect.v",
+];
+
+/// How a render is split in time: by default one pass of all samples; with a
+/// `time_limit`, passes of doubling sample counts (sized to the time left) until
+/// the time is up. Setting `cancel` (Ctrl-C) abandons the pass under way and keeps
+/// the finished ones. A render in passes gives the same bits as one pass of the
+/// sample count it reached: each pixel's sums run over its samples in order.
+#[derive(Clone, Debug, Default)]
+pub struct Passes {
+    pub time_limit: Option<Duration>,
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+/// Renders the scene (or the crop and sample range `opts` asks for) in one pass.
+/// Deterministic for a fixed seed, whatever the thread count: every random number
+/// is addressed by (pixel, sample, dimension, seed).
 pub fn render(
     scene: &Scene,
     accel: &Accel,
     opts: &RenderOptions,
     progress: Progress,
 ) -> crate::Result<RenderOutput> {
+    render_passes(scene, accel, opts, &Passes::default(), progress)
+}
+
+/// The crop and the sample range a render covers, checked against the image and
+/// `spp`: one clear error each, before anything is traced.
+pub(crate) fn extent(setup: &Setup, opts: &RenderOptions) -> crate::Result<(Crop, Range<u32>)> {
+    let (w, h) = (setup.camera.width, setup.camera.height);
+    let crop = opts.crop.unwrap_or(Crop::full(w, h));
+    crop.check_inside(w, h)
+        .map_err(|message| crate::Error::Option {
+            option: "--crop/--tile".into(),
+            message,
+        })?;
+    let (a, b) = opts.sample_range.unwrap_or((0, setup.spp));
+    if a >= b || b > setup.spp {
+        return Err(crate::Error::Option {
+            option: "--spp-range".into(),
+            message: format!(
+                "{a}:{b}: expected A:B with A < B ≤ the render's spp ({})",
+                setup.spp
+            ),
+        });
+    }
+    Ok((crop, a..b))
+}
+
+/// [`render`] split into [`Passes`]. With a time limit, `progress` gets
+/// (milliseconds elapsed, milliseconds allowed); otherwise (pixels done, pixels).
+pub fn render_passes(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    passes: &Passes,
+    progress: Progress,
+) -> crate::Result<RenderOutput> {
     let start = Instant::now();
     let setup = Setup::new(scene, opts)?;
-    let (spp, seed, camera) = (setup.spp, setup.seed, setup.camera.clone());
-    let (w, h) = (camera.width as usize, camera.height as usize);
-    let tracer = setup.tracer(scene, accel);
-
-    let tiles_x = w.div_ceil(TILE);
-    let tiles_y = h.div_ceil(TILE);
-    let total = tiles_x * tiles_y;
-    let done = AtomicUsize::new(0);
-    // Tiles are rendered in a scrambled order so that the pixels done so far are a
-    // fair sample of the image's cost (in index order the cheap sky rows come first
-    // and the ETA is 2–3× optimistic). The image does not depend on the order.
-    let order = scrambled_order(total);
-    let render_tile = |tile: usize| -> TileResult {
-        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
-        let x0 = tx * TILE;
-        let y0 = ty * TILE;
-        let x1 = (x0 + TILE).min(w);
-        let y1 = (y0 + TILE).min(h);
-        let mut res = TileResult::new(x0, y0, x1 - x0, y1 - y0, opts.aovs, opts.gradients);
-        for y in y0..y1 {
-            for x in x0..x1 {
-                let pixel = (y * w + x) as u32;
-                let mut acc = PixelAccumulator::default();
-                for s in 0..spp {
-                    let r =
-                        camera_sample(&tracer, &camera, pixel, s, seed, opts.gradients, Vec2::ZERO);
-                    acc.add(&r, s == 0);
-                }
-                res.store(x - x0, y - y0, &acc, spp);
+    let (crop, range) = extent(&setup, opts)?;
+    let ctx = SampleContext {
+        tracer: setup.tracer(scene, accel),
+        camera: &setup.camera,
+        seed: setup.seed,
+        gradients: opts.gradients,
+        first: range.start,
+    };
+    let mut film = Film::new(crop, setup.camera.width as usize);
+    let cancelled = || {
+        passes
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+    };
+    match passes.time_limit {
+        None => {
+            let total = film.pixels();
+            let done = AtomicUsize::new(0);
+            let report = |n: usize| progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
+            let plan = |_: usize| range.clone();
+            if !film.add_samples(&ctx, &plan, &cancelled, &report) {
+                return Err(interrupted());
             }
         }
-        let n = done.fetch_add((x1 - x0) * (y1 - y0), Ordering::Relaxed) + (x1 - x0) * (y1 - y0);
-        progress(n, w * h);
-        res
-    };
-    let tiles: Vec<TileResult> = order.into_par_iter().map(render_tile).collect();
-
-    let mut out = RenderOutput {
-        width: w,
-        height: h,
-        spp,
-        beauty: vec![Vec3::ZERO; w * h],
-        variance: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
-        normal: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
-        depth: opts.aovs.then(|| vec![0.0; w * h]),
-        albedo: opts.aovs.then(|| vec![Vec3::ZERO; w * h]),
-        object_id: opts.aovs.then(|| vec![0.0; w * h]),
-        gradients: opts.gradients.then(|| GradientPlanes::new(w * h)),
-        stats: RenderStats::default(),
-    };
-    let mut rays = 0u64;
-    for t in &tiles {
-        rays += t.rays;
-        t.scatter(&mut out, w);
+        Some(limit) => {
+            let reached = timed_passes(&ctx, &mut film, range.clone(), limit, &cancelled, progress);
+            if reached == range.start {
+                return Err(interrupted());
+            }
+        }
     }
-    out.stats = RenderStats {
-        wall_time: start.elapsed(),
-        rays,
-    };
+    let mut out = film.output(opts, range.start, (setup.camera.width, setup.camera.height));
+    out.stats.wall_time = start.elapsed();
     Ok(out)
+}
+
+fn interrupted() -> crate::Error {
+    crate::Error::Interrupted("before the first pass finished; nothing was written".into())
+}
+
+/// Passes of doubling sample counts from `range.start`, each sized to the time
+/// left at the rate measured so far, until `limit` or `range.end`; returns the
+/// first sample index not rendered. Only the first pass runs regardless of the
+/// clock (so that there is an image); a pass overtaken by the limit or by a
+/// cancel is abandoned.
+fn timed_passes(
+    ctx: &SampleContext,
+    film: &mut Film,
+    range: Range<u32>,
+    limit: Duration,
+    cancelled: &(dyn Fn() -> bool + Sync),
+    progress: Progress,
+) -> u32 {
+    let start = Instant::now();
+    let limit_ms = limit.as_millis().max(1) as usize;
+    let report = |_: usize| progress(start.elapsed().as_millis() as usize, limit_ms);
+    let mut next = range.start;
+    while next < range.end && !cancelled() {
+        let done = next - range.start;
+        let size = if done == 0 {
+            1
+        } else {
+            // Samples per pixel that fit in the time left at the rate so far.
+            let per_sample = start.elapsed().as_secs_f64() / done as f64;
+            let left = limit.as_secs_f64() - start.elapsed().as_secs_f64();
+            let fit = (left / per_sample.max(1e-9)).floor().min(u32::MAX as f64) as u32;
+            fit.min(done).min(range.end - next)
+        };
+        if size == 0 {
+            break;
+        }
+        let over = || cancelled() || (done > 0 && start.elapsed() > limit);
+        let pass = next..next + size;
+        if !film.add_samples(ctx, &|_| pass.clone(), &over, &report) {
+            break;
+        }
+        next += size;
+    }
+    next
+}
+
+/// What tracing one camera sample of a full-image pixel needs.
+pub(crate) struct SampleContext<'a> {
+    pub tracer: PathTracer<'a>,
+    pub camera: &'a crate::scene::Camera,
+    pub seed: u32,
+    pub gradients: bool,
+    /// The render's first sample index: its sample gives the object id.
+    pub first: u32,
+}
+
+/// The running sums of every pixel of a crop, tile by tile (tiles in a scrambled
+/// order, so that the pixels done so far are a fair sample of the image's cost:
+/// in index order the cheap sky rows come first and the ETA is 2–3× optimistic).
+#[derive(Clone)]
+pub(crate) struct Film {
+    crop: Crop,
+    full_width: usize,
+    tiles: Vec<FilmTile>,
+}
+
+#[derive(Clone)]
+struct FilmTile {
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+    pixels: Vec<PixelAccumulator>,
+}
+
+impl Film {
+    pub fn new(crop: Crop, full_width: usize) -> Self {
+        let (cx0, cy0) = (crop.x0 as usize, crop.y0 as usize);
+        let (cx1, cy1) = (crop.x1 as usize, crop.y1 as usize);
+        let tiles_x = (cx1 - cx0).div_ceil(TILE);
+        let tiles_y = (cy1 - cy0).div_ceil(TILE);
+        let tiles = scrambled_order(tiles_x * tiles_y)
+            .into_iter()
+            .map(|t| {
+                let (x0, y0) = (cx0 + t % tiles_x * TILE, cy0 + t / tiles_x * TILE);
+                let (x1, y1) = ((x0 + TILE).min(cx1), (y0 + TILE).min(cy1));
+                FilmTile {
+                    x0,
+                    y0,
+                    x1,
+                    y1,
+                    pixels: vec![PixelAccumulator::default(); (x1 - x0) * (y1 - y0)],
+                }
+            })
+            .collect();
+        Self {
+            crop,
+            full_width,
+            tiles,
+        }
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.crop.width() as usize * self.crop.height() as usize
+    }
+
+    /// Adds to every pixel the samples `plan(pixel)` names (pixel: linear index in
+    /// the full image); `report(n)` after each tile of `n` pixels. All or nothing:
+    /// when `cancelled()` turns true the film is left as it was and `false` returned.
+    pub fn add_samples(
+        &mut self,
+        ctx: &SampleContext,
+        plan: &(dyn Fn(usize) -> Range<u32> + Sync),
+        cancelled: &(dyn Fn() -> bool + Sync),
+        report: &(dyn Fn(usize) + Sync),
+    ) -> bool {
+        let w = self.full_width;
+        let tiles: Option<Vec<FilmTile>> = self
+            .tiles
+            .par_iter()
+            .map(|tile| {
+                let mut t = tile.clone();
+                let tw = t.x1 - t.x0;
+                for y in t.y0..t.y1 {
+                    if cancelled() {
+                        return None;
+                    }
+                    for x in t.x0..t.x1 {
+                        let pixel = y * w + x;
+                        let acc = &mut t.pixels[(y - t.y0) * tw + x - t.x0];
+                        for s in plan(pixel) {
+                            let r = camera_sample(
+                                &ctx.tracer,
+                                ctx.camera,
+                                pixel as u32,
+                                s,
+                                ctx.seed,
+                                ctx.gradients,
+                                Vec2::ZERO,
+                            );
+                            acc.add(&r, s, s == ctx.first);
+                        }
+                    }
+                }
+                report(tw * (t.y1 - t.y0));
+                Some(t)
+            })
+            .collect();
+        match tiles {
+            Some(t) if !cancelled() => {
+                self.tiles = t;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Calls `f(pixel, accumulator)` for every pixel (linear index in the full image).
+    pub fn for_each(&self, mut f: impl FnMut(usize, &PixelAccumulator)) {
+        for t in &self.tiles {
+            let tw = t.x1 - t.x0;
+            for (i, acc) in t.pixels.iter().enumerate() {
+                f((t.y0 + i / tw) * self.full_width + t.x0 + i % tw, acc);
+            }
+        }
+    }
+
+    /// The planes of the crop from each pixel's sums; `spp` is the most samples any
+    /// pixel has.
+    pub fn output(
+        &self,
+        opts: &RenderOptions,
+        first_sample: u32,
+        full: (u32, u32),
+    ) -> RenderOutput {
+        let (cw, ch) = (self.crop.width() as usize, self.crop.height() as usize);
+        let n = cw * ch;
+        let mut out = RenderOutput {
+            width: cw,
+            height: ch,
+            beauty: vec![Vec3::ZERO; n],
+            variance: opts.aovs.then(|| vec![Vec3::ZERO; n]),
+            normal: opts.aovs.then(|| vec![Vec3::ZERO; n]),
+            depth: opts.aovs.then(|| vec![0.0; n]),
+            albedo: opts.aovs.then(|| vec![Vec3::ZERO; n]),
+            object_id: opts.aovs.then(|| vec![0.0; n]),
+            gradients: opts.gradients.then(|| GradientPlanes::new(n)),
+            origin: (self.crop.x0 as usize, self.crop.y0 as usize),
+            display: (full.0 as usize, full.1 as usize),
+            first_sample,
+            merge: opts.merge_planes.then(|| MergePlanes {
+                hits: vec![0.0; n],
+                normal_len: vec![0.0; n],
+                grad_terms: opts.gradients.then(|| vec![[0.0; 10]; n]),
+            }),
+            ..Default::default()
+        };
+        let (cx0, cy0) = out.origin;
+        let mut rays = 0;
+        let mut spp = 0;
+        self.for_each(|pixel, acc| {
+            let (x, y) = (pixel % self.full_width, pixel / self.full_width);
+            let i = (y - cy0) * cw + x - cx0;
+            rays += acc.rays;
+            spp = spp.max(acc.count);
+            acc.store(&mut out, i);
+        });
+        out.spp = spp;
+        out.stats.rays = rays;
+        out
+    }
 }
 
 /// The indices `0..n` in a fixed pseudo-random order (sorted by a hash).
@@ -371,10 +742,14 @@ pub fn camera_sample_at(
 
 /// Running sums of one pixel's samples (f64, so thousands of samples add exactly
 /// enough for the variance estimate).
-#[derive(Default)]
-struct PixelAccumulator {
+#[derive(Clone, Default)]
+pub(crate) struct PixelAccumulator {
+    pub count: u32,
     sum: [f64; 3],
     sum_sq: [f64; 3],
+    /// Radiance sum of the samples of class A alone (half of them, see
+    /// [`is_class_a`]): the noise-adaptive sampler's second estimate.
+    class_a: [f64; 3],
     normal: Vec3,
     depth: f32,
     albedo: Vec3,
@@ -384,12 +759,25 @@ struct PixelAccumulator {
     gradient: GradientSample,
 }
 
+/// Splits the sample indices into two halves whose means are two independent
+/// estimates of the pixel, each of them stratified (Christensen et al. 2018,
+/// Sec. 10.2.1, as Cycles does: the parity of the odd bits of the index).
+pub fn is_class_a(sample: u32) -> bool {
+    (sample & 0xaaaa_aaaa).count_ones() & 1 == 1
+}
+
 impl PixelAccumulator {
-    fn add(&mut self, r: &SampleResult, first: bool) {
+    /// Adds sample `index`; `first`: it is the render's first sample (object id).
+    fn add(&mut self, r: &SampleResult, index: u32, first: bool) {
+        self.count += 1;
         let l = finite_or_zero(r.radiance);
+        let class_a = is_class_a(index);
         for (c, v) in l.to_array().into_iter().enumerate() {
             self.sum[c] += v as f64;
             self.sum_sq[c] += (v as f64) * (v as f64);
+            if class_a {
+                self.class_a[c] += v as f64;
+            }
         }
         if let Some(fh) = &r.first_hit {
             self.normal += finite_or_zero(fh.normal);
@@ -407,99 +795,82 @@ impl PixelAccumulator {
             self.gradient.add_scaled(g, 1.0);
         }
     }
-}
 
-struct TileResult {
-    x0: usize,
-    y0: usize,
-    w: usize,
-    beauty: Vec<Vec3>,
-    aovs: Option<Vec<[f32; 11]>>,
-    gradients: Option<Vec<GradientSample>>,
-    rays: u64,
-}
-
-impl TileResult {
-    fn new(x0: usize, y0: usize, w: usize, h: usize, aovs: bool, gradients: bool) -> Self {
-        Self {
-            x0,
-            y0,
-            w,
-            beauty: vec![Vec3::ZERO; w * h],
-            aovs: aovs.then(|| vec![[0.0; 11]; w * h]),
-            gradients: gradients.then(|| vec![GradientSample::default(); w * h]),
-            rays: 0,
-        }
+    /// The pixel mean I and the class-A estimate A (twice the class-A sum over the
+    /// sample count, so that E[A] = E[I]), RGB.
+    pub fn mean_and_half(&self) -> ([f64; 3], [f64; 3]) {
+        let n = self.count.max(1) as f64;
+        (self.sum.map(|s| s / n), self.class_a.map(|s| 2.0 * s / n))
     }
+}
 
-    fn store(&mut self, x: usize, y: usize, acc: &PixelAccumulator, spp: u32) {
+impl PixelAccumulator {
+    /// Writes this pixel's means into pixel `i` of `out`'s planes (those present).
+    fn store(&self, out: &mut RenderOutput, i: usize) {
+        let spp = self.count.max(1);
         let n = spp as f64;
-        let i = y * self.w + x;
-        let mean = [acc.sum[0] / n, acc.sum[1] / n, acc.sum[2] / n];
-        self.beauty[i] = Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
-        self.rays += acc.rays;
-        if let Some(g) = &mut self.gradients {
+        let mean = [self.sum[0] / n, self.sum[1] / n, self.sum[2] / n];
+        out.beauty[i] = Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
+        if let Some(planes) = &mut out.gradients {
             let mut mean = GradientSample::default();
-            mean.add_scaled(&acc.gradient, 1.0 / spp as f32);
-            g[i] = mean;
-        }
-        if let Some(a) = &mut self.aovs {
-            // Variance of the pixel mean: unbiased sample variance / n.
-            let var = |c: usize| -> f32 {
-                if spp < 2 {
-                    return 0.0;
-                }
-                let v = (acc.sum_sq[c] - acc.sum[c] * acc.sum[c] / n) / (n - 1.0);
-                (v.max(0.0) / n) as f32
-            };
-            let nrm = acc.normal.normalize_or_zero();
-            let inv = 1.0 / spp as f32;
-            a[i] = [
-                var(0),
-                var(1),
-                var(2),
-                nrm.x,
-                nrm.y,
-                nrm.z,
-                // Mean distance over the samples that hit something.
-                acc.depth / acc.hits.max(1) as f32,
-                acc.albedo.x * inv,
-                acc.albedo.y * inv,
-                acc.albedo.z * inv,
-                acc.object_id as f32,
-            ];
-        }
-    }
-
-    fn scatter(&self, out: &mut RenderOutput, width: usize) {
-        let h = self.beauty.len() / self.w;
-        for y in 0..h {
-            for x in 0..self.w {
-                let src = y * self.w + x;
-                let dst = (self.y0 + y) * width + self.x0 + x;
-                out.beauty[dst] = self.beauty[src];
-                if let (Some(g), Some(planes)) = (&self.gradients, &mut out.gradients) {
-                    planes.set(dst, &g[src]);
-                }
-                if let Some(a) = &self.aovs {
-                    let a = &a[src];
-                    if let Some(v) = &mut out.variance {
-                        v[dst] = Vec3::new(a[0], a[1], a[2]);
-                    }
-                    if let Some(v) = &mut out.normal {
-                        v[dst] = Vec3::new(a[3], a[4], a[5]);
-                    }
-                    if let Some(v) = &mut out.depth {
-                        v[dst] = a[6];
-                    }
-                    if let Some(v) = &mut out.albedo {
-                        v[dst] = Vec3::new(a[7], a[8], a[9]);
-                    }
-                    if let Some(v) = &mut out.object_id {
-                        v[dst] = a[10];
-                    }
-                }
+            mean.add_scaled(&self.gradient, 1.0 / spp as f32);
+            planes.set(i, &mean);
+            if let Some(terms) = out.merge.as_mut().and_then(|m| m.grad_terms.as_mut()) {
+                let [sv, dv, cdv, vis, ind] =
+                    [&mean.sv, &mean.dv, &mean.cdv, &mean.vis, &mean.indirect];
+                let lum = |g: &[Vec3; 2], k: usize| finite_or_zero_f32(luminance(g[k]));
+                terms[i] = [
+                    lum(sv, 0),
+                    lum(sv, 1),
+                    lum(dv, 0),
+                    lum(dv, 1),
+                    lum(cdv, 0),
+                    lum(cdv, 1),
+                    lum(vis, 0),
+                    lum(vis, 1),
+                    lum(ind, 0),
+                    lum(ind, 1),
+                ];
             }
         }
+        if out.variance.is_none() {
+            return;
+        }
+        // Variance of the pixel mean: unbiased sample variance / n.
+        let var = |c: usize| -> f32 {
+            if spp < 2 {
+                return 0.0;
+            }
+            let v = (self.sum_sq[c] - self.sum[c] * self.sum[c] / n) / (n - 1.0);
+            (v.max(0.0) / n) as f32
+        };
+        let inv = 1.0 / spp as f32;
+        let set3 = |p: &mut Option<Vec<Vec3>>, v: Vec3| {
+            if let Some(p) = p {
+                p[i] = v;
+            }
+        };
+        set3(&mut out.variance, Vec3::new(var(0), var(1), var(2)));
+        set3(&mut out.normal, self.normal.normalize_or_zero());
+        set3(&mut out.albedo, self.albedo * inv);
+        if let Some(d) = &mut out.depth {
+            // Mean distance over the samples that hit something.
+            d[i] = self.depth / self.hits.max(1) as f32;
+        }
+        if let Some(id) = &mut out.object_id {
+            id[i] = self.object_id as f32;
+        }
+        if let Some(m) = &mut out.merge {
+            m.hits[i] = self.hits as f32;
+            m.normal_len[i] = self.normal.length() / spp as f32;
+        }
+    }
+}
+
+fn finite_or_zero_f32(x: f32) -> f32 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
     }
 }

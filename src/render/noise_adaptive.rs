@@ -1,0 +1,256 @@
+//! scene + BVH → a render whose pixels stop sampling where their noise is below a
+//! threshold: the per-pixel adaptive sampler of Blender Cycles
+//! (`kernel/film/adaptive_sampling.h`, after Dammertz et al. 2009, "A
+//! hierarchical automatic stopping condition for Monte Carlo global
+//! illumination", Sec. 2.1, applied per pixel), the baseline that `compare` runs
+//! against the gradient-driven strategies.
+//!
+//! Each pixel keeps a second estimate A from half of its samples (class A, a
+//! stratified half: [`super::is_class_a`]); every `check_every` samples a pixel whose
+//! error |I − A|₁ / √(ΣI) (see [`pixel_error`]) is below the threshold stops, and
+//! the neighbours of every pixel that goes on are made to go on too (a 3×3
+//! dilation, Cycles' two box-filter passes). Samples are addressed by index, so the
+//! image is the same for any thread count.
+
+use super::{extent, Film, RenderOptions, RenderOutput, SampleContext, Setup};
+use super::{Crop, Progress};
+use crate::accel::Accel;
+use crate::scene::Scene;
+use crate::{Error, Result};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+/// Cycles scales the user's threshold by 5 (`scene/integrator.cpp`: "makes the
+/// threshold more similar to what it was before"); kept, so that a value means
+/// what it means in Blender's "Noise Threshold".
+pub const THRESHOLD_SCALE: f64 = 5.0;
+
+/// The sampler's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseAdaptive {
+    /// Blender's "Noise Threshold" (e.g. 0.01); 0 never stops before `max_spp`.
+    pub threshold: f32,
+    /// Samples every pixel gets before its first check.
+    pub min_spp: u32,
+    /// Samples no pixel exceeds.
+    pub max_spp: u32,
+    /// Samples between two checks (Cycles: 16).
+    pub check_every: u32,
+    /// Stop at this wall time: the round under way is abandoned (only the first
+    /// round always completes). The image then depends on the machine's speed,
+    /// no longer on the seed alone.
+    pub time_limit: Option<Duration>,
+}
+
+impl NoiseAdaptive {
+    /// Cycles' defaults: min spp max(4, ⌈16 / threshold^0.3⌉) ("threshold 0.1 →
+    /// 32, 0.01 → 64"), a check every 16 samples.
+    pub fn new(threshold: f32, max_spp: u32) -> Self {
+        let auto = if threshold > 0.0 {
+            (16.0 / threshold.powf(0.3)).ceil().min(u32::MAX as f32) as u32
+        } else {
+            max_spp
+        };
+        Self {
+            threshold,
+            min_spp: auto.max(4).min(max_spp.max(1)),
+            max_spp,
+            check_every: 16,
+            time_limit: None,
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        let err = |option: &str, message: String| {
+            Err(Error::Option {
+                option: option.into(),
+                message,
+            })
+        };
+        if !(self.threshold.is_finite() && self.threshold >= 0.0) {
+            return err(
+                "--noise-threshold",
+                format!("{}: expected a number ≥ 0", self.threshold),
+            );
+        }
+        if self.min_spp == 0 || self.min_spp > self.max_spp {
+            return err(
+                "--min-spp",
+                format!(
+                    "{}: expected 1 ≤ min spp ≤ --spp ({})",
+                    self.min_spp, self.max_spp
+                ),
+            );
+        }
+        if self.check_every == 0 {
+            return err("--check-every", "must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// Cycles' per-pixel error from the pixel mean `i` and the half-sample estimate
+/// `a` (RGB): |I − A|₁ / (10⁻⁴ + √ΣI), where ΣI < 1, and |I − A|₁ / (10⁻⁴ + ΣI)
+/// above (bright pixels, which a display clips, need less relative precision).
+pub fn pixel_error(i: [f64; 3], a: [f64; 3]) -> f64 {
+    let diff: f64 = (0..3).map(|c| (i[c] - a[c]).abs()).sum();
+    let intensity: f64 = i.iter().sum();
+    let normalize = if intensity < 1.0 {
+        intensity.max(0.0).sqrt()
+    } else {
+        intensity
+    };
+    diff / (1e-4 + normalize)
+}
+
+/// Renders the whole image with per-pixel adaptive sample counts (`opts.spp` is
+/// ignored: `settings.max_spp` caps every pixel). The output's `spp` is the
+/// most any pixel took and `spp_map` each pixel's count (`samples.spp`).
+/// `progress` gets (samples traced, pixels × max_spp).
+pub fn render_noise_adaptive(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    settings: &NoiseAdaptive,
+    progress: Progress,
+) -> Result<RenderOutput> {
+    let start = Instant::now();
+    settings.check()?;
+    let opts = RenderOptions {
+        spp: Some(settings.max_spp),
+        crop: None,
+        sample_range: None,
+        ..opts.clone()
+    };
+    let setup = Setup::new(scene, &opts)?;
+    extent(&setup, &opts)?;
+    let (w, h) = (setup.camera.width as usize, setup.camera.height as usize);
+    let ctx = SampleContext {
+        tracer: setup.tracer(scene, accel),
+        camera: &setup.camera,
+        seed: setup.seed,
+        gradients: opts.gradients,
+        first: 0,
+    };
+    let mut film = Film::new(Crop::full(w as u32, h as u32), w);
+    let mut counts = vec![0u32; w * h];
+    let mut active = vec![true; w * h];
+    let step = settings.check_every;
+    let first = settings.min_spp.div_ceil(step) * step;
+    let mut next: Vec<u32> = vec![first.min(settings.max_spp); w * h];
+    let traced = AtomicUsize::new(0);
+    let budget = w * h * settings.max_spp as usize;
+    let threshold = settings.threshold as f64 * THRESHOLD_SCALE;
+    loop {
+        let plan = |p: usize| {
+            if active[p] {
+                counts[p]..next[p]
+            } else {
+                0..0
+            }
+        };
+        let report = |_: usize| {};
+        let planned: usize = (0..w * h).map(|p| plan(p).len()).sum();
+        // Every round but the first is abandoned when it overruns the time limit,
+        // so that an equal-time comparison is one.
+        let first_round = counts.iter().all(|&c| c == 0);
+        let over = || !first_round && settings.time_limit.is_some_and(|t| start.elapsed() > t);
+        if !film.add_samples(&ctx, &plan, &over, &report) {
+            break;
+        }
+        progress(
+            traced.fetch_add(planned, Ordering::Relaxed) + planned,
+            budget,
+        );
+        for p in 0..w * h {
+            if active[p] {
+                counts[p] = next[p];
+            }
+        }
+        let mut unconverged = vec![false; w * h];
+        film.for_each(|p, acc| {
+            if active[p] && counts[p] < settings.max_spp {
+                let (i, a) = acc.mean_and_half();
+                unconverged[p] = pixel_error(i, a) >= threshold;
+            }
+        });
+        active = dilate(&unconverged, w, h);
+        for p in 0..w * h {
+            active[p] &= counts[p] < settings.max_spp;
+            next[p] = (counts[p] + step).min(settings.max_spp);
+        }
+        let out_of_time = settings.time_limit.is_some_and(|t| start.elapsed() > t);
+        if out_of_time || !active.contains(&true) {
+            break;
+        }
+    }
+    let mut out = film.output(&opts, 0, (w as u32, h as u32));
+    out.spp_map = Some(counts.iter().map(|&c| c as f32).collect());
+    out.stats.wall_time = start.elapsed();
+    Ok(out)
+}
+
+/// Every pixel within one pixel (3×3) of a set one: Cycles' `filter_x` then
+/// `filter_y` passes, so that the neighbours of a noisy pixel go on sampling.
+fn dilate(mask: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let mut rows = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let lo = x.saturating_sub(1);
+            let hi = (x + 1).min(w - 1);
+            rows[y * w + x] = (lo..=hi).any(|k| mask[y * w + k]);
+        }
+    }
+    let mut out = vec![false; w * h];
+    for y in 0..h {
+        let lo = y.saturating_sub(1);
+        let hi = (y + 1).min(h - 1);
+        for x in 0..w {
+            out[y * w + x] = (lo..=hi).any(|k| rows[k * w + x]);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::is_class_a;
+
+    #[test]
+    fn error_uses_sqrt_below_unit_intensity_and_linear_above() {
+        // ΣI = 0.25: √ = 0.5; |I − A|₁ = 0.03.
+        let e = pixel_error([0.1, 0.1, 0.05], [0.11, 0.09, 0.06]);
+        assert!((e - 0.03 / (1e-4 + 0.5)).abs() < 1e-12, "{e}");
+        // ΣI = 4: normalised by 4, not 2.
+        let e = pixel_error([2.0, 1.0, 1.0], [2.1, 1.0, 1.0]);
+        assert!((e - 0.1 / (1e-4 + 4.0)).abs() < 1e-12, "{e}");
+        // A black pixel with a black half-estimate has no error.
+        assert_eq!(pixel_error([0.0; 3], [0.0; 3]), 0.0);
+    }
+
+    #[test]
+    fn class_a_is_half_of_every_aligned_block_of_four() {
+        for block in 0..64u32 {
+            let n = (0..4).filter(|k| is_class_a(block * 4 + k)).count();
+            assert_eq!(n, 2, "block {block}");
+        }
+    }
+
+    #[test]
+    fn dilation_reaches_the_eight_neighbours_only() {
+        let (w, h) = (5, 4);
+        let mut m = vec![false; w * h];
+        m[w + 2] = true;
+        let d = dilate(&m, w, h);
+        let set: Vec<usize> = (0..w * h).filter(|&i| d[i]).collect();
+        assert_eq!(set, vec![1, 2, 3, 6, 7, 8, 11, 12, 13]);
+    }
+
+    #[test]
+    fn cycles_default_min_samples() {
+        assert_eq!(NoiseAdaptive::new(0.1, 1024).min_spp, 32);
+        assert_eq!(NoiseAdaptive::new(0.01, 1024).min_spp, 64);
+        assert_eq!(NoiseAdaptive::new(0.001, 1024).min_spp, 128);
+    }
+}
