@@ -17,6 +17,12 @@
 //! Beyond the paper, the domain can be the cone of a sphere light or the solid
 //! angle of a rectangular light, not only the hemisphere of an environment, so
 //! soft shadows of local lights carry visibility gradients too.
+//!
+//! A silhouette lying in a plane through the axis (a vertical blocker edge under
+//! the sky) is parallel to every φ-line and never a θ-jump: Eq. 48 alone misses
+//! it. The renderer therefore also marches a ring at fixed θ per camera sample,
+//! whose φ-jumps see that boundary squarely, and combines the two families by the
+//! balance heuristic on their crossing densities ([`trace_line_and_ring`]).
 
 use super::sphere_light::{cone_flow, ConeLaw};
 use crate::accel::{Accel, PrimRef};
@@ -101,7 +107,7 @@ pub fn trace_line(
 }
 
 /// One φ-line (as [`trace_line`], its points reported to `on_point`) plus one ring
-/// of `n_theta` shadow rays at fixed θ_r, whose φ-jumps are the same boundary seen
+/// of shadow rays at fixed θ_r (`ring_rays` of them), whose φ-jumps are the same boundary seen
 /// in the other parametrisation (Eq. 48 with θ and φ exchanged:
 /// ∂B = ∫_θ Σ_j sgn_j T sin θ ∂φ_j dθ). Both estimate one boundary integral,
 /// ∂B = −∮ σ T v_n ds over the blockers' silhouettes on the sphere of directions
