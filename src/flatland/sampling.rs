@@ -48,8 +48,8 @@
 //! Entry point for the figures: [`write_sampling_figures`].
 
 use super::figures::{push_row, write, Panel, Svg};
-use super::quadrature::GaussLegendre;
 use super::{Lighting, Scene};
+use crate::math::quadrature::GaussLegendre;
 use crate::{Error, Result};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -196,7 +196,7 @@ impl BumpyReceiver {
     pub fn shading_at_normal(&self, nu: f64) -> f64 {
         let (lo, hi) = Self::support(nu);
         self.rule
-            .integrate(lo, hi, |w| self.radiance(w) * (w - nu).cos())
+            .integrate(lo, hi, super::PANEL, |w| self.radiance(w) * (w - nu).cos())
     }
 
     /// `∂B/∂ν = ∫ L(ω) sin(ω − ν) dω`: the `L_θ ⊗ ρ` convolution of Eq. (25)
@@ -204,7 +204,7 @@ impl BumpyReceiver {
     pub fn shading_normal_derivative(&self, nu: f64) -> f64 {
         let (lo, hi) = Self::support(nu);
         self.rule
-            .integrate(lo, hi, |w| self.radiance(w) * (w - nu).sin())
+            .integrate(lo, hi, super::PANEL, |w| self.radiance(w) * (w - nu).sin())
     }
 
     /// The image `B(x)` (orthographic view from above; a diffuse receiver looks the
@@ -855,7 +855,10 @@ mod tests {
         // ν = 0: the bump-free receiver of the flatland module, B = ∫ T(θ) dθ.
         let r = BumpyReceiver::paper_fig17();
         let l = r.lighting();
-        let direct = GaussLegendre::new(16).integrate(-FRAC_PI_2, FRAC_PI_2, |t| l.transport(t));
+        let direct =
+            GaussLegendre::new(16).integrate(-FRAC_PI_2, FRAC_PI_2, crate::flatland::PANEL, |t| {
+                l.transport(t)
+            });
         assert!((r.shading_at_normal(0.0) - direct).abs() < 1e-14);
         // Symmetric lighting: B is even in ν, ∂B/∂ν odd and zero at 0.
         assert!(r.shading_normal_derivative(0.0).abs() < 1e-14);

@@ -4,6 +4,7 @@
 
 pub mod distribution;
 pub mod dual;
+pub mod quadrature;
 pub mod sampler;
 pub mod scalar;
 pub mod warp;

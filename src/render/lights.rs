@@ -43,6 +43,10 @@ pub struct LightSample {
     pub pdf: f32,
     /// Point on the light and its normal; `None` for the environment (at infinity).
     pub point: Option<(Vec3, Vec3)>,
+    /// For a sphere light sampled in the cone it subtends: its (centre, radius), so
+    /// the gradient stage can hold the sample's cone coordinates fixed
+    /// (`gradients::sphere_light`, law `Uniform`).
+    pub cone: Option<(Vec3, f32)>,
 }
 
 /// How the environment is importance-sampled: built only for scenes that have one.
@@ -258,6 +262,7 @@ impl LightSet {
             radiance: env.eval(wi),
             pdf,
             point: None,
+            cone: None,
         })
     }
 
@@ -387,6 +392,7 @@ fn sample_triangle(
         radiance: m.emission,
         pdf: dist2 / (area * cos_l),
         point: Some((q, n)),
+        cone: None,
     })
 }
 
@@ -398,7 +404,8 @@ fn sample_sphere(scene: &Scene, i: u32, p: Vec3, u: Vec2) -> Option<LightSample>
     let to_c = s.center - p;
     let dist2 = to_c.length_squared();
     let r2 = s.radius * s.radius;
-    let (wi, q, n) = if dist2 <= r2 * 1.0001 {
+    let inside = dist2 <= r2 * 1.0001;
+    let (wi, q, n) = if inside {
         // Inside (or on) the light: uniform area sampling of the whole sphere.
         let n = warp::square_to_uniform_sphere(u);
         let q = s.center + s.radius * n;
@@ -423,6 +430,7 @@ fn sample_sphere(scene: &Scene, i: u32, p: Vec3, u: Vec2) -> Option<LightSample>
         radiance: s.emission,
         pdf: sphere_pdf(scene, i, p, q, n),
         point: Some((q, n)),
+        cone: (!inside).then_some((s.center, s.radius)),
     })
 }
 

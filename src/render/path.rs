@@ -4,7 +4,8 @@
 
 use super::gradients::geometry::{hit_duals, HitDuals};
 use super::gradients::shading::{self, LightPoint};
-use super::gradients::visibility::{trace_line, Domain, LinePoint};
+use super::gradients::sphere_light::{self, ConeLaw};
+use super::gradients::visibility::{trace_line_and_ring, Domain, LinePoint};
 use super::gradients::{GradientSample, SV};
 use super::interaction::{interaction, offset_origin, segment_between, Interaction};
 use super::lights::{LightSet, LineLight};
@@ -331,10 +332,28 @@ impl PathTracer<'_> {
         let w = power_heuristic(ls.pdf, bsdf_pdf);
         // The gradient uses this light sample alone (weight 1): an unbiased
         // estimate of ∂(direct light) on its own.
+        // A sphere light's sample is held fixed in its cone's coordinates, whose
+        // flow keeps the variance bounded at the rim (issue 12, D2).
         if let Some(c) = capture {
             let far = self.far_light.map(|k| (c.hd.cv, k));
-            let lp = light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far);
-            c.g.add_lanes(&shading::direct_sample(material, &c.hd, &lp), 1.0);
+            let lanes = match ls.cone {
+                Some((centre, radius)) => sphere_light::direct_sample(
+                    material,
+                    &c.hd,
+                    centre,
+                    radius,
+                    ls.wi,
+                    ls.radiance,
+                    1.0 / ls.pdf,
+                    ConeLaw::Uniform,
+                    far,
+                ),
+                None => {
+                    let lp = light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far);
+                    shading::direct_sample(material, &c.hd, &lp)
+                }
+            };
+            c.g.add_lanes(&lanes, 1.0);
         }
         (beta * f * wi_local.z * ls.radiance * (w / ls.pdf), 1)
     }
@@ -427,11 +446,31 @@ impl PathTracer<'_> {
             let le = radiance_from(pt.wi);
             radiance += material.eval(wo, wl) * wl.z * le / (pt.pdf * pmf);
             let far = self.far_light.map(|k| (hd.cv, k));
-            let lp = light_point(p, pt.light_point, pt.wi, le, pt.pdf, far);
-            g.add_lanes(&shading::direct_sample(material, hd, &lp), 1.0 / pmf);
+            let c = if let Domain::Cone {
+                sphere: Some((centre, radius)),
+                ..
+            } = domain
+            {
+                let w = 1.0 / pt.pdf;
+                sphere_light::direct_sample(
+                    material,
+                    hd,
+                    centre,
+                    radius,
+                    pt.wi,
+                    le,
+                    w,
+                    ConeLaw::Line,
+                    far,
+                )
+            } else {
+                let lp = light_point(p, pt.light_point, pt.wi, le, pt.pdf, far);
+                shading::direct_sample(material, hd, &lp)
+            };
+            g.add_lanes(&c, 1.0 / pmf);
         };
         let dx = [hd.x.lane(SV), hd.x.lane(SV + 1)];
-        let est = trace_line(
+        let est = trace_line_and_ring(
             scene,
             self.accel,
             p,

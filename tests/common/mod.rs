@@ -36,49 +36,17 @@ impl Rng {
     }
 }
 
-/// Gauss-Legendre nodes and weights on [-1, 1] (Newton iteration on P_n; accurate to
-/// ~1e-15 for n up to a few hundred).
+/// Gauss-Legendre nodes and weights on [-1, 1], from the crate's one implementation
+/// (`gradtrace::math::quadrature`).
 pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n.div_ceil(2) {
-        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, 0.0);
-            for j in 0..n {
-                let p2 = p1;
-                p1 = p0;
-                p0 = ((2 * j + 1) as f64 * z * p1 - j as f64 * p2) / (j + 1) as f64;
-            }
-            dp = n as f64 * (z * p0 - p1) / (z * z - 1.0);
-            let dz = p0 / dp;
-            z -= dz;
-            if dz.abs() < 1e-16 {
-                break;
-            }
-        }
-        x[i] = -z;
-        x[n - 1 - i] = z;
-        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-        w[n - 1 - i] = w[i];
-    }
-    (x, w)
+    let rule = gradtrace::math::quadrature::GaussLegendre::new(n);
+    (rule.nodes().to_vec(), rule.weights().to_vec())
 }
 
 /// A composite Gauss-Legendre rule on [a, b]: `panels` equal panels of `order` nodes.
 /// Returns (nodes, weights) so that Σ w f(x) ≈ ∫_a^b f.
 pub fn composite_gl(a: f64, b: f64, panels: usize, order: usize) -> Vec<(f64, f64)> {
-    let (x, w) = gauss_legendre(order);
-    let h = (b - a) / panels as f64;
-    let mut out = Vec::with_capacity(panels * order);
-    for p in 0..panels {
-        let lo = a + h * p as f64;
-        for k in 0..order {
-            out.push((lo + 0.5 * h * (x[k] + 1.0), 0.5 * h * w[k]));
-        }
-    }
-    out
+    gradtrace::math::quadrature::GaussLegendre::new(order).composite(a, b, panels)
 }
 
 /// Adaptive Simpson quadrature of `f` on [a, b] to absolute tolerance `tol`.

@@ -19,6 +19,10 @@
 //! Differentiating at a fixed area sample is unbiased for the derivative of the
 //! unshadowed-boundary part of the integral, because the light's domain does not
 //! move with x; the moving visibility boundary is the separate visibility term.
+//! Sphere lights are the exception: held fixed in area measure their samples'
+//! derivative grows as 1/cos θ_y at the silhouette (unbounded variance), so they
+//! are held fixed in the coordinates of the cone they subtend instead
+//! (`sphere_light`), which maps that cone onto itself for every x.
 //!
 //! Indirect light: the path's continuation from the first hit is a direction
 //! sample of the same kind, so f·(n·ω_i)₊ at that fixed direction, over the same
@@ -28,6 +32,7 @@
 
 pub mod geometry;
 pub mod shading;
+pub mod sphere_light;
 pub mod visibility;
 
 use crate::math::dual::{DVec3, Dual};

@@ -17,8 +17,16 @@
 //! Beyond the paper, the domain can be the cone of a sphere light or the solid
 //! angle of a rectangular light, not only the hemisphere of an environment, so
 //! soft shadows of local lights carry visibility gradients too.
+//!
+//! A silhouette lying in a plane through the axis (a vertical blocker edge under
+//! the sky) is parallel to every φ-line and never a θ-jump: Eq. 48 alone misses
+//! it. The renderer therefore also marches a ring at fixed θ per camera sample,
+//! whose φ-jumps see that boundary squarely, and combines the two families by the
+//! balance heuristic on their crossing densities ([`trace_line_and_ring`]).
 
+use super::sphere_light::{cone_flow, ConeLaw};
 use crate::accel::{Accel, PrimRef};
+use crate::math::quadrature::GaussLegendre;
 use crate::math::{Frame, Ray, Vec3};
 use crate::render::interaction::offset_origin;
 use crate::scene::Scene;
@@ -74,6 +82,11 @@ pub struct LinePoint {
 /// visibility) to `on_point`, and returns the visibility gradient for the two
 /// displacements `dx` of the shading point. `transport(ω)` is T: the integrand of
 /// B in solid angle (L · f · cos), evaluated at jump directions.
+///
+/// This is Eq. 48 as printed, the θ-jumps of one line alone: an edge lying in a
+/// plane through the axis never shows up as a θ-jump and is missed (see
+/// [`trace_line_and_ring`], which the renderer uses). Kept for the tests that
+/// integrate single lines over φ against closed forms.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_line(
     scene: &Scene,
@@ -89,151 +102,567 @@ pub fn trace_line(
     transport: &dyn Fn(Vec3) -> Vec3,
     on_point: &mut dyn FnMut(&LinePoint),
 ) -> LineEstimate {
-    let frame = match domain {
-        Domain::Cone { frame, .. } | Domain::Rect { frame, .. } => *frame,
-    };
-    let (sp, cp) = phi.sin_cos();
-    let dphi = frame.s * cp + frame.t * sp;
-    let dir = |theta: f32| {
-        let (st, ct) = theta.sin_cos();
-        frame.n * ct + dphi * st
-    };
-    let theta_max = match *domain {
-        Domain::Cone { theta_max, .. } => theta_max,
-        Domain::Rect {
-            corner,
-            edge_u,
-            edge_v,
-            ..
-        } => rect_exit_angle(x, frame.n, dphi, corner, edge_u, edge_v),
-    };
-    let mut out = LineEstimate::default();
-    if theta_max.is_nan() || theta_max <= 0.0 {
-        return out;
+    let m = Marcher::new(scene, accel, x, ng, domain, refine_steps, dx, transport);
+    m.line(phi, theta_jitter, n_theta, Families::Line, on_point)
+}
+
+/// One φ-line (as [`trace_line`], its points reported to `on_point`) plus one ring
+/// of shadow rays at fixed θ_r (`ring_rays` of them), whose φ-jumps are the same boundary seen
+/// in the other parametrisation (Eq. 48 with θ and φ exchanged:
+/// ∂B = ∫_θ Σ_j sgn_j T sin θ ∂φ_j dθ). Both estimate one boundary integral,
+/// ∂B = −∮ σ T v_n ds over the blockers' silhouettes on the sphere of directions
+/// (v_n: the silhouette's normal velocity, σ = +1 where the visible side is along
+/// its normal), and each crossing is weighted by the balance heuristic over the
+/// two families' crossing densities per unit arc length,
+/// p_line = |m·e_θ| / (2π sin θ) (φ uniform) and p_ring = |m·e_φ| / Θ (θ_r uniform
+/// on [0, Θ]), m the silhouette's normal. Their sum is at least min(1/2π, 1/Θ), so
+/// no orientation is missed and no crossing's weight blows up: edges in a plane
+/// through the axis (a vertical blocker edge under the sky, issue 12 D1), which
+/// lines never cross, are crossed squarely by rings, and the (φ − φ0)^(−1/2)
+/// spikes of footnote 4, where a line grazes a curved blocker, are damped the
+/// same way. The ring starts at φ (uniform) and takes θ_r = Θ · frac(jitter + ½),
+/// uniform too: each family on its own is unbiased, so their correlation is not.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_line_and_ring(
+    scene: &Scene,
+    accel: &Accel,
+    x: Vec3,
+    ng: Vec3,
+    domain: &Domain,
+    phi: f32,
+    theta_jitter: f32,
+    n_theta: u32,
+    refine_steps: u32,
+    dx: [Vec3; 2],
+    transport: &dyn Fn(Vec3) -> Vec3,
+    on_point: &mut dyn FnMut(&LinePoint),
+) -> LineEstimate {
+    let m = Marcher::new(scene, accel, x, ng, domain, refine_steps, dx, transport);
+    let ring_max = m.ring_extent();
+    if ring_max.is_nan() || ring_max <= 0.0 {
+        return m.line(phi, theta_jitter, n_theta, Families::Line, on_point);
     }
-    let step = theta_max / n_theta as f32;
-    // Probe one direction: visible?, and the point on the light. An any-hit
-    // query suffices; the blocker itself is only looked up at jumps.
-    let shadow_ray = |theta: f32| -> Option<(Ray, Option<(Vec3, Vec3)>)> {
-        let w = dir(theta);
-        let (t_max, lp) = light_extent(domain, x, w);
-        // Below the geometric horizon the receiver itself blocks.
-        if t_max <= 0.0 || w.dot(ng) <= 0.0 {
+    let both = Families::Both(ring_max);
+    let mut est = m.line(phi, theta_jitter, n_theta, both, on_point);
+    let theta_r = ring_max * (theta_jitter + 0.5).fract();
+    let ring = m.ring(theta_r, phi, ring_rays(n_theta, theta_r, ring_max), both);
+    for k in 0..2 {
+        est.vis[k] += ring.vis[k];
+    }
+    est.rays += ring.rays;
+    est.jumps += ring.jumps;
+    est
+}
+
+/// Which families of curves sample the boundary, for the crossing densities: lines
+/// alone (Eq. 48), rings alone (Θ: the range of θ_r), or both (balance heuristic).
+#[derive(Clone, Copy, Debug)]
+enum Families {
+    Line,
+    Ring(f32),
+    Both(f32),
+}
+
+impl Families {
+    /// The density per unit arc length with which the families cross a silhouette
+    /// point at polar angle θ whose normal m has components m_θ, m_φ; `None` where
+    /// a lone family runs (nearly) along the silhouette (footnote 3: the crossing
+    /// slides along the curve and its derivative is unbounded; it is left out).
+    fn density(self, m_theta: f32, m_phi: f32, sin_theta: f32) -> Option<f32> {
+        let p_line = m_theta / (TAU * sin_theta);
+        match self {
+            Families::Line if m_theta < 1e-4 => None,
+            Families::Line => Some(p_line),
+            Families::Ring(_) if m_phi < 1e-4 => None,
+            Families::Ring(big) => Some(m_phi / big),
+            Families::Both(big) => Some(p_line + m_phi / big),
+        }
+    }
+}
+
+/// A line (parameter θ, at azimuth direction `e`) or a ring (parameter φ, at `theta`).
+#[derive(Clone, Copy, Debug)]
+enum Curve {
+    Line { e: Vec3 },
+    Ring { theta: f32 },
+}
+
+/// Rays on the ring at θ_r: as many as keep its spacing, 2π sin θ_r / n, that of
+/// the line, Θ / `n_line` (a blocker narrower than the spacing is missed), at most
+/// 4 `n_line`. Over the hemisphere that is 2.5 `n_line` on average.
+fn ring_rays(n_line: u32, theta_r: f32, big: f32) -> u32 {
+    let n = n_line as f32 * TAU * theta_r.sin() / big;
+    (n.round() as u32).clamp(1, 4 * n_line.max(1))
+}
+
+/// One ring alone (no line, no MIS): `n_phi` shadow rays at θ_r = Θ · `u_theta`
+/// starting at φ0, its φ-jumps weighted by the ring's crossing density alone —
+/// Eq. 48 with θ and φ exchanged. For tests that integrate it over θ_r.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_ring(
+    scene: &Scene,
+    accel: &Accel,
+    x: Vec3,
+    ng: Vec3,
+    domain: &Domain,
+    phi0: f32,
+    u_theta: f32,
+    n_phi: u32,
+    refine_steps: u32,
+    dx: [Vec3; 2],
+    transport: &dyn Fn(Vec3) -> Vec3,
+) -> LineEstimate {
+    let m = Marcher::new(scene, accel, x, ng, domain, refine_steps, dx, transport);
+    let big = m.ring_extent();
+    if big.is_nan() || big <= 0.0 {
+        return LineEstimate::default();
+    }
+    m.ring(big * u_theta, phi0, n_phi, Families::Ring(big))
+    // (`n_phi` as given: the tests choose the spacing.)
+}
+
+/// The shared state of one shading point's line and ring.
+struct Marcher<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    x: Vec3,
+    ng: Vec3,
+    domain: &'a Domain,
+    frame: Frame,
+    refine: u32,
+    dx: [Vec3; 2],
+    transport: &'a dyn Fn(Vec3) -> Vec3,
+}
+
+impl<'a> Marcher<'a> {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        x: Vec3,
+        ng: Vec3,
+        domain: &'a Domain,
+        refine: u32,
+        dx: [Vec3; 2],
+        transport: &'a dyn Fn(Vec3) -> Vec3,
+    ) -> Self {
+        let frame = match domain {
+            Domain::Cone { frame, .. } | Domain::Rect { frame, .. } => *frame,
+        };
+        Self {
+            scene,
+            accel,
+            x,
+            ng,
+            domain,
+            frame,
+            refine,
+            dx,
+            transport,
+        }
+    }
+
+    /// The shadow ray along `w` and the point it reaches on the light; `None` below
+    /// the geometric horizon (the receiver itself blocks) or off the light.
+    fn shadow_ray(&self, w: Vec3) -> Option<(Ray, Option<(Vec3, Vec3)>)> {
+        let (t_max, lp) = light_extent(self.domain, self.x, w);
+        if t_max <= 0.0 || w.dot(self.ng) <= 0.0 {
             return None;
         }
         // The segment must end short of the light as seen from the offset origin,
         // not from x: the offset moves the origin toward the light.
-        let o = offset_origin(x, ng, w);
-        let t_o = light_extent(domain, o, w).0;
+        let o = offset_origin(self.x, self.ng, w);
+        let t_o = light_extent(self.domain, o, w).0;
         Some((Ray::segment(o, w, t_o * (1.0 - 1e-4)), lp))
-    };
-    let probe = |theta: f32| -> (bool, Option<(Vec3, Vec3)>) {
-        match shadow_ray(theta) {
-            Some((ray, lp)) => (!accel.occluded(&ray), lp),
+    }
+
+    /// Visible?, and the point on the light. An any-hit query suffices; the
+    /// blocker itself is only looked up at jumps.
+    fn probe(&self, w: Vec3) -> (bool, Option<(Vec3, Vec3)>) {
+        match self.shadow_ray(w) {
+            Some((ray, lp)) => (!self.accel.occluded(&ray), lp),
             None => (false, None),
         }
-    };
-    let blocker = |theta: f32| -> BlockerHit {
-        let (ray, _) = shadow_ray(theta)?;
-        accel.intersect(&ray).map(|h| (h.t, h.prim))
-    };
-    // (θ, visible) of the previous sample on the line.
-    let mut prev: Option<(f32, bool)> = None;
-    for i in 0..n_theta {
-        let theta = (i as f32 + theta_jitter) * step;
-        let (visible, lp) = probe(theta);
-        out.rays += 1;
-        let (st, _) = theta.sin_cos();
-        let pdf = 1.0 / (TAU * st.max(1e-12) * step);
-        on_point(&LinePoint {
-            wi: dir(theta),
-            pdf,
-            light_point: lp,
-            visible,
-        });
-        if let Some((theta0, vis0)) = prev {
-            if vis0 != visible {
-                // Locate the jump: midpoint, refined by bisection if asked.
-                let (mut lo, mut hi) = (theta0, theta);
-                for _ in 0..refine_steps {
-                    let mid = 0.5 * (lo + hi);
-                    let (v, _) = probe(mid);
-                    out.rays += 1;
-                    if v == vis0 {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
+    }
+
+    fn blocker(&self, w: Vec3) -> BlockerHit {
+        let (ray, _) = self.shadow_ray(w)?;
+        self.accel.intersect(&ray).map(|h| (h.t, h.prim))
+    }
+
+    /// The unit direction at azimuth φ in the frame's tangent plane.
+    fn azimuth(&self, phi: f32) -> Vec3 {
+        let (sp, cp) = phi.sin_cos();
+        self.frame.s * cp + self.frame.t * sp
+    }
+
+    /// θmax of the line at azimuth direction `e`.
+    fn theta_max(&self, e: Vec3) -> f32 {
+        match *self.domain {
+            Domain::Cone { theta_max, .. } => theta_max,
+            Domain::Rect {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => rect_exit_angle(self.x, self.frame.n, e, corner, edge_u, edge_v),
+        }
+    }
+
+    /// Θ, the largest θ of the domain: the range rings are drawn from.
+    fn ring_extent(&self) -> f32 {
+        match *self.domain {
+            Domain::Cone { theta_max, .. } => theta_max,
+            Domain::Rect {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => [
+                corner,
+                corner + edge_u,
+                corner + edge_v,
+                corner + edge_u + edge_v,
+            ]
+            .iter()
+            .map(|&p| {
+                let q = p - self.x;
+                q.cross(self.frame.n).length().atan2(q.dot(self.frame.n))
+            })
+            .fold(0.0, f32::max),
+        }
+    }
+
+    /// The φ-line: `n` stratified rays along θ ∈ [0, θmax(φ)].
+    fn line(
+        &self,
+        phi: f32,
+        jitter: f32,
+        n: u32,
+        families: Families,
+        on_point: &mut dyn FnMut(&LinePoint),
+    ) -> LineEstimate {
+        let curve = Curve::Line {
+            e: self.azimuth(phi),
+        };
+        let mut out = LineEstimate::default();
+        let theta_max = self.theta_max(self.azimuth(phi));
+        if theta_max.is_nan() || theta_max <= 0.0 || n == 0 {
+            return out;
+        }
+        let step = theta_max / n as f32;
+        // (θ, visible) of the previous sample on the line.
+        let mut prev: Option<(f32, bool)> = None;
+        for i in 0..n {
+            let theta = (i as f32 + jitter) * step;
+            let wi = self.dir(&curve, theta);
+            let (visible, lp) = self.probe(wi);
+            out.rays += 1;
+            let pdf = 1.0 / (TAU * theta.sin().max(1e-12) * step);
+            on_point(&LinePoint {
+                wi,
+                pdf,
+                light_point: lp,
+                visible,
+            });
+            if let Some((theta0, vis0)) = prev {
+                if vis0 != visible {
+                    self.jump(&curve, theta0, theta, vis0, families, &mut out);
                 }
-                let alpha = 0.5 * (lo + hi);
-                // Visible below the jump and blocked above: the visible region grows
-                // with α (sgn = +1); the opposite transition has sgn = −1 (Fig. 8).
-                let sgn = if vis0 { 1.0 } else { -1.0 };
-                // The blocker: closest hit on the blocked side, next to the jump.
-                out.rays += 1;
-                if let Some((t, prim)) = blocker(if vis0 { hi } else { lo }) {
-                    let w = dir(alpha);
-                    let (sa, ca) = alpha.sin_cos();
-                    let c = frame.n * (-sa) + dphi * ca;
-                    if let Some((dalpha, d)) = jump_derivatives(scene, x, w, c, t, prim, dx) {
-                        // Parallax of a local light: the points of the light seen along
-                        // the jump also move (by the same formula at their distance R),
-                        // and the shading terms already hold them fixed, so only the
-                        // relative motion counts: dα (1 − D/R). R = ∞ for the
-                        // environment (Eq. 49 as printed).
-                        let r = light_extent(domain, x, w).0;
-                        let parallax = if r.is_finite() && r > 0.0 {
-                            (1.0 - d / r).max(0.0)
-                        } else {
-                            1.0
-                        };
-                        let tr = transport(w);
-                        // Integrated over φ with density 1/2π: weight 2π.
-                        for (v, da) in out.vis.iter_mut().zip(dalpha) {
-                            *v += tr * (sgn * sa * da * parallax * TAU);
-                        }
-                        out.jumps += 1;
+            }
+            prev = Some((theta, visible));
+        }
+        out
+    }
+
+    /// The ring at θ_r: `n` rays at φ = φ0 + 2π j / n, a closed loop (each sample
+    /// compared with the next, the last with the first); samples outside the
+    /// light's domain (a rectangle's corners) break the loop.
+    fn ring(&self, theta_r: f32, phi0: f32, n: u32, families: Families) -> LineEstimate {
+        let mut out = LineEstimate::default();
+        if theta_r.is_nan() || theta_r <= 0.0 || n == 0 {
+            return out;
+        }
+        let curve = Curve::Ring { theta: theta_r };
+        let in_domain = |phi: f32| theta_r < self.theta_max(self.azimuth(phi));
+        let step = TAU / n as f32;
+        let rm = families;
+        let mut first: Option<(f32, bool)> = None;
+        let mut prev: Option<(f32, bool)> = None;
+        for j in 0..n {
+            let phi = phi0 + j as f32 * step;
+            if !in_domain(phi) {
+                prev = None;
+                continue;
+            }
+            let (visible, _) = self.probe(self.dir(&curve, phi));
+            out.rays += 1;
+            if j == 0 {
+                first = Some((phi, visible));
+            }
+            if let Some((phi_prev, vis0)) = prev {
+                if vis0 != visible {
+                    self.jump(&curve, phi_prev, phi, vis0, rm, &mut out);
+                }
+            }
+            prev = Some((phi, visible));
+        }
+        if let (Some((phi_last, vis_last)), Some((phi_first, vis_first))) = (prev, first) {
+            if n > 1 && vis_last != vis_first {
+                self.jump(&curve, phi_last, phi_first + TAU, vis_last, rm, &mut out);
+            }
+        }
+        out
+    }
+
+    /// The direction at parameter `t` of a line (t = θ) or ring (t = φ).
+    fn dir(&self, curve: &Curve, t: f32) -> Vec3 {
+        let axis = self.frame.n;
+        match *curve {
+            Curve::Line { e } => {
+                let (st, ct) = t.sin_cos();
+                axis * ct + e * st
+            }
+            Curve::Ring { theta } => {
+                let (st, ct) = theta.sin_cos();
+                axis * ct + self.azimuth(t) * st
+            }
+        }
+    }
+
+    /// The unit tangent ∂ω/∂t (normalised) at `t`.
+    fn tangent(&self, curve: &Curve, t: f32) -> Vec3 {
+        let (st, ct) = t.sin_cos();
+        match *curve {
+            Curve::Line { e } => e * ct - self.frame.n * st,
+            Curve::Ring { .. } => self.frame.t * ct - self.frame.s * st,
+        }
+    }
+
+    /// The parameters in the open interval between `a` and `b` where the curve
+    /// crosses the plane through x with normal `nu`.
+    fn plane_crossings(&self, curve: &Curve, nu: Vec3, a: f32, b: f32) -> Vec<f32> {
+        let (lo, hi) = (a.min(b), a.max(b));
+        let base: Vec<(f32, f32)> = match *curve {
+            // cos θ (axis·ν) + sin θ (e·ν) = 0: θ0 + kπ.
+            Curve::Line { e } => {
+                let t0 = (-self.frame.n.dot(nu)).atan2(e.dot(nu));
+                vec![(t0, std::f32::consts::PI)]
+            }
+            // sin θr (cos φ s·ν + sin φ t·ν) = −cos θr (axis·ν): two roots per turn.
+            Curve::Ring { theta } => {
+                let (st, ct) = theta.sin_cos();
+                let (p, q) = (st * self.frame.s.dot(nu), st * self.frame.t.dot(nu));
+                let r = p.hypot(q);
+                let c = -ct * self.frame.n.dot(nu);
+                if r <= 1e-12 || c.abs() > r {
+                    return Vec::new();
+                }
+                let (mid, spread) = (q.atan2(p), (c / r).acos());
+                vec![(mid - spread, TAU), (mid + spread, TAU)]
+            }
+        };
+        let mut out = Vec::new();
+        for (t0, period) in base {
+            let mut t = t0 + ((lo - t0) / period).ceil() * period;
+            while t < hi {
+                if t > lo {
+                    out.push(t);
+                }
+                t += period;
+            }
+        }
+        out
+    }
+
+    /// The exact crossing of a polygon silhouette between the blocked and the
+    /// visible sample: from the blocked end, the edge through which the curve leaves
+    /// the hit triangle (solved in closed form on the edge's plane through x); if the
+    /// curve is still blocked just past it (an inner edge of the mesh, or another
+    /// blocker behind), the walk goes on from there. Returns (t, m, D) of Eq. 72's
+    /// edge, or `None` (a curved blocker, or no edge found) to fall back to the
+    /// bracket's midpoint.
+    fn polygon_crossing(
+        &self,
+        curve: &Curve,
+        visible_t: f32,
+        blocked_t: f32,
+        out: &mut LineEstimate,
+    ) -> Option<(f32, Vec3, f32)> {
+        let mut from = blocked_t;
+        let toward = (visible_t - blocked_t).signum();
+        let eps = 1e-4 * (visible_t - blocked_t).abs();
+        for _ in 0..4 {
+            out.rays += 1;
+            let (_, prim) = self.blocker(self.dir(curve, from))?;
+            let PrimRef::Triangle { mesh, tri } = prim else {
+                return None;
+            };
+            let m = &self.scene.meshes[mesh as usize];
+            let v = m.triangles[tri as usize].map(|i| m.positions[i as usize] - self.x);
+            // The nearest exit along the curve toward the visible end.
+            let mut exit: Option<(f32, Vec3, Vec3)> = None;
+            for e in 0..3 {
+                let (a, b) = (v[e], v[(e + 1) % 3]);
+                let nu = a.cross(b);
+                if nu.length_squared() < 1e-20 {
+                    continue;
+                }
+                for t in self.plane_crossings(curve, nu, from, visible_t) {
+                    let w = self.dir(curve, t);
+                    // Between the edge's endpoints, in front of x.
+                    let inside = a.cross(w).dot(nu) >= 0.0 && w.cross(b).dot(nu) >= 0.0;
+                    if !inside || w.dot(a + b) <= 0.0 {
+                        continue;
+                    }
+                    if exit.is_none_or(|(te, ..)| (t - from).abs() < (te - from).abs()) {
+                        exit = Some((t, a, b));
                     }
                 }
             }
+            let (t, a, b) = exit?;
+            let past = t + toward * eps;
+            out.rays += 1;
+            if self.probe(self.dir(curve, past)).0 {
+                let w = self.dir(curve, t);
+                let k = (b - a).normalize_or_zero();
+                let (_, d) = ray_line_distance(Vec3::ZERO, w, a, k);
+                let m = w.cross(k).normalize_or_zero();
+                return (m != Vec3::ZERO && d > 0.0).then_some((t, m, d));
+            }
+            from = past;
+            if (visible_t - from) * toward <= 0.0 {
+                return None;
+            }
         }
-        prev = Some((theta, visible));
+        None
     }
-    out
+
+    /// A visibility jump between the samples at `lo` (visibility `vis0`) and `hi`
+    /// of `curve`: located (bisection if asked, then exactly on a polygon edge), its
+    /// silhouette's geometry found, and its crossing added to `out`.
+    fn jump(
+        &self,
+        curve: &Curve,
+        lo: f32,
+        hi: f32,
+        vis0: bool,
+        families: Families,
+        out: &mut LineEstimate,
+    ) {
+        let (mut lo, mut hi) = (lo, hi);
+        for _ in 0..self.refine {
+            let mid = 0.5 * (lo + hi);
+            let (v, _) = self.probe(self.dir(curve, mid));
+            out.rays += 1;
+            if v == vis0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let (visible_t, blocked_t) = if vis0 { (lo, hi) } else { (hi, lo) };
+        let found = match self.polygon_crossing(curve, visible_t, blocked_t, out) {
+            Some(c) => Some(c),
+            None => {
+                // The midpoint and the blocker's nearest silhouette (spheres, or a
+                // polygon walk that did not close).
+                let at = 0.5 * (lo + hi);
+                out.rays += 1;
+                self.blocker(self.dir(curve, blocked_t))
+                    .and_then(|(t, prim)| {
+                        silhouette_geometry(self.scene, self.x, self.dir(curve, at), t, prim)
+                            .map(|(m, d)| (at, m, d))
+                    })
+            }
+        };
+        let Some((at, m, d)) = found else {
+            return;
+        };
+        let w = self.dir(curve, at);
+        let axis = self.frame.n;
+        let sin_t = w.cross(axis).length();
+        if sin_t < 1e-6 {
+            return;
+        }
+        let e_phi = axis.cross(w) / sin_t;
+        let e_theta = e_phi.cross(w);
+        let m_theta = m.dot(e_theta).abs();
+        // Crossing density per unit arc length of the silhouette (see
+        // `trace_line_and_ring`).
+        let Some(density) = families.density(m_theta, m.dot(e_phi).abs(), sin_t) else {
+            return;
+        };
+        // σ = +1 where the visible side lies along +m.
+        let c = self.tangent(curve, at);
+        let toward_visible = if vis0 { -c } else { c };
+        let sigma = if m.dot(toward_visible) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        let v_rel = self.relative_velocity(w, m, d);
+        let tr = (self.transport)(w);
+        for (v, vn) in out.vis.iter_mut().zip(v_rel) {
+            *v += tr * (-sigma * vn / density);
+        }
+        out.jumps += 1;
+    }
+
+    /// The silhouette's normal velocity (along m) per displacement dx[k], relative to
+    /// the light's sample points as the shading lanes hold them: the blocker's own
+    /// −(δ·m)/D (Eq. 44 / 72: the grazing point stays on the blocker's tangent plane
+    /// or its edge), minus the motion of what it is seen against. The environment's
+    /// directions do not move; a rectangle's points, fixed in area measure, move by
+    /// −(δ·m)/R (R the distance to the light along w): the relative motion is
+    /// (1 − D/R) of the blocker's. A sphere light's samples are fixed in cone
+    /// coordinates (`sphere_light`) and move with its flow.
+    fn relative_velocity(&self, w: Vec3, m: Vec3, d: f32) -> [f32; 2] {
+        let blocker = self.dx.map(|delta| -delta.dot(m) / d);
+        match *self.domain {
+            Domain::Cone { sphere: None, .. } => blocker,
+            Domain::Rect { .. } => {
+                let r = light_extent(self.domain, self.x, w).0;
+                let parallax = if r.is_finite() && r > 0.0 {
+                    (1.0 - d / r).max(0.0)
+                } else {
+                    1.0
+                };
+                blocker.map(|v| v * parallax)
+            }
+            Domain::Cone {
+                sphere: Some((c, r)),
+                ..
+            } => match cone_flow(self.x, c, r, w, ConeLaw::Line, self.dx) {
+                Some(f) => [0, 1].map(|k| blocker[k] - f.dw[k].dot(m)),
+                None => blocker,
+            },
+        }
+    }
 }
 
-/// dα/dδ for the two displacements δ = dx[k] of the shading point, for a jump
-/// along the tangent ray `w` whose transverse direction (∂ω/∂θ) is `c`, and the
-/// distance D to the grazing point.
-///
-/// The grazing point p = x + D w stays on the blocker: for a curved blocker on its
-/// tangent plane (Eq. 43–46), for a polygon on its silhouette edge k (Eq. 72).
-/// Both are the same solve with k = the silhouette's tangent: writing
-/// dp = D dα c + dD w + δ = s k and taking components along c and the line
-/// plane's normal v gives s = (δ·v)/(k·v) and dα = (s (k·c) − δ·c) / D
-/// (δ in the line plane: dα = −cos α / D, Eq. 45; out of it: Eq. 46/72).
-fn jump_derivatives(
+/// The silhouette at a jump along `w`: its unit normal m on the sphere of
+/// directions (m ⊥ w) and the distance D to the grazing point. For a sphere the
+/// grazing point is the ray's closest approach to the centre and m the sphere's
+/// normal there (Eq. 44); for a triangle the silhouette is the edge nearest to the
+/// grazing ray, k, and m ∝ w × k (Eq. 72: the edge's plane through x).
+fn silhouette_geometry(
     scene: &Scene,
     x: Vec3,
     w: Vec3,
-    c: Vec3,
     t_hit: f32,
     prim: PrimRef,
-    dx: [Vec3; 2],
-) -> Option<([f32; 2], f32)> {
-    let (d, k) = match prim {
+) -> Option<(Vec3, f32)> {
+    let (m, d) = match prim {
         PrimRef::Sphere(i) => {
             let s = &scene.spheres[i as usize];
-            // Grazing point: the ray's closest approach to the centre.
             let d = (s.center - x).dot(w);
             let p = x + w * d;
-            let n = (p - s.center).normalize_or_zero();
-            (d, n.cross(w).normalize_or_zero())
+            ((p - s.center).normalize_or_zero(), d)
         }
         PrimRef::Triangle { mesh, tri } => {
-            let m = &scene.meshes[mesh as usize];
-            let v = m.triangles[tri as usize].map(|i| m.positions[i as usize]);
-            // The silhouette edge: the triangle edge nearest to the grazing ray.
+            let mesh = &scene.meshes[mesh as usize];
+            let v = mesh.triangles[tri as usize].map(|i| mesh.positions[i as usize]);
             let mut best = (f32::INFINITY, Vec3::ZERO, t_hit);
             for e in 0..3 {
                 let (a, b) = (v[e], v[(e + 1) % 3]);
@@ -243,26 +672,10 @@ fn jump_derivatives(
                     best = (dist, k, tk);
                 }
             }
-            (best.2, best.1)
+            (w.cross(best.1).normalize_or_zero(), best.2)
         }
     };
-    if d.is_nan() || d <= 0.0 || k == Vec3::ZERO {
-        return None;
-    }
-    let v = w.cross(c);
-    let kv = k.dot(v);
-    if kv.abs() < 1e-4 {
-        // The silhouette lies in the line's plane: the jump slides along the
-        // line and its derivative is unbounded (a degenerate configuration,
-        // footnote 3 of the paper); it contributes nothing measurable.
-        return None;
-    }
-    let kc = k.dot(c);
-    let r = dx.map(|delta| {
-        let s = delta.dot(v) / kv;
-        (s * kc - delta.dot(c)) / d
-    });
-    (r[0].is_finite() && r[1].is_finite()).then_some((r, d))
+    (d.is_finite() && d > 0.0 && m != Vec3::ZERO && m.is_finite()).then_some((m, d))
 }
 
 /// Distance between the ray x + t w and the line a + s k, and the ray parameter
@@ -515,7 +928,7 @@ pub fn object_space_gradient(
     let mut cuts = sphere_tangent_phis(spheres, x, frame);
     cuts.insert(0, 0.0);
     cuts.push(std::f64::consts::TAU);
-    let (nodes, weights) = gauss_legendre_16();
+    let rule = GaussLegendre::new(16);
     let mut g = [glam::DVec3::ZERO; 2];
     let mut b = 0.0f64;
     for w in cuts.windows(2) {
@@ -531,7 +944,7 @@ pub fn object_space_gradient(
                 std::f64::consts::PI * panel as f64 / PANELS as f64,
                 std::f64::consts::PI * (panel + 1) as f64 / PANELS as f64,
             );
-            for (&t, &wt) in nodes.iter().zip(&weights) {
+            for (&t, &wt) in rule.nodes().iter().zip(rule.weights()) {
                 let tau = ta + (tb - ta) * 0.5 * (t + 1.0);
                 let phi = pa + (pb - pa) * 0.5 * (1.0 - tau.cos());
                 let jac = (pb - pa) * 0.5 * tau.sin() * 0.5 * (tb - ta);
@@ -546,39 +959,6 @@ pub fn object_space_gradient(
     }
     let inv = 1.0 / std::f64::consts::TAU;
     ([(g[0] * inv).as_vec3(), (g[1] * inv).as_vec3()], b as f32)
-}
-
-/// 16-point Gauss–Legendre nodes and weights on [−1, 1].
-fn gauss_legendre_16() -> ([f64; 16], [f64; 16]) {
-    const X: [f64; 8] = [
-        0.0950125098376374,
-        0.2816035507792589,
-        0.4580167776572274,
-        0.6178762444026438,
-        0.755404408355003,
-        0.8656312023878318,
-        0.9445750230732326,
-        0.9894009349916499,
-    ];
-    const W: [f64; 8] = [
-        0.1894506104550685,
-        0.1826034150449236,
-        0.1691565193950025,
-        0.1495959888165767,
-        0.1246289712555339,
-        0.0951585116824928,
-        0.0622535239386479,
-        0.0271524594117541,
-    ];
-    let mut x = [0.0; 16];
-    let mut w = [0.0; 16];
-    for i in 0..8 {
-        x[2 * i] = -X[i];
-        x[2 * i + 1] = X[i];
-        w[2 * i] = W[i];
-        w[2 * i + 1] = W[i];
-    }
-    (x, w)
 }
 
 /// Integrates a per-φ quantity (a visibility gradient pair) over φ ∈ [0, 2π) by
