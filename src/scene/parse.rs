@@ -54,6 +54,7 @@ struct FileRaw {
     #[serde(default)]
     lights: Vec<LightRaw>,
     environment: Option<EnvironmentRaw>,
+    animation: Option<super::animation::AnimationRaw>,
 }
 
 #[derive(Deserialize)]
@@ -552,6 +553,10 @@ impl<'a> Builder<'a> {
             degenerate_triangles: self.degenerate,
             meshes_with_normals: self.meshes.iter().filter(|m| !m.normals.is_empty()).count(),
         };
+        let animation = raw.animation.as_ref();
+        let animation = animation
+            .map(|a| super::animation::resolve(ctx, a, &self.object_names))
+            .transpose()?;
         Ok(Scene {
             path: ctx.file.to_path_buf(),
             assets: ctx.assets.take(),
@@ -565,6 +570,7 @@ impl<'a> Builder<'a> {
             environment,
             object_names: self.object_names,
             stats,
+            animation,
         })
     }
 

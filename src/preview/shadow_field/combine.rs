@@ -1,0 +1,168 @@
+//! Run-time combination (Zhou et al. 2005, Sec. 3.2 of the deformable paper): at a
+//! receiver, the entities are sorted near to far; the receiver's transfer (clamped
+//! cosine / π, times its self-visibility) is multiplied by each occluder's
+//! visibility in turn (triple products), and each light adds its SRF dotted with
+//! the transfer accumulated so far — the OOFs of the entities nearer than it.
+//! The environment's SH, last, sees every occluder.
+//!
+//! Multiplying the transfer rather than the lights' fields is the same integral
+//! ∫ L·V₁⋯V_n·T for band-limited factors; it needs one product per occluder for
+//! all lights together.
+
+use super::field::Field;
+use super::precompute::EntityKind;
+use crate::math::sh::{self, ShF, COEFFS};
+use crate::math::Vec3;
+use glam::Mat3;
+
+/// An entity placed in the current frame.
+#[derive(Clone, Debug)]
+pub struct Placed {
+    pub kind: EntityKind,
+    pub center: Vec3,
+    pub radius: f32,
+    /// World → the rest frame of the entity's fields (the inverse of its rotation).
+    pub to_rest: Mat3,
+    /// Occlusion field with world-aligned coefficients (rotated to this frame).
+    pub occlusion: Option<Field>,
+    pub radiance: Option<[Field; 3]>,
+}
+
+/// Everything the combination reads for one frame.
+#[derive(Clone, Debug)]
+pub struct Combiner {
+    pub entities: Vec<Placed>,
+    /// The environment's RGB SH (zero without an environment).
+    pub environment: [ShF; 3],
+    /// Visibility of the upper half-space of each plane (`cap(normal, 0)`), per
+    /// entity index (unused for other kinds).
+    plane_visibility: Vec<(ShF, ShF)>,
+}
+
+/// Receiver transfer of a Lambertian surface without the albedo: max(n·ω, 0)/π.
+pub fn diffuse_transfer(n: Vec3) -> ShF {
+    let c = sh::clamped_cosine(n.as_dvec3());
+    c.map(|x| (x / std::f64::consts::PI) as f32)
+}
+
+fn visibility_from_occlusion(o: &ShF) -> ShF {
+    let mut v = o.map(|x| -x);
+    v[0] += ONE0;
+    v
+}
+
+/// The constant 1's only coefficient, √(4π).
+const ONE0: f32 = 3.544_907_7;
+
+impl Combiner {
+    pub fn new(entities: Vec<Placed>, environment: [ShF; 3]) -> Self {
+        let plane_visibility = entities
+            .iter()
+            .map(|e| match e.kind {
+                EntityKind::Plane { normal, .. } => {
+                    let up = sh::cap(normal.as_dvec3(), 0.0).map(|x| x as f32);
+                    let down = sh::cap(-normal.as_dvec3(), 0.0).map(|x| x as f32);
+                    (up, down)
+                }
+                _ => ([0.0; COEFFS], [0.0; COEFFS]),
+            })
+            .collect();
+        Self {
+            entities,
+            environment,
+            plane_visibility,
+        }
+    }
+
+    /// Light reaching a Lambertian receiver at `p` with normal `n` per unit albedo
+    /// (the reflected radiance is albedo × this). `own` is the receiver's entity
+    /// (skipped: its self-shadowing is `self_visibility`), `self_visibility` its
+    /// per-vertex visibility, if any. Returns the value and the number of
+    /// entities that were combined (not culled).
+    pub fn shade(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        own: Option<usize>,
+        self_visibility: Option<&ShF>,
+    ) -> (Vec3, usize) {
+        let mut t = diffuse_transfer(n);
+        if let Some(v) = self_visibility {
+            t = sh::product(&t, v);
+        }
+        // Near-to-far order of the entities that can matter (bounding sphere not
+        // entirely below the receiver's horizon).
+        let mut order: [(f32, u16); 32] = [(0.0, 0); 32];
+        let mut count = 0;
+        let mut planes = 0u32;
+        for (i, e) in self.entities.iter().enumerate() {
+            if Some(i) == own {
+                continue;
+            }
+            if let EntityKind::Plane { .. } = e.kind {
+                planes |= 1 << i.min(31);
+                continue;
+            }
+            let to_c = e.center - p;
+            if n.dot(to_c) < -e.radius || count == order.len() {
+                continue;
+            }
+            order[count] = (to_c.length_squared(), i as u16);
+            count += 1;
+        }
+        let order = &mut order[..count];
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let mut out = Vec3::ZERO;
+        for &(_, i) in order.iter() {
+            let e = &self.entities[i as usize];
+            let q = e.to_rest * (p - e.center);
+            if let Some(rad) = &e.radiance {
+                if !self.behind_a_plane(p, e.center, planes) {
+                    out += Vec3::new(
+                        sh::dot_f32(&t, &rad[0].lookup(q)),
+                        sh::dot_f32(&t, &rad[1].lookup(q)),
+                        sh::dot_f32(&t, &rad[2].lookup(q)),
+                    );
+                }
+            }
+            if let Some(occ) = &e.occlusion {
+                t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
+            }
+        }
+        let mut combined = count;
+        for (i, e) in self.entities.iter().enumerate() {
+            if planes & (1 << i.min(31)) == 0 {
+                continue;
+            }
+            if let EntityKind::Plane { point, normal } = e.kind {
+                let (up, down) = &self.plane_visibility[i];
+                t = sh::product(
+                    &t,
+                    if normal.dot(p - point) >= 0.0 {
+                        up
+                    } else {
+                        down
+                    },
+                );
+                combined += 1;
+            }
+        }
+        let env = &self.environment;
+        out += Vec3::new(
+            sh::dot_f32(&t, &env[0]),
+            sh::dot_f32(&t, &env[1]),
+            sh::dot_f32(&t, &env[2]),
+        );
+        (out, combined)
+    }
+
+    /// Whether some plane separates `p` from `light` (the light is then hidden).
+    fn behind_a_plane(&self, p: Vec3, light: Vec3, planes: u32) -> bool {
+        self.entities.iter().enumerate().any(|(i, e)| match e.kind {
+            EntityKind::Plane { point, normal } if planes & (1 << i.min(31)) != 0 => {
+                normal.dot(p - point) * normal.dot(light - point) < 0.0
+            }
+            _ => false,
+        })
+    }
+}

@@ -1,0 +1,1 @@
+//! Deforming entities (the deformable paper, Sec. 4 and App. A–B).
