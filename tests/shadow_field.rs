@@ -2,6 +2,9 @@
 //! SRF of a sphere light against its radiance cap, field interpolation, and the
 //! preview against the path tracer end to end (`pipeline::preview::shadow_field::run`).
 
+// Index loops mirror the matrix subscripts.
+#![allow(clippy::needless_range_loop)]
+
 use glam::{DVec3, Vec3};
 use gradtrace::math::sh::{self, COEFFS};
 use gradtrace::pipeline::preview::shadow_field::{run, ShadowFieldOptions};
@@ -175,4 +178,238 @@ fn preview_agrees_with_the_path_tracer_on_the_bunny_scene() {
     let again = gradtrace::output::read_exr(&second.exr).unwrap();
     assert_eq!(again.channel("R"), exr.channel("R"));
     let _ = std::fs::remove_dir_all(&opts.out_dir);
+}
+
+mod deforming {
+    use super::*;
+    use gradtrace::preview::shadow_field::deform::{self, BaseSphere, Extrapolation, MatrixTable};
+    use gradtrace::preview::shadow_field::field::Grid;
+    use gradtrace::preview::shadow_field::precompute;
+
+    #[test]
+    fn rescaling_is_the_papers_construction() {
+        // f_1 is the identity, f_k⁻¹ = f_{1/k}, f′ matches finite differences, and
+        // the silhouette seen at 45° from r on the square's diagonal: from d = 2r
+        // it is at atan(s/(d − s)) with s = r/2.
+        for &theta in &[0.1, 0.5, 1.0, 1.5, 2.0, 3.0] {
+            assert!((deform::f_k(theta, 1.0) - theta).abs() < 1e-14);
+            for &k in &[0.2, 0.7, 1.6, 3.0] {
+                let back = deform::f_k(deform::f_k(theta, k), 1.0 / k);
+                assert!((back - theta).abs() < 1e-12);
+                let h = 1e-6;
+                let fd = (deform::f_k(theta + h, k) - deform::f_k(theta - h, k)) / (2.0 * h);
+                assert!((fd - deform::f_k_derivative(theta, k)).abs() < 1e-7);
+            }
+        }
+        let want = (0.5f64 / 1.5).atan();
+        assert!((deform::f_k(std::f64::consts::FRAC_PI_4, 0.5) - want).abs() < 1e-14);
+    }
+
+    #[test]
+    fn extrapolation_matrices_have_the_papers_sparsity() {
+        assert_eq!(deform::paper_nonzero_count(deform::Q), 44);
+        assert_eq!(deform::sparsity_pattern().len(), 44);
+        let pattern = deform::sparsity_pattern();
+        for &k in &[0.15, 0.5, 0.9, 1.4, 3.0] {
+            let generic = (0.3..=2.0).contains(&k);
+            for kind in [Extrapolation::Visibility, Extrapolation::Radiance] {
+                let m = deform::matrix_dense(k, kind);
+                let mut nonzero = 0;
+                for a in 0..COEFFS {
+                    for b in 0..COEFFS {
+                        if pattern.contains(&(a, b)) {
+                            nonzero += (m[a][b].abs() > 1e-9) as usize;
+                        } else {
+                            assert!(
+                                m[a][b].abs() < 1e-12,
+                                "M[{a}][{b}] = {} at k = {k}",
+                                m[a][b]
+                            );
+                        }
+                    }
+                }
+                // Inside the 44 positions three more entries vanish exactly: a
+                // warp of the constant is the constant, so the visibility matrix's
+                // column 0 is (1, 0, …); the radiance factor keeps ∫ V dω (App.
+                // A), so that matrix's row 0 is (1, 0, …). Every other allowed
+                // entry is used for a generic k (as k → 0 the warped functions
+                // shrink to a point and more fall below 1e-9).
+                for l in 1..4 {
+                    let i = sh::index(l, 0);
+                    let (a, b) = match kind {
+                        Extrapolation::Visibility => (i, 0),
+                        Extrapolation::Radiance => (0, i),
+                    };
+                    assert!(
+                        m[a][b].abs() < 1e-6,
+                        "{kind:?} M[{a}][{b}] = {} at k = {k}",
+                        m[a][b]
+                    );
+                }
+                assert!(
+                    (m[0][0] - 1.0).abs() < 1e-6,
+                    "{kind:?} k = {k}: {}",
+                    m[0][0]
+                );
+                if generic {
+                    assert_eq!(nonzero, 41, "{kind:?} k = {k}");
+                }
+            }
+        }
+        let id = deform::matrix_dense(1.0, Extrapolation::Visibility);
+        for a in 0..COEFFS {
+            for b in 0..COEFFS {
+                assert!((id[a][b] - if a == b { 1.0 } else { 0.0 }).abs() < 1e-10);
+            }
+        }
+        // Linear interpolation between tabulated ratios is between its neighbours.
+        let table = MatrixTable::new(vec![0.5, 1.0], Extrapolation::Visibility);
+        let mid = table.at(0.75);
+        for ((a, b), m) in table.matrices[0]
+            .entries
+            .iter()
+            .zip(&table.matrices[1].entries)
+            .zip(&mid.entries)
+        {
+            assert!((m.2 - 0.5 * (a.2 + b.2)).abs() < 1e-6);
+        }
+    }
+
+    fn bunny() -> (gradtrace::scene::Scene, precompute::Entity) {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+        let scene = gradtrace::scene::load(std::path::Path::new(path)).unwrap();
+        let e = precompute::entities(&scene)
+            .into_iter()
+            .find(|e| e.name == "bunny")
+            .unwrap();
+        (scene, e)
+    }
+
+    /// Relative L2 distance over all samples of two fields.
+    fn field_error(a: &[[f32; COEFFS]], b: &[[f32; COEFFS]]) -> f64 {
+        let (mut d, mut n) = (0.0, 0.0);
+        for (x, y) in a.iter().zip(b) {
+            for k in 0..COEFFS {
+                d += (x[k] as f64 - y[k] as f64).powi(2);
+                n += (y[k] as f64).powi(2);
+            }
+        }
+        (d / n).sqrt()
+    }
+
+    #[test]
+    fn base_sphere_extrapolation_matches_direct_sampling_at_other_radii() {
+        // The paper's Fig. 1 check, on the bunny: visibility sampled on the
+        // bounding sphere and rescaled by f_k, against visibility traced directly
+        // at 1.5, 2.5 and 5 radii (the same 12 × 20 directions).
+        let (scene, e) = bunny();
+        let geo = precompute::EntityGeometry::new(&scene, &e);
+        let bsv = BaseSphere::trace(&geo, e.center, e.radius, 12, 20, 24);
+        let mut results = Vec::new();
+        for (ratio, bound) in [(1.5f32, 0.45), (2.5, 1.1), (5.0, 3.8)] {
+            let grid = Grid {
+                n_theta: 12,
+                n_phi: 20,
+                n_radii: 1,
+                r_min: ratio * e.radius,
+                r_max: ratio * e.radius,
+            };
+            let table = MatrixTable::for_grid(&grid, e.radius, Extrapolation::Visibility);
+            let extrapolated = bsv.extrapolate(&grid, &table);
+            let direct: Vec<_> = (0..grid.len())
+                .map(|i| {
+                    geo.sample(e.center + grid.position(i), e.center, e.radius, 24, false)
+                        .occlusion
+                })
+                .collect();
+            let err = field_error(&extrapolated.data, &direct);
+            // Without rescaling (M = identity) the base-sphere visibility is far too wide.
+            let identity = MatrixTable::new(vec![1.0], Extrapolation::Visibility);
+            let plain = bsv.extrapolate(&grid, &identity);
+            let err_plain = field_error(&plain.data, &direct);
+            eprintln!("{ratio} R: relative L2 error {err:.3} with f_k, {err_plain:.3} without");
+            results.push((ratio, bound, err, err_plain));
+        }
+        for (ratio, bound, err, err_plain) in results {
+            assert!(err < bound, "{ratio} R: {err}");
+            assert!(err < 0.5 * err_plain);
+        }
+    }
+}
+
+#[test]
+fn deforming_sequence_renders_every_frame() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/shadowfield_deform.toml"
+    );
+    let mut opts = ShadowFieldOptions::new(scene);
+    opts.out_dir = out_dir("deform");
+    opts.quiet = true;
+    opts.frames = Some(3);
+    opts.resolution = Some((64, 48));
+    opts.reference_spp = Some(32);
+    opts.settings = Settings {
+        rays: 12,
+        self_rays: 6,
+        ..Settings::default()
+    };
+    let s = run(&opts).unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&s).unwrap());
+    assert_eq!(s.frames, Some(3));
+    for f in 0..3 {
+        assert!(opts
+            .out_dir
+            .join(format!("shadowfield_deform-f{f:03}.exr"))
+            .is_file());
+    }
+    let (bsv, full) = (s.bsv_update_s.unwrap(), s.full_field_s.unwrap());
+    assert!(
+        bsv > 0.0 && full > bsv,
+        "base-sphere update {bsv} s vs full field {full} s"
+    );
+    let worst = s.rmse_worst_frame_relative.unwrap();
+    assert!(
+        worst.is_finite() && worst < 0.3,
+        "worst frame RMSE {}% of the mean",
+        worst * 100.0
+    );
+    let _ = std::fs::remove_dir_all(&opts.out_dir);
+}
+
+#[test]
+fn animation_block_errors_name_the_key() {
+    let dir = out_dir("anim-errors");
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = "[camera]\nfrom = [0, 1, 4]\nto = [0, 0, 0]\nfov = 40\nresolution = [8, 8]\n\
+                [materials.m]\ntype = \"lambert\"\nalbedo = [0.5, 0.5, 0.5]\n\
+                [[shapes]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
+    let cases = [
+        ("[animation]\n[[animation.objects]]\nshape = \"bal\"\n", "undefined shape `bal`"),
+        (
+            "[animation]\n[[animation.objects]]\nshape = \"ball\"\nkeys = [{ t = 2 }]\n",
+            "expected a time in [0, 1]",
+        ),
+        (
+            "[animation]\n[[animation.objects]]\nshape = \"ball\"\ndeform = { type = \"wobble\", amount = [0, 1] }\n",
+            "unknown variant `wobble`",
+        ),
+        ("[animation]\nframe = 3\n", "unknown field `frame`"),
+    ];
+    for (extra, want) in cases {
+        let text = format!("{base}{extra}");
+        let err = gradtrace::scene::load_from_str(&text, &dir.join("a.toml")).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains(want) && msg.contains("animation"), "{msg}");
+    }
+    let ok = format!(
+        "{base}[animation]\nframes = 4\n[[animation.objects]]\nshape = \"ball\"\n\
+         keys = [{{ t = 0 }}, {{ t = 1, translate = [1, 0, 0] }}]\n"
+    );
+    let scene = gradtrace::scene::load_from_str(&ok, &dir.join("a.toml")).unwrap();
+    let anim = scene.animation.as_ref().unwrap();
+    assert_eq!(anim.frames, 4);
+    let mid = anim.scene_at(&scene, 1, 3);
+    assert!((mid.spheres[0].center.x - 0.5).abs() < 1e-6);
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -26,6 +26,8 @@ pub struct Placed {
     /// Occlusion field with world-aligned coefficients (rotated to this frame).
     pub occlusion: Option<Field>,
     pub radiance: Option<[Field; 3]>,
+    /// A deforming entity shades its own surface with its own field.
+    pub self_from_field: bool,
 }
 
 /// Everything the combination reads for one frame.
@@ -89,6 +91,12 @@ impl Combiner {
         let mut t = diffuse_transfer(n);
         if let Some(v) = self_visibility {
             t = sh::product(&t, v);
+        }
+        if let Some(e) = own.map(|i| &self.entities[i]).filter(|e| e.self_from_field) {
+            if let Some(occ) = &e.occlusion {
+                let q = e.to_rest * (p - e.center);
+                t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
+            }
         }
         // Near-to-far order of the entities that can matter (bounding sphere not
         // entirely below the receiver's horizon).

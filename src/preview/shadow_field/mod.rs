@@ -194,6 +194,7 @@ impl Fields {
                     .radiance
                     .as_ref()
                     .map(|r| [turn(&r[0]), turn(&r[1]), turn(&r[2])]),
+                self_from_field: e.deforming,
             });
             for (k, &m) in e.meshes.iter().enumerate() {
                 if mesh_self.len() <= m {

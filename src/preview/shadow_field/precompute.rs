@@ -37,9 +37,13 @@ pub struct Entity {
     pub meshes: Vec<usize>,
     pub spheres: Vec<usize>,
     pub kind: EntityKind,
-    /// Bounding sphere at rest.
+    /// Bounding sphere at rest (for a deforming entity: in the current frame).
     pub center: Vec3,
     pub radius: f32,
+    /// Rebuilt each frame from its base-sphere visibility; it then shadows itself
+    /// through its own field (k > 1 inside the bounding sphere) instead of
+    /// per-vertex self-occlusion.
+    pub deforming: bool,
 }
 
 /// Groups the scene's meshes and spheres by object id, in id order.
@@ -96,6 +100,7 @@ pub fn entities(scene: &Scene) -> Vec<Entity> {
                 kind,
                 center,
                 radius,
+                deforming: false,
             })
         })
         .collect()
@@ -162,6 +167,11 @@ impl EntityGeometry {
             mesh_emission: meshes.iter().map(|m| m.emission).collect(),
             sphere_emission: spheres.iter().map(|s| s.emission).collect(),
         }
+    }
+
+    /// Whether a ray hits the entity at all.
+    pub fn hits(&self, ray: &Ray) -> bool {
+        self.accel.occluded(ray)
     }
 
     /// Whether a ray hits the entity, and the radiance it sees there (emission is
@@ -293,6 +303,20 @@ pub fn work_units(scene: &Scene, e: &Entity, settings: &Settings) -> usize {
     }
 }
 
+/// The occlusion field alone, every grid sample traced directly (in parallel).
+pub fn occlusion_field(geo: &EntityGeometry, e: &Entity, grid: &Grid, rays: usize) -> Field {
+    Field {
+        grid: *grid,
+        data: (0..grid.len())
+            .into_par_iter()
+            .map(|i| {
+                geo.sample(e.center + grid.position(i), e.center, e.radius, rays, false)
+                    .occlusion
+            })
+            .collect(),
+    }
+}
+
 /// Traces every sample of an entity's fields, in parallel; `tick` is called
 /// once per sample point and vertex.
 pub fn compute_fields(
@@ -335,7 +359,7 @@ pub fn compute_fields(
             data: samples.iter().map(|s| s.radiance[c]).collect(),
         })
     });
-    let self_occlusion = if e.kind == EntityKind::Occluder {
+    let self_occlusion = if e.kind == EntityKind::Occluder && !e.deforming {
         e.meshes
             .iter()
             .map(|&m| mesh_self_occlusion(&geo, &scene.meshes[m], e.radius, settings, tick))
