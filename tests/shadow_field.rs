@@ -413,3 +413,93 @@ fn animation_block_errors_name_the_key() {
     assert!((mid.spheres[0].center.x - 0.5).abs() < 1e-6);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The bundled scenes at their own settings, into `out/shadow_field/` (minutes):
+/// `cargo test --release --test shadow_field bundled_scenes -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn bundled_scenes_at_full_settings() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    for (scene, frames, spp) in [
+        ("shadowfield_bunny", None, 512),
+        ("shadowfield_deform", Some(8), 256),
+    ] {
+        let mut opts = ShadowFieldOptions::new(root.join(format!("scenes/{scene}.toml")));
+        opts.out_dir = root.join("out/shadow_field").join(scene);
+        opts.frames = frames;
+        opts.reference_spp = Some(spp);
+        let s = run(&opts).unwrap();
+        println!("{}", serde_json::to_string_pretty(&s).unwrap());
+    }
+}
+
+#[test]
+fn low_frequency_environment_reprojects_to_its_own_coefficients() {
+    use gradtrace::preview::shadow_field::{environment_lowfreq, environment_sh};
+    use gradtrace::scene::Environment;
+    // A sky whose order-4 projection stays positive, so the lat-long image of the
+    // projection (negative lobes clamped) holds exactly that projection.
+    let sky = Environment::GaussianSky {
+        direction: Vec3::new(0.3, 0.9, 0.1).normalize(),
+        sharpness: 2.0,
+        peak: Vec3::new(1.0, 0.8, 0.6),
+        ambient: Vec3::splat(0.5),
+    };
+    let sh_sky = environment_sh(Some(&sky));
+    let image = environment_lowfreq(&sh_sky, 512, 256);
+    let again = environment_sh(Some(&image));
+    for c in 0..3 {
+        let err: f64 = (0..COEFFS)
+            .map(|k| (again[c][k] - sh_sky[c][k]).powi(2) as f64)
+            .sum();
+        let norm: f64 = sh_sky[c].iter().map(|x| (*x as f64).powi(2)).sum();
+        assert!(
+            (err / norm).sqrt() < 2e-3,
+            "channel {c}: {}",
+            (err / norm).sqrt()
+        );
+    }
+    // The constant environment's projection is exact: √(4π) L in the DC term.
+    let k = environment_sh(Some(&Environment::Constant {
+        radiance: Vec3::ONE,
+    }));
+    assert!((k[0][0] - (4.0 * std::f32::consts::PI).sqrt()).abs() < 1e-6);
+    assert!(k[0][1..].iter().all(|x| *x == 0.0));
+}
+
+#[test]
+fn vertices_are_shaded_like_pixels() {
+    use gradtrace::preview::shadow_field::{self as sf, Receivers};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+    let scene = gradtrace::scene::load(std::path::Path::new(path)).unwrap();
+    let settings = Settings {
+        rays: 8,
+        self_rays: 4,
+        ..Settings::default()
+    };
+    let fields = sf::precompute(&scene, &settings, &|_, _| {});
+    let accel = gradtrace::accel::Accel::build(&scene.meshes, &scene.spheres);
+    let (combiner, mesh_self) =
+        fields.combiner(&[], sf::environment_sh(scene.environment.as_ref()));
+    let receivers = Receivers::new(&scene, &accel, &fields, &mesh_self);
+    let bunny = scene
+        .meshes
+        .iter()
+        .position(|m| m.name.starts_with("bunny"))
+        .unwrap();
+    let colours = sf::shade_vertices(&receivers, &combiner, bunny);
+    assert_eq!(colours.len(), scene.meshes[bunny].positions.len());
+    assert!(colours
+        .iter()
+        .all(|c| c.is_finite() && c.min_element() >= 0.0));
+    // A camera ray through a vertex sees the vertex's own colour (same point,
+    // normal and self-visibility up to the barycentric blend at a vertex).
+    let v = scene.meshes[bunny].positions.len() / 3;
+    let x = scene.meshes[bunny].positions[v];
+    let eye = x + sf::precompute::vertex_normals(&scene.meshes[bunny])[v] * 0.5;
+    let ray = gradtrace::math::Ray::new(eye, (x - eye).normalize());
+    let (pixel, shaded, _) = receivers.radiance(&combiner, &ray);
+    assert!(shaded);
+    let rel = (pixel - colours[v]).length() / colours[v].length();
+    assert!(rel < 0.05, "pixel {pixel} vs vertex {}", colours[v]);
+}

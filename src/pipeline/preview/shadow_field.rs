@@ -83,6 +83,15 @@ pub struct ShadowFieldSummary {
     pub reference_spp_equal_error: f64,
     pub reference_s_equal_error: f64,
     pub speedup_equal_error: f64,
+    /// The preview's error with the reference's own noise removed,
+    /// √(rmse² − σ²/reference_spp) (0 when the noise explains it all).
+    pub rmse_bias: f64,
+    /// Whether that error exceeds the reference's noise (σ²/reference_spp): only
+    /// then is the equal-error point estimate well determined; otherwise the path
+    /// tracer needs more than `reference_spp` samples, and the lower bound holds.
+    pub equal_error_resolved: bool,
+    /// speedup at `reference_spp` when unresolved (a lower bound), else the estimate.
+    pub speedup_equal_error_lower_bound: f64,
     pub exr: PathBuf,
     pub png: PathBuf,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -253,12 +262,12 @@ fn summarise(
     let rmse_low = metrics::rmse(img, &refs.lowfreq).unwrap_or(f32::NAN) as f64;
     // The path tracer at s spp scores σ²(1/s + 1/s_ref) against the reference.
     let excess = rmse * rmse / refs.noise_var - 1.0 / refs.spp as f64;
-    let spp_eq = if excess > 0.0 {
-        1.0 / excess
-    } else {
-        refs.spp as f64
-    };
+    let spp_eq = if excess > 0.0 { 1.0 / excess } else { 1e12 };
     let s_eq = spp_eq * refs.seconds_per_spp;
+    let reference_noise = refs.noise_var / refs.spp as f64;
+    let bias2 = (rmse * rmse - reference_noise).max(0.0);
+    let resolved = bias2 > reference_noise;
+    let lower_spp = if resolved { spp_eq } else { refs.spp as f64 };
     let threads = rayon::current_num_threads();
     let entities = fields.entities.len();
     let points = frame.shaded.points;
@@ -283,6 +292,10 @@ fn summarise(
         reference_spp_equal_error: spp_eq,
         reference_s_equal_error: s_eq,
         speedup_equal_error: s_eq / frame.render_s.max(1e-9),
+        rmse_bias: bias2.sqrt(),
+        equal_error_resolved: resolved,
+        speedup_equal_error_lower_bound: lower_spp * refs.seconds_per_spp
+            / frame.render_s.max(1e-9),
         exr: stem.with_extension("exr"),
         png: stem.with_extension("png"),
         frames: None,

@@ -41,10 +41,40 @@ pub struct Combiner {
     plane_visibility: Vec<(ShF, ShF)>,
 }
 
-/// Receiver transfer of a Lambertian surface without the albedo: max(n·ω, 0)/π.
+/// Receiver transfer of a Lambertian surface without the albedo: max(n·ω, 0)/π,
+/// i.e. the clamped cosine's zonal coefficients √(4π/(2l+1)) z_l / π times Y_lm(n)
+/// (f32, no square roots: the constants are folded; `tests/sh.rs` checks
+/// `sh::clamped_cosine`, and the unit test below this against it).
+#[inline]
 pub fn diffuse_transfer(n: Vec3) -> ShF {
-    let c = sh::clamped_cosine(n.as_dvec3());
-    c.map(|x| (x / std::f64::consts::PI) as f32)
+    // √(4π/(2l+1)) z_l / π for l = 0, 1, 2 (l = 3 vanishes), times the Y_lm constants.
+    const A0: f32 = 1.0;
+    const A1: f32 = 2.0 / 3.0;
+    const A2: f32 = 0.25;
+    let (x, y, z) = (n.x, n.y, n.z);
+    let c0 = A0 * 0.282_094_8;
+    let c1 = A1 * 0.488_602_5;
+    let c2 = A2 * 1.092_548_4;
+    let c20 = A2 * 0.315_391_57;
+    let c22 = A2 * 0.546_274_2;
+    [
+        c0,
+        c1 * y,
+        c1 * z,
+        c1 * x,
+        c2 * x * y,
+        c2 * y * z,
+        c20 * (3.0 * z * z - 1.0),
+        c2 * x * z,
+        c22 * (x * x - y * y),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ]
 }
 
 fn visibility_from_occlusion(o: &ShF) -> ShF {
@@ -124,18 +154,21 @@ impl Combiner {
         for &(_, i) in order.iter() {
             let e = &self.entities[i as usize];
             let q = e.to_rest * (p - e.center);
+            let Some(occ) = &e.occlusion else {
+                continue;
+            };
+            // One set of trilinear corners for the occlusion and the radiance.
+            let corners = occ.grid.corners(q);
             if let Some(rad) = &e.radiance {
                 if !self.behind_a_plane(p, e.center, planes) {
                     out += Vec3::new(
-                        sh::dot_f32(&t, &rad[0].lookup(q)),
-                        sh::dot_f32(&t, &rad[1].lookup(q)),
-                        sh::dot_f32(&t, &rad[2].lookup(q)),
+                        sh::dot_f32(&t, &rad[0].lookup_at(&corners)),
+                        sh::dot_f32(&t, &rad[1].lookup_at(&corners)),
+                        sh::dot_f32(&t, &rad[2].lookup_at(&corners)),
                     );
                 }
             }
-            if let Some(occ) = &e.occlusion {
-                t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
-            }
+            t = sh::product(&t, &visibility_from_occlusion(&occ.lookup_at(&corners)));
         }
         let mut combined = count;
         for (i, e) in self.entities.iter().enumerate() {
@@ -172,5 +205,26 @@ impl Combiner {
             }
             _ => false,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folded_transfer_is_the_clamped_cosine_over_pi() {
+        for n in [Vec3::Y, Vec3::new(0.3, -0.5, 0.81).normalize(), -Vec3::X] {
+            let want = sh::clamped_cosine(n.as_dvec3());
+            let got = diffuse_transfer(n);
+            for k in 0..COEFFS {
+                let w = want[k] / std::f64::consts::PI;
+                assert!(
+                    (f64::from(got[k]) - w).abs() < 1e-6,
+                    "{k}: {} vs {w}",
+                    got[k]
+                );
+            }
+        }
     }
 }

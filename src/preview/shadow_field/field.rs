@@ -118,7 +118,14 @@ impl Field {
     /// Trilinear interpolation at local offset `q`, times the far-field scale.
     #[inline]
     pub fn lookup(&self, q: Vec3) -> ShF {
-        let (corners, far) = self.grid.corners(q);
+        self.lookup_at(&self.grid.corners(q))
+    }
+
+    /// The interpolation at corners from [`Grid::corners`] (shared by fields on
+    /// the same grid).
+    #[inline]
+    pub fn lookup_at(&self, (corners, far): &([(u32, f32); 8], f32)) -> ShF {
+        let (corners, far) = (*corners, *far);
         let mut c = [0.0f32; COEFFS];
         for (i, w) in corners {
             if w == 0.0 {
