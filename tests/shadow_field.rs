@@ -503,3 +503,48 @@ fn vertices_are_shaded_like_pixels() {
     let rel = (pixel - colours[v]).length() / colours[v].length();
     assert!(rel < 0.05, "pixel {pixel} vs vertex {}", colours[v]);
 }
+
+/// On-CPU nanoseconds of the calling thread (Linux schedstat), so that a speed
+/// figure on a shared, loaded machine counts only the time this thread ran.
+fn thread_cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
+/// µs of CPU per receiver point and entity, one thread:
+/// `cargo test --release --test shadow_field combination_cpu_time -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn combination_cpu_time() {
+    use gradtrace::preview::shadow_field as sf;
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+    let scene = gradtrace::scene::load(std::path::Path::new(path)).unwrap();
+    let settings = Settings {
+        rays: 8,
+        self_rays: 4,
+        ..Settings::default()
+    };
+    let fields = sf::precompute(&scene, &settings, &|_, _| {});
+    let (combiner, _) = fields.combiner(&[], sf::environment_sh(scene.environment.as_ref()));
+    let floor = fields.entities.iter().position(|e| e.name == "floor");
+    let points: Vec<Vec3> = (0..4096)
+        .map(|i| Vec3::new(-1.5 + 0.0007 * i as f32, 0.0, 0.6 - 0.0003 * i as f32))
+        .collect();
+    let (mut pairs, mut acc) = (0usize, Vec3::ZERO);
+    let Some(start) = thread_cpu_ns() else {
+        return;
+    };
+    for _ in 0..20 {
+        for &p in &points {
+            let (v, n) = combiner.shade(p, Vec3::Y, floor, None);
+            acc += v;
+            pairs += n;
+        }
+    }
+    let ns = thread_cpu_ns().unwrap() - start;
+    println!(
+        "{:.3} µs CPU per point-entity ({pairs} point-entity pairs, {:.3} µs per point), checksum {acc}",
+        ns as f64 / 1e3 / pairs as f64,
+        ns as f64 / 1e3 / (20 * points.len()) as f64
+    );
+}

@@ -23,8 +23,8 @@ pub struct ShadowFieldOptions {
     pub scene: PathBuf,
     /// Output folder (default `out/`).
     pub out_dir: PathBuf,
-    /// Render this many frames of the scene's `[animation]` (default: none, or the
-    /// block's own `frames` when it has one and this is `Some(0)`).
+    /// Render this many frames of the scene's `[animation]` (`Some(0)`: the block's
+    /// own `frames`); `None`: the still scene, animation ignored.
     pub frames: Option<u32>,
     /// Samples per pixel of the path-traced direct-lighting reference (default 256).
     pub reference_spp: Option<u32>,
@@ -127,7 +127,8 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
     create_dir(&opts.out_dir)?;
     let frames = match (opts.frames, scene.animation.as_ref()) {
         (None, _) => None,
-        (Some(n), Some(_)) => Some(n.max(1)),
+        (Some(0), Some(a)) => Some(a.frames),
+        (Some(n), Some(_)) => Some(n),
         (Some(_), None) => {
             return Err(Error::Option {
                 option: "--frames".into(),
