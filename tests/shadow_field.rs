@@ -548,3 +548,38 @@ fn combination_cpu_time() {
         ns as f64 / 1e3 / (20 * points.len()) as f64
     );
 }
+
+#[test]
+fn every_entity_counts_beyond_thirty_two() {
+    use gradtrace::preview::shadow_field as sf;
+    // 40 small spheres in a row high above the origin; the last one, in file
+    // order, hangs right over the receiver and must shadow it.
+    let mut text = String::from(
+        "[camera]\nfrom = [0, 1, 4]\nto = [0, 0, 0]\nfov = 40\nresolution = [8, 8]\n\
+         [materials.m]\ntype = \"lambert\"\nalbedo = [0.5, 0.5, 0.5]\n\
+         [environment]\ntype = \"constant\"\nradiance = [1, 1, 1]\n",
+    );
+    for i in 0..40 {
+        let x = if i == 39 { 0.0 } else { 3.0 + i as f32 };
+        text += &format!(
+            "[[shapes]]\ntype = \"sphere\"\ncenter = [{x}, 1, 0]\nradius = 0.4\nmaterial = \"m\"\n"
+        );
+    }
+    let dir = out_dir("many");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = gradtrace::scene::load_from_str(&text, &dir.join("many.toml")).unwrap();
+    let settings = Settings {
+        rays: 6,
+        self_rays: 2,
+        ..Settings::default()
+    };
+    let fields = sf::precompute(&scene, &settings, &|_, _| {});
+    assert_eq!(fields.entities.len(), 40);
+    let (combiner, _) = fields.combiner(&[], sf::environment_sh(scene.environment.as_ref()));
+    let (lit, n) = combiner.shade(Vec3::ZERO, Vec3::Y, None, None);
+    assert_eq!(n, 40);
+    // Unoccluded, a unit environment gives 1 per unit albedo; the sphere over the
+    // point takes its cap (half-angle asin 0.4 ≈ 24°) out: 1 − sin² = 0.84.
+    assert!(lit.x < 0.9, "{lit}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -129,27 +129,37 @@ impl Combiner {
             }
         }
         // Near-to-far order of the entities that can matter (bounding sphere not
-        // entirely below the receiver's horizon).
-        let mut order: [(f32, u16); 32] = [(0.0, 0); 32];
+        // entirely below the receiver's horizon); on the stack up to 32 of them.
+        let mut stack: [(f32, u32); 32] = [(0.0, 0); 32];
+        let mut heap: Vec<(f32, u32)> = Vec::new();
         let mut count = 0;
-        let mut planes = 0u32;
         for (i, e) in self.entities.iter().enumerate() {
-            if Some(i) == own {
-                continue;
-            }
-            if let EntityKind::Plane { .. } = e.kind {
-                planes |= 1 << i.min(31);
+            if Some(i) == own || matches!(e.kind, EntityKind::Plane { .. }) {
                 continue;
             }
             let to_c = e.center - p;
-            if n.dot(to_c) < -e.radius || count == order.len() {
+            if n.dot(to_c) < -e.radius {
                 continue;
             }
-            order[count] = (to_c.length_squared(), i as u16);
+            let item = (to_c.length_squared(), i as u32);
+            if count < stack.len() {
+                stack[count] = item;
+            } else {
+                if heap.is_empty() {
+                    heap.extend_from_slice(&stack);
+                }
+                heap.push(item);
+            }
             count += 1;
         }
-        let order = &mut order[..count];
+        let order = if heap.is_empty() {
+            &mut stack[..count]
+        } else {
+            &mut heap[..]
+        };
         order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let planes =
+            |i: usize| Some(i) != own && matches!(self.entities[i].kind, EntityKind::Plane { .. });
         let mut out = Vec3::ZERO;
         for &(_, i) in order.iter() {
             let e = &self.entities[i as usize];
@@ -160,7 +170,7 @@ impl Combiner {
             // One set of trilinear corners for the occlusion and the radiance.
             let corners = occ.grid.corners(q);
             if let Some(rad) = &e.radiance {
-                if !self.behind_a_plane(p, e.center, planes) {
+                if !self.behind_a_plane(p, e.center, own) {
                     out += Vec3::new(
                         sh::dot_f32(&t, &rad[0].lookup_at(&corners)),
                         sh::dot_f32(&t, &rad[1].lookup_at(&corners)),
@@ -172,7 +182,7 @@ impl Combiner {
         }
         let mut combined = count;
         for (i, e) in self.entities.iter().enumerate() {
-            if planes & (1 << i.min(31)) == 0 {
+            if !planes(i) {
                 continue;
             }
             if let EntityKind::Plane { point, normal } = e.kind {
@@ -198,9 +208,9 @@ impl Combiner {
     }
 
     /// Whether some plane separates `p` from `light` (the light is then hidden).
-    fn behind_a_plane(&self, p: Vec3, light: Vec3, planes: u32) -> bool {
+    fn behind_a_plane(&self, p: Vec3, light: Vec3, own: Option<usize>) -> bool {
         self.entities.iter().enumerate().any(|(i, e)| match e.kind {
-            EntityKind::Plane { point, normal } if planes & (1 << i.min(31)) != 0 => {
+            EntityKind::Plane { point, normal } if Some(i) != own => {
                 normal.dot(p - point) * normal.dot(light - point) < 0.0
             }
             _ => false,
