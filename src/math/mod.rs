@@ -7,6 +7,7 @@ pub mod dual;
 pub mod quadrature;
 pub mod sampler;
 pub mod scalar;
+pub mod sh;
 pub mod warp;
 
 pub use glam::{Vec2, Vec3, Vec3A};

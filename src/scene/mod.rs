@@ -2,6 +2,7 @@
 //! pointers. Parsing and validation live in `parse`; everything downstream
 //! (accel, render, output) reads only the types defined here.
 
+pub mod animation;
 pub mod bump;
 pub mod camera;
 mod describe;
@@ -188,6 +189,8 @@ pub struct Scene {
     /// Names of the scene-file shapes, indexed by `object_id - 1`.
     pub object_names: Vec<String>,
     pub stats: SceneStats,
+    /// The `[animation]` block, if any (`preview shadow-field --frames`).
+    pub animation: Option<animation::Animation>,
 }
 
 impl Scene {

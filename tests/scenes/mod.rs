@@ -51,6 +51,7 @@ pub fn empty_scene(camera: Camera) -> Scene {
         environment: None,
         object_names: vec![],
         stats: SceneStats::default(),
+        animation: None,
     }
 }
 

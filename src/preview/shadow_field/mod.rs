@@ -1,1 +1,430 @@
 //! Shadow fields (Zhou et al. 2005; deformable extension): per-entity occlusion and source radiance fields in order-4 spherical harmonics, combined per receiver point.
+//!
+//! scene → [`precompute`] (one OOF per occluder, SRF + OOF per light, self-occlusion
+//! at mesh vertices; rays traced with our BVH, in parallel) → [`Fields`] →
+//! [`Fields::combiner`] for a frame's poses → [`shade_image`] (first hit per pixel
+//! sample) or [`shade_vertices`]. Rigid fields are rotated in SH; deforming entities
+//! are rebuilt each frame from their base-sphere visibility ([`deform`]).
+
+// Index loops mirror the coefficient subscripts of the formulas.
+#![allow(clippy::needless_range_loop)]
+
+pub mod cache;
+pub mod combine;
+pub mod deform;
+pub mod field;
+pub mod precompute;
+
+use crate::accel::{Accel, PrimRef};
+use crate::math::sh::{self, Rotation, ShF, COEFFS};
+use crate::math::{Vec2, Vec3};
+use crate::scene::{Environment, Scene};
+use combine::{Combiner, Placed};
+use glam::Mat3;
+use precompute::{Entity, EntityFields, EntityKind, Ticker};
+use rayon::prelude::*;
+
+/// Precomputation settings; every field enters the cache key.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Angular samples of each field sphere (θ including both poles × φ): 12 × 20
+    /// as in the paper.
+    pub n_theta: usize,
+    pub n_phi: usize,
+    /// Concentric spheres, geometric from `r_min` to `r_max` bounding radii.
+    pub n_radii: usize,
+    pub r_min: f32,
+    pub r_max: f32,
+    /// Rays per field sample: `rays²` stratified directions in the entity's cone.
+    pub rays: usize,
+    /// Rays per vertex for self-occlusion: `self_rays²` over the hemisphere.
+    pub self_rays: usize,
+    /// Receivers per pixel: `pixel_samples²` first hits, box filter.
+    pub pixel_samples: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            n_theta: 12,
+            n_phi: 20,
+            n_radii: 16,
+            r_min: 0.25,
+            r_max: 8.0,
+            rays: 32,
+            self_rays: 16,
+            pixel_samples: 2,
+        }
+    }
+}
+
+impl Settings {
+    /// The text of every setting, for the cache key.
+    pub fn key(&self) -> String {
+        format!("{self:?}")
+    }
+}
+
+/// The precomputed fields of a scene, rest pose.
+#[derive(Clone, Debug)]
+pub struct Fields {
+    pub entities: Vec<Entity>,
+    pub fields: Vec<EntityFields>,
+}
+
+/// Precomputes every entity's fields (in parallel); `progress(done, total)`.
+pub fn precompute(
+    scene: &Scene,
+    settings: &Settings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Fields {
+    let entities = precompute::entities(scene);
+    let total = entities
+        .iter()
+        .map(|e| precompute::work_units(scene, e, settings))
+        .sum();
+    let ticker = Ticker::new(total, progress);
+    let tick = || ticker.tick();
+    let fields = entities
+        .iter()
+        .map(|e| precompute::compute_fields(scene, e, settings, &tick))
+        .collect();
+    Fields { entities, fields }
+}
+
+/// A rigid pose of an entity relative to its rest pose: x ↦ c + t + R (x − c)
+/// about the rest bounding centre c.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    pub rotation: Mat3,
+    pub translation: Vec3,
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self {
+            rotation: Mat3::IDENTITY,
+            translation: Vec3::ZERO,
+        }
+    }
+}
+
+/// The order-4 RGB projection of the environment (zero without one).
+pub fn environment_sh(env: Option<&Environment>) -> [ShF; 3] {
+    let Some(env) = env else {
+        return [[0.0; COEFFS]; 3];
+    };
+    if let Environment::Constant { radiance } = env {
+        let one = sh::one();
+        return std::array::from_fn(|c| one.map(|x| (x * f64::from(radiance[c])) as f32));
+    }
+    let rule = sh::sphere_quadrature(96, 192);
+    let values: Vec<Vec3> = rule.iter().map(|(d, _)| env.eval(d.as_vec3())).collect();
+    std::array::from_fn(|c| {
+        let mut out = [0.0f64; COEFFS];
+        for ((d, w), v) in rule.iter().zip(&values) {
+            let y = sh::eval(*d);
+            for k in 0..COEFFS {
+                out[k] += w * f64::from(v[c]) * y[k];
+            }
+        }
+        out.map(|x| x as f32)
+    })
+}
+
+/// Lat-long image of the environment's order-4 projection (negative lobes clamped
+/// to zero): the lighting the method can represent, for the low-frequency reference.
+pub fn environment_lowfreq(env_sh: &[ShF; 3], width: usize, height: usize) -> Environment {
+    let mut texels = Vec::with_capacity(width * height);
+    for j in 0..height {
+        for i in 0..width {
+            let uv = Vec2::new(
+                (i as f32 + 0.5) / width as f32,
+                j as f32 / (height - 1) as f32,
+            );
+            let d = crate::scene::environment::latlong_to_direction(uv);
+            let y = sh::eval_f32(d);
+            texels.push(Vec3::new(
+                sh::dot_f32(&env_sh[0], &y).max(0.0),
+                sh::dot_f32(&env_sh[1], &y).max(0.0),
+                sh::dot_f32(&env_sh[2], &y).max(0.0),
+            ));
+        }
+    }
+    Environment::Image {
+        width,
+        height,
+        texels,
+        scale: 1.0,
+    }
+}
+
+impl Fields {
+    /// The combiner for one frame: each entity at `poses[i]` (rest when missing),
+    /// its fields' coefficients rotated once (not per receiver), and per-mesh
+    /// self-visibility rotated likewise.
+    pub fn combiner(&self, poses: &[Pose], env: [ShF; 3]) -> (Combiner, Vec<Option<Vec<ShF>>>) {
+        let mut placed = Vec::with_capacity(self.entities.len());
+        let mut mesh_self: Vec<Option<Vec<ShF>>> = Vec::new();
+        for (i, (e, f)) in self.entities.iter().zip(&self.fields).enumerate() {
+            let pose = poses.get(i).copied().unwrap_or_default();
+            let identity = pose.rotation == Mat3::IDENTITY;
+            let rot = Rotation::new(pose.rotation.as_dmat3());
+            let turn = |fd: &field::Field| {
+                if identity {
+                    fd.clone()
+                } else {
+                    fd.rotated(&rot)
+                }
+            };
+            let kind = match e.kind {
+                EntityKind::Plane { point, normal } => EntityKind::Plane {
+                    point: point + pose.translation,
+                    normal: pose.rotation * normal,
+                },
+                k => k,
+            };
+            placed.push(Placed {
+                kind,
+                center: e.center + pose.translation,
+                radius: e.radius,
+                to_rest: pose.rotation.transpose(),
+                occlusion: f.occlusion.as_ref().map(turn),
+                radiance: f
+                    .radiance
+                    .as_ref()
+                    .map(|r| [turn(&r[0]), turn(&r[1]), turn(&r[2])]),
+                self_from_field: e.deforming,
+            });
+            for (k, &m) in e.meshes.iter().enumerate() {
+                if mesh_self.len() <= m {
+                    mesh_self.resize(m + 1, None);
+                }
+                mesh_self[m] = f.self_occlusion.get(k).map(|occ| {
+                    occ.iter()
+                        .map(|o| {
+                            let o = if identity { *o } else { rot.apply_f32(o) };
+                            let mut v = o.map(|x| -x);
+                            v[0] += sh::one()[0] as f32;
+                            v
+                        })
+                        .collect()
+                });
+            }
+        }
+        (Combiner::new(placed, env), mesh_self)
+    }
+}
+
+/// A shaded image and how many receiver points it took.
+#[derive(Clone, Debug)]
+pub struct Shaded {
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<Vec3>,
+    /// Receiver points shaded (first hits on a non-emitting surface).
+    pub points: usize,
+    /// Sum over points of the entities combined there (the cost unit).
+    pub point_entities: usize,
+}
+
+/// Everything a receiver needs about the scene's geometry.
+pub struct Receivers<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    /// Entity index of each object id (index = object id).
+    pub entity_of_object: Vec<Option<usize>>,
+    /// Per scene mesh: visibility SH at each vertex (self-shadowing), if any.
+    pub mesh_self: &'a [Option<Vec<ShF>>],
+}
+
+impl<'a> Receivers<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        fields: &Fields,
+        mesh_self: &'a [Option<Vec<ShF>>],
+    ) -> Self {
+        let max_id = fields
+            .entities
+            .iter()
+            .map(|e| e.object_id)
+            .max()
+            .unwrap_or(0);
+        let mut entity_of_object = vec![None; max_id as usize + 1];
+        for (i, e) in fields.entities.iter().enumerate() {
+            entity_of_object[e.object_id as usize] = Some(i);
+        }
+        Self {
+            scene,
+            accel,
+            entity_of_object,
+            mesh_self,
+        }
+    }
+
+    /// Radiance along one camera ray: emission seen directly, or the shadow-field
+    /// estimate of the direct light reflected at the first hit, or the environment.
+    /// The bool says whether a receiver was shaded; the usize how many entities.
+    pub fn radiance(&self, combiner: &Combiner, ray: &crate::math::Ray) -> (Vec3, bool, usize) {
+        let Some(hit) = self.accel.intersect(ray) else {
+            let env = self
+                .scene
+                .environment
+                .as_ref()
+                .map_or(Vec3::ZERO, |e| e.eval(ray.dir));
+            return (env, false, 0);
+        };
+        let Some(sp) = self.accel.surface_point(ray, &hit) else {
+            return (Vec3::ZERO, false, 0);
+        };
+        let front = sp.n_geo.dot(ray.dir) < 0.0;
+        let (object_id, material, emission, shading_n, self_vis) = match hit.prim {
+            PrimRef::Triangle { mesh, tri } => {
+                let m = &self.scene.meshes[mesh as usize];
+                let t = m.triangles[tri as usize];
+                let b = [1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y];
+                let n = if m.normals.len() == m.positions.len() {
+                    (0..3)
+                        .map(|k| m.normals[t[k] as usize] * b[k])
+                        .sum::<Vec3>()
+                        .normalize_or_zero()
+                } else {
+                    sp.n_geo
+                };
+                let sv = self
+                    .mesh_self
+                    .get(mesh as usize)
+                    .and_then(|s| s.as_ref())
+                    .map(|s| {
+                        let mut v = [0.0f32; COEFFS];
+                        for k in 0..3 {
+                            let sk = &s[t[k] as usize];
+                            for c in 0..COEFFS {
+                                v[c] += b[k] * sk[c];
+                            }
+                        }
+                        v
+                    });
+                (
+                    m.object_id,
+                    m.material,
+                    if front { m.emission } else { Vec3::ZERO },
+                    n,
+                    sv,
+                )
+            }
+            PrimRef::Sphere(s) => {
+                let s = &self.scene.spheres[s as usize];
+                (
+                    s.object_id,
+                    s.material,
+                    if front { s.emission } else { Vec3::ZERO },
+                    sp.n_geo,
+                    None,
+                )
+            }
+        };
+        // Two-sided shading: the normal faces the viewer; self-visibility was
+        // computed for the front side only.
+        let (n, self_vis) = if shading_n.dot(ray.dir) > 0.0 {
+            (-shading_n, None)
+        } else {
+            (shading_n, self_vis)
+        };
+        let albedo = diffuse_albedo(&self.scene.materials[material as usize]);
+        if albedo == Vec3::ZERO || n == Vec3::ZERO {
+            return (emission, false, 0);
+        }
+        let own = self
+            .entity_of_object
+            .get(object_id as usize)
+            .copied()
+            .flatten();
+        let (e, count) = combiner.shade(sp.p, n, own, self_vis.as_ref());
+        let value = emission + albedo * e.max(Vec3::ZERO);
+        (crate::math::finite_or_zero(value), true, count)
+    }
+}
+
+/// The diffuse albedo the preview shades with (glossy lobes are left out: the
+/// issue's bars are for diffuse scenes; a mirror is black).
+pub fn diffuse_albedo(m: &crate::brdf::Material) -> Vec3 {
+    use crate::brdf::Material;
+    match m {
+        Material::Lambert { albedo } => *albedo,
+        Material::BlinnPhong { kd, .. } | Material::CookTorrance { kd, .. } => *kd,
+        Material::Mirror { .. } => Vec3::ZERO,
+    }
+}
+
+/// Shades every pixel with `pixel_samples²` stratified first hits (box filter),
+/// rows in parallel; deterministic whatever the thread count.
+pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: usize) -> Shaded {
+    let cam = &receivers.scene.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let k = pixel_samples.max(1);
+    let rows: Vec<(Vec<Vec3>, usize, usize)> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut row = Vec::with_capacity(w);
+            let (mut points, mut pe) = (0, 0);
+            for x in 0..w {
+                let mut acc = Vec3::ZERO;
+                for a in 0..k {
+                    for b in 0..k {
+                        let p = Vec2::new(
+                            x as f32 + (a as f32 + 0.5) / k as f32,
+                            y as f32 + (b as f32 + 0.5) / k as f32,
+                        );
+                        let (v, shaded, n) = receivers.radiance(combiner, &cam.generate_ray(p));
+                        acc += v;
+                        points += shaded as usize;
+                        pe += n;
+                    }
+                }
+                row.push(acc / (k * k) as f32);
+            }
+            (row, points, pe)
+        })
+        .collect();
+    let mut out = Shaded {
+        width: w,
+        height: h,
+        rgb: Vec::with_capacity(w * h),
+        points: 0,
+        point_entities: 0,
+    };
+    for (row, p, pe) in rows {
+        out.rgb.extend(row);
+        out.points += p;
+        out.point_entities += pe;
+    }
+    out
+}
+
+/// Shades every vertex of a mesh (the paper's per-vertex mode): reflected radiance
+/// towards the vertex normal's side, self-visibility included.
+pub fn shade_vertices(receivers: &Receivers, combiner: &Combiner, mesh: usize) -> Vec<Vec3> {
+    let scene = receivers.scene;
+    let m = &scene.meshes[mesh];
+    let normals = precompute::vertex_normals(m);
+    let own = receivers
+        .entity_of_object
+        .get(m.object_id as usize)
+        .copied()
+        .flatten();
+    let albedo = diffuse_albedo(&scene.materials[m.material as usize]);
+    let self_vis = receivers.mesh_self.get(mesh).and_then(|s| s.as_ref());
+    (0..m.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            if normals[v] == Vec3::ZERO {
+                return Vec3::ZERO;
+            }
+            let sv = self_vis.map(|s| &s[v]);
+            let (e, _) = combiner.shade(m.positions[v], normals[v], own, sv);
+            crate::math::finite_or_zero(albedo * e.max(Vec3::ZERO))
+        })
+        .collect()
+}

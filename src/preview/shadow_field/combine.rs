@@ -1,0 +1,240 @@
+//! Run-time combination (Zhou et al. 2005, Sec. 3.2 of the deformable paper): at a
+//! receiver, the entities are sorted near to far; the receiver's transfer (clamped
+//! cosine / π, times its self-visibility) is multiplied by each occluder's
+//! visibility in turn (triple products), and each light adds its SRF dotted with
+//! the transfer accumulated so far — the OOFs of the entities nearer than it.
+//! The environment's SH, last, sees every occluder.
+//!
+//! Multiplying the transfer rather than the lights' fields is the same integral
+//! ∫ L·V₁⋯V_n·T for band-limited factors; it needs one product per occluder for
+//! all lights together.
+
+use super::field::Field;
+use super::precompute::EntityKind;
+use crate::math::sh::{self, ShF, COEFFS};
+use crate::math::Vec3;
+use glam::Mat3;
+
+/// An entity placed in the current frame.
+#[derive(Clone, Debug)]
+pub struct Placed {
+    pub kind: EntityKind,
+    pub center: Vec3,
+    pub radius: f32,
+    /// World → the rest frame of the entity's fields (the inverse of its rotation).
+    pub to_rest: Mat3,
+    /// Occlusion field with world-aligned coefficients (rotated to this frame).
+    pub occlusion: Option<Field>,
+    pub radiance: Option<[Field; 3]>,
+    /// A deforming entity shades its own surface with its own field.
+    pub self_from_field: bool,
+}
+
+/// Everything the combination reads for one frame.
+#[derive(Clone, Debug)]
+pub struct Combiner {
+    pub entities: Vec<Placed>,
+    /// The environment's RGB SH (zero without an environment).
+    pub environment: [ShF; 3],
+    /// Visibility of the upper half-space of each plane (`cap(normal, 0)`), per
+    /// entity index (unused for other kinds).
+    plane_visibility: Vec<(ShF, ShF)>,
+}
+
+/// Receiver transfer of a Lambertian surface without the albedo: max(n·ω, 0)/π,
+/// i.e. the clamped cosine's zonal coefficients √(4π/(2l+1)) z_l / π times Y_lm(n)
+/// (f32, no square roots: the constants are folded; `tests/sh.rs` checks
+/// `sh::clamped_cosine`, and the unit test below this against it).
+#[inline]
+pub fn diffuse_transfer(n: Vec3) -> ShF {
+    // √(4π/(2l+1)) z_l / π for l = 0, 1, 2 (l = 3 vanishes), times the Y_lm constants.
+    const A0: f32 = 1.0;
+    const A1: f32 = 2.0 / 3.0;
+    const A2: f32 = 0.25;
+    let (x, y, z) = (n.x, n.y, n.z);
+    let c0 = A0 * 0.282_094_8;
+    let c1 = A1 * 0.488_602_5;
+    let c2 = A2 * 1.092_548_4;
+    let c20 = A2 * 0.315_391_57;
+    let c22 = A2 * 0.546_274_2;
+    [
+        c0,
+        c1 * y,
+        c1 * z,
+        c1 * x,
+        c2 * x * y,
+        c2 * y * z,
+        c20 * (3.0 * z * z - 1.0),
+        c2 * x * z,
+        c22 * (x * x - y * y),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ]
+}
+
+fn visibility_from_occlusion(o: &ShF) -> ShF {
+    let mut v = o.map(|x| -x);
+    v[0] += ONE0;
+    v
+}
+
+/// The constant 1's only coefficient, √(4π).
+const ONE0: f32 = 3.544_907_7;
+
+impl Combiner {
+    pub fn new(entities: Vec<Placed>, environment: [ShF; 3]) -> Self {
+        let plane_visibility = entities
+            .iter()
+            .map(|e| match e.kind {
+                EntityKind::Plane { normal, .. } => {
+                    let up = sh::cap(normal.as_dvec3(), 0.0).map(|x| x as f32);
+                    let down = sh::cap(-normal.as_dvec3(), 0.0).map(|x| x as f32);
+                    (up, down)
+                }
+                _ => ([0.0; COEFFS], [0.0; COEFFS]),
+            })
+            .collect();
+        Self {
+            entities,
+            environment,
+            plane_visibility,
+        }
+    }
+
+    /// Light reaching a Lambertian receiver at `p` with normal `n` per unit albedo
+    /// (the reflected radiance is albedo × this). `own` is the receiver's entity
+    /// (skipped: its self-shadowing is `self_visibility`), `self_visibility` its
+    /// per-vertex visibility, if any. Returns the value and the number of
+    /// entities that were combined (not culled).
+    pub fn shade(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        own: Option<usize>,
+        self_visibility: Option<&ShF>,
+    ) -> (Vec3, usize) {
+        let mut t = diffuse_transfer(n);
+        if let Some(v) = self_visibility {
+            t = sh::product(&t, v);
+        }
+        if let Some(e) = own.map(|i| &self.entities[i]).filter(|e| e.self_from_field) {
+            if let Some(occ) = &e.occlusion {
+                let q = e.to_rest * (p - e.center);
+                t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
+            }
+        }
+        // Near-to-far order of the entities that can matter (bounding sphere not
+        // entirely below the receiver's horizon); on the stack up to 32 of them.
+        let mut stack: [(f32, u32); 32] = [(0.0, 0); 32];
+        let mut heap: Vec<(f32, u32)> = Vec::new();
+        let mut count = 0;
+        for (i, e) in self.entities.iter().enumerate() {
+            if Some(i) == own || matches!(e.kind, EntityKind::Plane { .. }) {
+                continue;
+            }
+            let to_c = e.center - p;
+            if n.dot(to_c) < -e.radius {
+                continue;
+            }
+            let item = (to_c.length_squared(), i as u32);
+            if count < stack.len() {
+                stack[count] = item;
+            } else {
+                if heap.is_empty() {
+                    heap.extend_from_slice(&stack);
+                }
+                heap.push(item);
+            }
+            count += 1;
+        }
+        let order = if heap.is_empty() {
+            &mut stack[..count]
+        } else {
+            &mut heap[..]
+        };
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let planes =
+            |i: usize| Some(i) != own && matches!(self.entities[i].kind, EntityKind::Plane { .. });
+        let mut out = Vec3::ZERO;
+        for &(_, i) in order.iter() {
+            let e = &self.entities[i as usize];
+            let q = e.to_rest * (p - e.center);
+            let Some(occ) = &e.occlusion else {
+                continue;
+            };
+            // One set of trilinear corners for the occlusion and the radiance.
+            let corners = occ.grid.corners(q);
+            if let Some(rad) = &e.radiance {
+                if !self.behind_a_plane(p, e.center, own) {
+                    out += Vec3::new(
+                        sh::dot_f32(&t, &rad[0].lookup_at(&corners)),
+                        sh::dot_f32(&t, &rad[1].lookup_at(&corners)),
+                        sh::dot_f32(&t, &rad[2].lookup_at(&corners)),
+                    );
+                }
+            }
+            t = sh::product(&t, &visibility_from_occlusion(&occ.lookup_at(&corners)));
+        }
+        let mut combined = count;
+        for (i, e) in self.entities.iter().enumerate() {
+            if !planes(i) {
+                continue;
+            }
+            if let EntityKind::Plane { point, normal } = e.kind {
+                let (up, down) = &self.plane_visibility[i];
+                t = sh::product(
+                    &t,
+                    if normal.dot(p - point) >= 0.0 {
+                        up
+                    } else {
+                        down
+                    },
+                );
+                combined += 1;
+            }
+        }
+        let env = &self.environment;
+        out += Vec3::new(
+            sh::dot_f32(&t, &env[0]),
+            sh::dot_f32(&t, &env[1]),
+            sh::dot_f32(&t, &env[2]),
+        );
+        (out, combined)
+    }
+
+    /// Whether some plane separates `p` from `light` (the light is then hidden).
+    fn behind_a_plane(&self, p: Vec3, light: Vec3, own: Option<usize>) -> bool {
+        self.entities.iter().enumerate().any(|(i, e)| match e.kind {
+            EntityKind::Plane { point, normal } if Some(i) != own => {
+                normal.dot(p - point) * normal.dot(light - point) < 0.0
+            }
+            _ => false,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folded_transfer_is_the_clamped_cosine_over_pi() {
+        for n in [Vec3::Y, Vec3::new(0.3, -0.5, 0.81).normalize(), -Vec3::X] {
+            let want = sh::clamped_cosine(n.as_dvec3());
+            let got = diffuse_transfer(n);
+            for k in 0..COEFFS {
+                let w = want[k] / std::f64::consts::PI;
+                assert!(
+                    (f64::from(got[k]) - w).abs() < 1e-6,
+                    "{k}: {} vs {w}",
+                    got[k]
+                );
+            }
+        }
+    }
+}

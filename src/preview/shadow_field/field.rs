@@ -1,0 +1,151 @@
+//! A shadow field's sample grid: SH vectors on concentric spheres around an entity
+//! (Zhou et al. 2005, Sec. 3.1; 12 × 20 angular samples as in the deformable paper),
+//! with trilinear lookup (radius in log scale, θ, φ wrapping).
+
+use crate::math::sh::{ShF, COEFFS};
+use crate::math::Vec3;
+
+/// Where the samples of a field lie, relative to the entity's centre and in its
+/// own (rest-pose) orientation. θ is measured from the local +z axis; samples
+/// include both poles (θ_i = iπ/(n_θ−1)), φ_j = 2πj/n_φ, radii geometric from
+/// `r_min` to `r_max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub n_theta: usize,
+    pub n_phi: usize,
+    pub n_radii: usize,
+    pub r_min: f32,
+    pub r_max: f32,
+}
+
+impl Grid {
+    pub fn len(&self) -> usize {
+        self.n_theta * self.n_phi * self.n_radii
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Flat index of sample (radius, θ, φ).
+    pub fn index(&self, r: usize, t: usize, p: usize) -> usize {
+        (r * self.n_theta + t) * self.n_phi + p
+    }
+
+    pub fn radius(&self, r: usize) -> f32 {
+        if self.n_radii == 1 {
+            return self.r_min;
+        }
+        self.r_min * (self.r_max / self.r_min).powf(r as f32 / (self.n_radii - 1) as f32)
+    }
+
+    /// Unit direction of angular sample (θ index, φ index) in the local frame.
+    pub fn direction(&self, t: usize, p: usize) -> Vec3 {
+        let theta = std::f32::consts::PI * t as f32 / (self.n_theta - 1) as f32;
+        let phi = std::f32::consts::TAU * p as f32 / self.n_phi as f32;
+        let s = theta.sin();
+        Vec3::new(s * phi.cos(), s * phi.sin(), theta.cos())
+    }
+
+    /// Local offset of sample i from the centre.
+    pub fn position(&self, i: usize) -> Vec3 {
+        let p = i % self.n_phi;
+        let t = (i / self.n_phi) % self.n_theta;
+        let r = i / (self.n_phi * self.n_theta);
+        self.direction(t, p) * self.radius(r)
+    }
+
+    /// The eight samples around local offset `q` with their trilinear weights, and
+    /// the far-field scale (r_max/d)² (1 inside r_max) the caller applies to
+    /// occlusion and radiance beyond the outermost sphere (a distant entity
+    /// shrinks to a small cone whose solid angle falls as 1/d²).
+    pub fn corners(&self, q: Vec3) -> ([(u32, f32); 8], f32) {
+        let d = q.length().max(1e-30);
+        let far = if d > self.r_max {
+            (self.r_max / d).powi(2)
+        } else {
+            1.0
+        };
+        let log_ratio = (self.r_max / self.r_min).ln();
+        let sr = if self.n_radii > 1 {
+            ((d / self.r_min).ln() / log_ratio * (self.n_radii - 1) as f32)
+                .clamp(0.0, (self.n_radii - 1) as f32)
+        } else {
+            0.0
+        };
+        let cos_t = (q.z / d).clamp(-1.0, 1.0);
+        let st = cos_t.acos() / std::f32::consts::PI * (self.n_theta - 1) as f32;
+        let mut sp = q.y.atan2(q.x) / std::f32::consts::TAU;
+        if sp < 0.0 {
+            sp += 1.0;
+        }
+        let sp = (sp * self.n_phi as f32).clamp(0.0, self.n_phi as f32);
+        let (r0, fr) = split(sr, self.n_radii);
+        let (t0, ft) = split(st, self.n_theta);
+        let p0 = (sp.floor() as usize).min(self.n_phi - 1);
+        let fp = sp - p0 as f32;
+        let p1 = (p0 + 1) % self.n_phi;
+        let r1 = (r0 + 1).min(self.n_radii - 1);
+        let t1 = (t0 + 1).min(self.n_theta - 1);
+        let mut out = [(0u32, 0.0f32); 8];
+        let mut k = 0;
+        for (r, wr) in [(r0, 1.0 - fr), (r1, fr)] {
+            for (t, wt) in [(t0, 1.0 - ft), (t1, ft)] {
+                for (p, wp) in [(p0, 1.0 - fp), (p1, fp)] {
+                    out[k] = (self.index(r, t, p) as u32, wr * wt * wp);
+                    k += 1;
+                }
+            }
+        }
+        (out, far)
+    }
+}
+
+/// Integer cell and fraction of a clamped continuous index in [0, n − 1].
+fn split(s: f32, n: usize) -> (usize, f32) {
+    let i = (s.floor() as usize).min(n.saturating_sub(2));
+    (i, (s - i as f32).clamp(0.0, 1.0))
+}
+
+/// One SH vector per grid sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    pub grid: Grid,
+    pub data: Vec<ShF>,
+}
+
+impl Field {
+    /// Trilinear interpolation at local offset `q`, times the far-field scale.
+    #[inline]
+    pub fn lookup(&self, q: Vec3) -> ShF {
+        self.lookup_at(&self.grid.corners(q))
+    }
+
+    /// The interpolation at corners from [`Grid::corners`] (shared by fields on
+    /// the same grid).
+    #[inline]
+    pub fn lookup_at(&self, (corners, far): &([(u32, f32); 8], f32)) -> ShF {
+        let (corners, far) = (*corners, *far);
+        let mut c = [0.0f32; COEFFS];
+        for (i, w) in corners {
+            if w == 0.0 {
+                continue;
+            }
+            let s = &self.data[i as usize];
+            let w = w * far;
+            for k in 0..COEFFS {
+                c[k] += w * s[k];
+            }
+        }
+        c
+    }
+
+    /// The field of the entity rotated by `rot` (SH rotation of every sample;
+    /// positions stay in the rest frame and the caller rotates the query).
+    pub fn rotated(&self, rot: &crate::math::sh::Rotation) -> Field {
+        Field {
+            grid: self.grid,
+            data: self.data.iter().map(|c| rot.apply_f32(c)).collect(),
+        }
+    }
+}

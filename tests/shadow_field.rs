@@ -1,0 +1,585 @@
+//! Shadow fields: the OOF of a sphere against its closed-form visibility cap, the
+//! SRF of a sphere light against its radiance cap, field interpolation, and the
+//! preview against the path tracer end to end (`pipeline::preview::shadow_field::run`).
+
+// Index loops mirror the matrix subscripts.
+#![allow(clippy::needless_range_loop)]
+
+use glam::{DVec3, Vec3};
+use gradtrace::math::sh::{self, COEFFS};
+use gradtrace::pipeline::preview::shadow_field::{run, ShadowFieldOptions};
+use gradtrace::preview::shadow_field::precompute::EntityGeometry;
+use gradtrace::preview::shadow_field::Settings;
+use gradtrace::scene::Sphere;
+use std::path::PathBuf;
+
+fn sphere(center: Vec3, radius: f32, emission: Vec3) -> Sphere {
+    Sphere {
+        name: "s".into(),
+        center,
+        radius,
+        material: 0,
+        emission,
+        bump: None,
+        object_id: 1,
+    }
+}
+
+/// L2 norm of the difference of two SH functions over the sphere, relative to the
+/// norm of the reference (Parseval: the coefficient vectors' distance).
+fn rel_l2(a: &[f32; COEFFS], b: &sh::Sh) -> f64 {
+    let d: f64 = (0..COEFFS).map(|k| (a[k] as f64 - b[k]).powi(2)).sum();
+    let n: f64 = b.iter().map(|x| x * x).sum();
+    (d / n).sqrt()
+}
+
+#[test]
+fn sphere_occlusion_field_matches_the_closed_form_cap() {
+    let (c, r) = (Vec3::new(0.3, -0.2, 0.5), 0.7);
+    let geo = EntityGeometry::from_shapes(&[], &[sphere(c, r, Vec3::ZERO)]);
+    for (k, d) in [1.05f32, 1.5, 3.0, 8.0].into_iter().enumerate() {
+        let dir = Vec3::new(0.3, 0.8, -0.52 + 0.1 * k as f32).normalize();
+        let p = c + dir * d * r;
+        let got = geo.sample(p, c, r, 32, false).occlusion;
+        let sin = 1.0 / d as f64;
+        let want = sh::cap(-dir.as_dvec3(), (1.0 - sin * sin).sqrt());
+        let err = rel_l2(&got, &want);
+        // 32² stratified rays over the cone the sphere fills: the cap is resolved
+        // to well under 1% (a bound a wrong cone or weight misses by far).
+        assert!(err < 5e-3, "d = {d} R: relative L2 error {err}");
+    }
+}
+
+#[test]
+fn sphere_light_radiance_field_matches_its_cap() {
+    let (c, r, le) = (Vec3::ZERO, 0.3, Vec3::new(2.0, 1.0, 0.5));
+    let geo = EntityGeometry::from_shapes(&[], &[sphere(c, r, le)]);
+    let p = Vec3::new(0.4, 1.1, -0.3);
+    let s = geo.sample(p, c, r, 32, true);
+    let d = p.length() as f64;
+    let sin = r as f64 / d;
+    let cap = sh::cap((c - p).normalize().as_dvec3(), (1.0 - sin * sin).sqrt());
+    for ch in 0..3 {
+        let want = cap.map(|x| x * le[ch] as f64);
+        assert!(rel_l2(&s.radiance[ch], &want) < 5e-3);
+    }
+}
+
+#[test]
+fn interpolated_field_stays_close_to_direct_samples() {
+    use gradtrace::preview::shadow_field::field::{Field, Grid};
+    let (c, r) = (Vec3::ZERO, 0.5);
+    let geo = EntityGeometry::from_shapes(&[], &[sphere(c, r, Vec3::ZERO)]);
+    let grid = Grid {
+        n_theta: 12,
+        n_phi: 20,
+        n_radii: 16,
+        r_min: 0.25 * r,
+        r_max: 8.0 * r,
+    };
+    let field = Field {
+        grid,
+        data: (0..grid.len())
+            .map(|i| geo.sample(c + grid.position(i), c, r, 24, false).occlusion)
+            .collect(),
+    };
+    // Points between the samples: the trilinear lookup against the exact cap.
+    let mut worst: f64 = 0.0;
+    for (k, d) in [1.3f32, 2.2, 3.7, 6.1].into_iter().enumerate() {
+        let dir = Vec3::new(0.37 * k as f32 - 0.5, 0.61, 0.29).normalize();
+        let got = field.lookup(dir * d * r);
+        let sin = 1.0 / d as f64;
+        let want = sh::cap(-dir.as_dvec3(), (1.0 - sin * sin).sqrt());
+        let err = rel_l2(&got, &want);
+        eprintln!("d = {d} R: relative L2 error of the interpolated field {err:.4}");
+        worst = worst.max(err);
+    }
+    // 12 × 20 angular samples are 15–18° apart: far out, where the cap is a small
+    // lobe whose coefficients follow its direction, linear interpolation between
+    // neighbours loses a few per cent (measured 5.1%, 4.2%, 2.7%, 7.4% at the four
+    // distances); a wrong grid, weight or axis gives errors of order 1.
+    assert!(worst < 0.1, "worst relative L2 error {worst}");
+    // Beyond the outermost sphere the occlusion falls as 1/d².
+    let far = field.lookup(Vec3::new(0.0, 40.0 * r, 0.0));
+    let want = sh::cap(-DVec3::Y, (1.0 - 1.0 / 1600f64).sqrt());
+    assert!((far[0] as f64 - want[0]).abs() / want[0] < 0.02);
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("gradtrace-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn preview_agrees_with_the_path_tracer_on_the_bunny_scene() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+    let mut opts = ShadowFieldOptions::new(scene);
+    opts.out_dir = out_dir("bunny");
+    opts.quiet = true;
+    opts.resolution = Some((96, 72));
+    opts.reference_spp = Some(64);
+    opts.settings = Settings {
+        rays: 16,
+        self_rays: 8,
+        ..Settings::default()
+    };
+    let first = run(&opts).unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&first).unwrap());
+    assert_eq!(first.method, "shadow-field");
+    assert_eq!(first.entities, 4, "floor, bunny, ball, light");
+    assert!(!first.precompute_cached);
+    assert!(
+        first.points >= 96 * 72 * 4 / 2,
+        "most pixels see a lit surface"
+    );
+    assert!(first.rmse.is_finite() && first.rmse_lowfreq.is_finite());
+    assert!(
+        first.rmse_relative < 0.15,
+        "RMSE {}% of the mean",
+        first.rmse_relative * 100.0
+    );
+    let exr = gradtrace::output::read_exr(&first.exr).unwrap();
+    for ch in [
+        "R",
+        "G",
+        "B",
+        "reference.R",
+        "reference.G",
+        "reference.B",
+        "error.Y",
+    ] {
+        let c = exr.channel(ch).unwrap_or_else(|| panic!("missing {ch}"));
+        assert!(c.data.iter().all(|x| x.is_finite()));
+    }
+    assert!(first.png.is_file());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(opts.out_dir.join("preview.json")).unwrap())
+            .unwrap();
+    for key in [
+        "method",
+        "entities",
+        "points",
+        "precompute_s",
+        "render_s",
+        "us_per_point_entity",
+        "image_mean",
+        "rmse",
+        "rmse_lowfreq",
+        "reference_spp_equal_error",
+        "reference_s_equal_error",
+        "speedup_equal_error",
+    ] {
+        assert!(json.get(key).is_some(), "preview.json lacks {key}");
+    }
+    // A second run reads the cached fields and shades the same image.
+    let second = run(&opts).unwrap();
+    assert!(second.precompute_cached);
+    let again = gradtrace::output::read_exr(&second.exr).unwrap();
+    assert_eq!(again.channel("R"), exr.channel("R"));
+    let _ = std::fs::remove_dir_all(&opts.out_dir);
+}
+
+mod deforming {
+    use super::*;
+    use gradtrace::preview::shadow_field::deform::{self, BaseSphere, Extrapolation, MatrixTable};
+    use gradtrace::preview::shadow_field::field::Grid;
+    use gradtrace::preview::shadow_field::precompute;
+
+    #[test]
+    fn rescaling_is_the_papers_construction() {
+        // f_1 is the identity, f_k⁻¹ = f_{1/k}, f′ matches finite differences, and
+        // the silhouette seen at 45° from r on the square's diagonal: from d = 2r
+        // it is at atan(s/(d − s)) with s = r/2.
+        for &theta in &[0.1, 0.5, 1.0, 1.5, 2.0, 3.0] {
+            assert!((deform::f_k(theta, 1.0) - theta).abs() < 1e-14);
+            for &k in &[0.2, 0.7, 1.6, 3.0] {
+                let back = deform::f_k(deform::f_k(theta, k), 1.0 / k);
+                assert!((back - theta).abs() < 1e-12);
+                let h = 1e-6;
+                let fd = (deform::f_k(theta + h, k) - deform::f_k(theta - h, k)) / (2.0 * h);
+                assert!((fd - deform::f_k_derivative(theta, k)).abs() < 1e-7);
+            }
+        }
+        let want = (0.5f64 / 1.5).atan();
+        assert!((deform::f_k(std::f64::consts::FRAC_PI_4, 0.5) - want).abs() < 1e-14);
+    }
+
+    #[test]
+    fn extrapolation_matrices_have_the_papers_sparsity() {
+        assert_eq!(deform::paper_nonzero_count(deform::Q), 44);
+        assert_eq!(deform::sparsity_pattern().len(), 44);
+        let pattern = deform::sparsity_pattern();
+        for &k in &[0.15, 0.5, 0.9, 1.4, 3.0] {
+            let generic = (0.3..=2.0).contains(&k);
+            for kind in [Extrapolation::Visibility, Extrapolation::Radiance] {
+                let m = deform::matrix_dense(k, kind);
+                let mut nonzero = 0;
+                for a in 0..COEFFS {
+                    for b in 0..COEFFS {
+                        if pattern.contains(&(a, b)) {
+                            nonzero += (m[a][b].abs() > 1e-9) as usize;
+                        } else {
+                            assert!(
+                                m[a][b].abs() < 1e-12,
+                                "M[{a}][{b}] = {} at k = {k}",
+                                m[a][b]
+                            );
+                        }
+                    }
+                }
+                // Inside the 44 positions three more entries vanish exactly: a
+                // warp of the constant is the constant, so the visibility matrix's
+                // column 0 is (1, 0, …); the radiance factor keeps ∫ V dω (App.
+                // A), so that matrix's row 0 is (1, 0, …). Every other allowed
+                // entry is used for a generic k (as k → 0 the warped functions
+                // shrink to a point and more fall below 1e-9).
+                for l in 1..4 {
+                    let i = sh::index(l, 0);
+                    let (a, b) = match kind {
+                        Extrapolation::Visibility => (i, 0),
+                        Extrapolation::Radiance => (0, i),
+                    };
+                    assert!(
+                        m[a][b].abs() < 1e-6,
+                        "{kind:?} M[{a}][{b}] = {} at k = {k}",
+                        m[a][b]
+                    );
+                }
+                assert!(
+                    (m[0][0] - 1.0).abs() < 1e-6,
+                    "{kind:?} k = {k}: {}",
+                    m[0][0]
+                );
+                if generic {
+                    assert_eq!(nonzero, 41, "{kind:?} k = {k}");
+                }
+            }
+        }
+        let id = deform::matrix_dense(1.0, Extrapolation::Visibility);
+        for a in 0..COEFFS {
+            for b in 0..COEFFS {
+                assert!((id[a][b] - if a == b { 1.0 } else { 0.0 }).abs() < 1e-10);
+            }
+        }
+        // Linear interpolation between tabulated ratios is between its neighbours.
+        let table = MatrixTable::new(vec![0.5, 1.0], Extrapolation::Visibility);
+        let mid = table.at(0.75);
+        for ((a, b), m) in table.matrices[0]
+            .entries
+            .iter()
+            .zip(&table.matrices[1].entries)
+            .zip(&mid.entries)
+        {
+            assert!((m.2 - 0.5 * (a.2 + b.2)).abs() < 1e-6);
+        }
+    }
+
+    fn bunny() -> (gradtrace::scene::Scene, precompute::Entity) {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+        let scene = gradtrace::scene::load(std::path::Path::new(path)).unwrap();
+        let e = precompute::entities(&scene)
+            .into_iter()
+            .find(|e| e.name == "bunny")
+            .unwrap();
+        (scene, e)
+    }
+
+    /// Relative L2 distance over all samples of two fields.
+    fn field_error(a: &[[f32; COEFFS]], b: &[[f32; COEFFS]]) -> f64 {
+        let (mut d, mut n) = (0.0, 0.0);
+        for (x, y) in a.iter().zip(b) {
+            for k in 0..COEFFS {
+                d += (x[k] as f64 - y[k] as f64).powi(2);
+                n += (y[k] as f64).powi(2);
+            }
+        }
+        (d / n).sqrt()
+    }
+
+    #[test]
+    fn base_sphere_extrapolation_matches_direct_sampling_at_other_radii() {
+        // The paper's Fig. 1 check, on the bunny: visibility sampled on the
+        // bounding sphere and rescaled by f_k, against visibility traced directly
+        // at 1.5, 2.5 and 5 radii (the same 12 × 20 directions).
+        let (scene, e) = bunny();
+        let geo = precompute::EntityGeometry::new(&scene, &e);
+        let bsv = BaseSphere::trace(&geo, e.center, e.radius, 12, 20, 24);
+        let mut results = Vec::new();
+        for (ratio, bound) in [(1.5f32, 0.45), (2.5, 1.1), (5.0, 3.8)] {
+            let grid = Grid {
+                n_theta: 12,
+                n_phi: 20,
+                n_radii: 1,
+                r_min: ratio * e.radius,
+                r_max: ratio * e.radius,
+            };
+            let table = MatrixTable::for_grid(&grid, e.radius, Extrapolation::Visibility);
+            let extrapolated = bsv.extrapolate(&grid, &table);
+            let direct: Vec<_> = (0..grid.len())
+                .map(|i| {
+                    geo.sample(e.center + grid.position(i), e.center, e.radius, 24, false)
+                        .occlusion
+                })
+                .collect();
+            let err = field_error(&extrapolated.data, &direct);
+            // Without rescaling (M = identity) the base-sphere visibility is far too wide.
+            let identity = MatrixTable::new(vec![1.0], Extrapolation::Visibility);
+            let plain = bsv.extrapolate(&grid, &identity);
+            let err_plain = field_error(&plain.data, &direct);
+            eprintln!("{ratio} R: relative L2 error {err:.3} with f_k, {err_plain:.3} without");
+            results.push((ratio, bound, err, err_plain));
+        }
+        for (ratio, bound, err, err_plain) in results {
+            assert!(err < bound, "{ratio} R: {err}");
+            assert!(err < 0.5 * err_plain);
+        }
+    }
+}
+
+#[test]
+fn deforming_sequence_renders_every_frame() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/shadowfield_deform.toml"
+    );
+    let mut opts = ShadowFieldOptions::new(scene);
+    opts.out_dir = out_dir("deform");
+    opts.quiet = true;
+    opts.frames = Some(3);
+    opts.resolution = Some((64, 48));
+    opts.reference_spp = Some(32);
+    opts.settings = Settings {
+        rays: 12,
+        self_rays: 6,
+        ..Settings::default()
+    };
+    let s = run(&opts).unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&s).unwrap());
+    assert_eq!(s.frames, Some(3));
+    for f in 0..3 {
+        assert!(opts
+            .out_dir
+            .join(format!("shadowfield_deform-f{f:03}.exr"))
+            .is_file());
+    }
+    let (bsv, full) = (s.bsv_update_s.unwrap(), s.full_field_s.unwrap());
+    assert!(
+        bsv > 0.0 && full > bsv,
+        "base-sphere update {bsv} s vs full field {full} s"
+    );
+    let worst = s.rmse_worst_frame_relative.unwrap();
+    assert!(
+        worst.is_finite() && worst < 0.3,
+        "worst frame RMSE {}% of the mean",
+        worst * 100.0
+    );
+    let _ = std::fs::remove_dir_all(&opts.out_dir);
+}
+
+#[test]
+fn animation_block_errors_name_the_key() {
+    let dir = out_dir("anim-errors");
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = "[camera]\nfrom = [0, 1, 4]\nto = [0, 0, 0]\nfov = 40\nresolution = [8, 8]\n\
+                [materials.m]\ntype = \"lambert\"\nalbedo = [0.5, 0.5, 0.5]\n\
+                [[shapes]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
+    let cases = [
+        ("[animation]\n[[animation.objects]]\nshape = \"bal\"\n", "undefined shape `bal`"),
+        (
+            "[animation]\n[[animation.objects]]\nshape = \"ball\"\nkeys = [{ t = 2 }]\n",
+            "expected a time in [0, 1]",
+        ),
+        (
+            "[animation]\n[[animation.objects]]\nshape = \"ball\"\ndeform = { type = \"wobble\", amount = [0, 1] }\n",
+            "unknown variant `wobble`",
+        ),
+        ("[animation]\nframe = 3\n", "unknown field `frame`"),
+    ];
+    for (extra, want) in cases {
+        let text = format!("{base}{extra}");
+        let err = gradtrace::scene::load_from_str(&text, &dir.join("a.toml")).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains(want) && msg.contains("animation"), "{msg}");
+    }
+    let ok = format!(
+        "{base}[animation]\nframes = 4\n[[animation.objects]]\nshape = \"ball\"\n\
+         keys = [{{ t = 0 }}, {{ t = 1, translate = [1, 0, 0] }}]\n"
+    );
+    let scene = gradtrace::scene::load_from_str(&ok, &dir.join("a.toml")).unwrap();
+    let anim = scene.animation.as_ref().unwrap();
+    assert_eq!(anim.frames, 4);
+    let mid = anim.scene_at(&scene, 1, 3);
+    assert!((mid.spheres[0].center.x - 0.5).abs() < 1e-6);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The bundled scenes at their own settings, into `out/shadow_field/` (minutes):
+/// `cargo test --release --test shadow_field bundled_scenes -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn bundled_scenes_at_full_settings() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    for (scene, frames, spp) in [
+        ("shadowfield_bunny", None, 512),
+        ("shadowfield_deform", Some(8), 256),
+    ] {
+        let mut opts = ShadowFieldOptions::new(root.join(format!("scenes/{scene}.toml")));
+        opts.out_dir = root.join("out/shadow_field").join(scene);
+        opts.frames = frames;
+        opts.reference_spp = Some(spp);
+        let s = run(&opts).unwrap();
+        println!("{}", serde_json::to_string_pretty(&s).unwrap());
+    }
+}
+
+#[test]
+fn low_frequency_environment_reprojects_to_its_own_coefficients() {
+    use gradtrace::preview::shadow_field::{environment_lowfreq, environment_sh};
+    use gradtrace::scene::Environment;
+    // A sky whose order-4 projection stays positive, so the lat-long image of the
+    // projection (negative lobes clamped) holds exactly that projection.
+    let sky = Environment::GaussianSky {
+        direction: Vec3::new(0.3, 0.9, 0.1).normalize(),
+        sharpness: 2.0,
+        peak: Vec3::new(1.0, 0.8, 0.6),
+        ambient: Vec3::splat(0.5),
+    };
+    let sh_sky = environment_sh(Some(&sky));
+    let image = environment_lowfreq(&sh_sky, 512, 256);
+    let again = environment_sh(Some(&image));
+    for c in 0..3 {
+        let err: f64 = (0..COEFFS)
+            .map(|k| (again[c][k] - sh_sky[c][k]).powi(2) as f64)
+            .sum();
+        let norm: f64 = sh_sky[c].iter().map(|x| (*x as f64).powi(2)).sum();
+        assert!(
+            (err / norm).sqrt() < 2e-3,
+            "channel {c}: {}",
+            (err / norm).sqrt()
+        );
+    }
+    // The constant environment's projection is exact: √(4π) L in the DC term.
+    let k = environment_sh(Some(&Environment::Constant {
+        radiance: Vec3::ONE,
+    }));
+    assert!((k[0][0] - (4.0 * std::f32::consts::PI).sqrt()).abs() < 1e-6);
+    assert!(k[0][1..].iter().all(|x| *x == 0.0));
+}
+
+#[test]
+fn vertices_are_shaded_like_pixels() {
+    use gradtrace::preview::shadow_field::{self as sf, Receivers};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+    let scene = gradtrace::scene::load(std::path::Path::new(path)).unwrap();
+    let settings = Settings {
+        rays: 8,
+        self_rays: 4,
+        ..Settings::default()
+    };
+    let fields = sf::precompute(&scene, &settings, &|_, _| {});
+    let accel = gradtrace::accel::Accel::build(&scene.meshes, &scene.spheres);
+    let (combiner, mesh_self) =
+        fields.combiner(&[], sf::environment_sh(scene.environment.as_ref()));
+    let receivers = Receivers::new(&scene, &accel, &fields, &mesh_self);
+    let bunny = scene
+        .meshes
+        .iter()
+        .position(|m| m.name.starts_with("bunny"))
+        .unwrap();
+    let colours = sf::shade_vertices(&receivers, &combiner, bunny);
+    assert_eq!(colours.len(), scene.meshes[bunny].positions.len());
+    assert!(colours
+        .iter()
+        .all(|c| c.is_finite() && c.min_element() >= 0.0));
+    // A camera ray through a vertex sees the vertex's own colour (same point,
+    // normal and self-visibility up to the barycentric blend at a vertex).
+    let v = scene.meshes[bunny].positions.len() / 3;
+    let x = scene.meshes[bunny].positions[v];
+    let eye = x + sf::precompute::vertex_normals(&scene.meshes[bunny])[v] * 0.5;
+    let ray = gradtrace::math::Ray::new(eye, (x - eye).normalize());
+    let (pixel, shaded, _) = receivers.radiance(&combiner, &ray);
+    assert!(shaded);
+    let rel = (pixel - colours[v]).length() / colours[v].length();
+    assert!(rel < 0.05, "pixel {pixel} vs vertex {}", colours[v]);
+}
+
+/// On-CPU nanoseconds of the calling thread (Linux schedstat), so that a speed
+/// figure on a shared, loaded machine counts only the time this thread ran.
+fn thread_cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
+/// µs of CPU per receiver point and entity, one thread:
+/// `cargo test --release --test shadow_field combination_cpu_time -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn combination_cpu_time() {
+    use gradtrace::preview::shadow_field as sf;
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_bunny.toml");
+    let scene = gradtrace::scene::load(std::path::Path::new(path)).unwrap();
+    let settings = Settings {
+        rays: 8,
+        self_rays: 4,
+        ..Settings::default()
+    };
+    let fields = sf::precompute(&scene, &settings, &|_, _| {});
+    let (combiner, _) = fields.combiner(&[], sf::environment_sh(scene.environment.as_ref()));
+    let floor = fields.entities.iter().position(|e| e.name == "floor");
+    let points: Vec<Vec3> = (0..4096)
+        .map(|i| Vec3::new(-1.5 + 0.0007 * i as f32, 0.0, 0.6 - 0.0003 * i as f32))
+        .collect();
+    let (mut pairs, mut acc) = (0usize, Vec3::ZERO);
+    let Some(start) = thread_cpu_ns() else {
+        return;
+    };
+    for _ in 0..20 {
+        for &p in &points {
+            let (v, n) = combiner.shade(p, Vec3::Y, floor, None);
+            acc += v;
+            pairs += n;
+        }
+    }
+    let ns = thread_cpu_ns().unwrap() - start;
+    println!(
+        "{:.3} µs CPU per point-entity ({pairs} point-entity pairs, {:.3} µs per point), checksum {acc}",
+        ns as f64 / 1e3 / pairs as f64,
+        ns as f64 / 1e3 / (20 * points.len()) as f64
+    );
+}
+
+#[test]
+fn every_entity_counts_beyond_thirty_two() {
+    use gradtrace::preview::shadow_field as sf;
+    // 40 small spheres in a row high above the origin; the last one, in file
+    // order, hangs right over the receiver and must shadow it.
+    let mut text = String::from(
+        "[camera]\nfrom = [0, 1, 4]\nto = [0, 0, 0]\nfov = 40\nresolution = [8, 8]\n\
+         [materials.m]\ntype = \"lambert\"\nalbedo = [0.5, 0.5, 0.5]\n\
+         [environment]\ntype = \"constant\"\nradiance = [1, 1, 1]\n",
+    );
+    for i in 0..40 {
+        let x = if i == 39 { 0.0 } else { 3.0 + i as f32 };
+        text += &format!(
+            "[[shapes]]\ntype = \"sphere\"\ncenter = [{x}, 1, 0]\nradius = 0.4\nmaterial = \"m\"\n"
+        );
+    }
+    let dir = out_dir("many");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = gradtrace::scene::load_from_str(&text, &dir.join("many.toml")).unwrap();
+    let settings = Settings {
+        rays: 6,
+        self_rays: 2,
+        ..Settings::default()
+    };
+    let fields = sf::precompute(&scene, &settings, &|_, _| {});
+    assert_eq!(fields.entities.len(), 40);
+    let (combiner, _) = fields.combiner(&[], sf::environment_sh(scene.environment.as_ref()));
+    let (lit, n) = combiner.shade(Vec3::ZERO, Vec3::Y, None, None);
+    assert_eq!(n, 40);
+    // Unoccluded, a unit environment gives 1 per unit albedo; the sphere over the
+    // point takes its cap (half-angle asin 0.4 ≈ 24°) out: 1 − sin² = 0.84.
+    assert!(lit.x < 0.9, "{lit}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
