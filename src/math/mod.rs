@@ -5,6 +5,7 @@
 pub mod distribution;
 pub mod dual;
 pub mod sampler;
+pub mod vmf;
 pub mod warp;
 
 pub use glam::{Vec2, Vec3, Vec3A};
