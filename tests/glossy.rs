@@ -375,3 +375,119 @@ fn teapot_preview_matches_path_tracer() {
     println!("{s:#?}\nRMSE = {:.2} % of the mean", 100.0 * rel);
     assert!(rel <= 0.08, "RMSE {:.2} % of the mean", 100.0 * rel);
 }
+
+/// Process CPU seconds (user + system), Linux only: the machine is shared, so
+/// precompute cost is quoted in CPU time as well as wall time.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat
+        .rsplit(')')
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect();
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|x| x.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// The benchmark figures of the issue: `GLOSSY_SCENE` (default the e = 128 teapot),
+/// `GLOSSY_LEVEL`, `GLOSSY_SAMPLES`, `GLOSSY_SPATIAL` (0/1), `GLOSSY_UNIFORM`
+/// (uniform levels), `GLOSSY_RES`, `GLOSSY_SPP`, `GLOSSY_OUT`; prints progress with
+/// wall and CPU time, then runs the pipeline on the cached transfer.
+#[test]
+#[ignore = "benchmark; run with --ignored --nocapture"]
+fn glossy_benchmark() {
+    let scene_path: String = env_or("GLOSSY_SCENE", "scenes/glossy_teapot.toml".to_string());
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene_path);
+    let res: u32 = env_or("GLOSSY_RES", 512);
+    let mut opts = GlossyOptions::new(&scene_path);
+    opts.out_dir = PathBuf::from(env_or(
+        "GLOSSY_OUT",
+        format!("{}/glossy_bench", env!("CARGO_TARGET_TMPDIR")),
+    ));
+    opts.quiet = true;
+    opts.resolution = Some((res, res));
+    opts.reference_spp = Some(env_or("GLOSSY_SPP", 256));
+    opts.orbit = Some(env_or("GLOSSY_ORBIT", 0));
+    opts.settings = Settings {
+        max_angular_level: env_or("GLOSSY_LEVEL", 3),
+        samples: env_or("GLOSSY_SAMPLES", 32),
+        spatial: env_or("GLOSSY_SPATIAL", 1) == 1,
+        uniform_levels: env_or("GLOSSY_UNIFORM", 0),
+        max_vertices: env_or("GLOSSY_MAXV", 60_000),
+        ..Settings::default()
+    };
+    let scene = gradtrace::scene::load(&scene_path).unwrap();
+    let accel = gradtrace::accel::Accel::build(&scene.meshes, &scene.spheres);
+    // Where `run` looks for the cache; an existing one is reused.
+    let key = {
+        use sha2::Digest;
+        let mut h = sha2::Sha256::new();
+        h.update(scene.content_hash().unwrap().as_bytes());
+        h.update(format!("{:?}", opts.settings).as_bytes());
+        h.update(env!("CARGO_PKG_VERSION").as_bytes());
+        h.finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect::<String>()
+    };
+    let cache = opts
+        .out_dir
+        .join("cache")
+        .join(format!("glossy-{}.bin", &key[..16]));
+    let mut cpu_s = f64::NAN;
+    if !cache.is_file() {
+        let (wall, cpu) = (std::time::Instant::now(), cpu_seconds());
+        let last = std::sync::Mutex::new((String::new(), 0u64));
+        let progress = |phase: &str, done: u64, total: u64| {
+            let mut l = last.lock().unwrap();
+            let step = 10 * done / total.max(1);
+            if l.0 != phase || l.1 != step {
+                *l = (phase.to_string(), step);
+                let (w, c) = (wall.elapsed().as_secs_f64(), cpu_seconds() - cpu);
+                eprintln!("[{w:7.1} s wall, {c:7.1} s cpu] {phase}: {done}/{total}");
+            }
+        };
+        let t = glossy::precompute(&scene, &accel, &opts.settings, &progress).unwrap();
+        cpu_s = cpu_seconds() - cpu;
+        eprintln!(
+            "precompute: {:.1} s wall, {cpu_s:.1} s cpu; {:?}",
+            wall.elapsed().as_secs_f64(),
+            t.stats
+        );
+        std::fs::create_dir_all(cache.parent().unwrap()).unwrap();
+        std::fs::write(&cache, t.encode(&key)).unwrap();
+    }
+    let s = run(&opts).unwrap();
+    assert!(
+        s.cached,
+        "the benchmark's cache key must match the pipeline's"
+    );
+    println!(
+        "RESULT scene={} res={res} precompute_wall_s={:.1} precompute_cpu_s={cpu_s:.1} vertices={}→{} levels={:?} bytes={} render_ms={:.1} rmse={:.5} mean={:.5} rmse/mean={:.2}% interior={:.2}% reference_s={:.1}",
+        scene.name(),
+        s.precompute_s,
+        s.vertices_initial,
+        s.vertices_final,
+        s.angular_levels,
+        s.bytes,
+        s.render_ms,
+        s.rmse,
+        s.reference_mean,
+        100.0 * s.rmse / s.reference_mean,
+        100.0 * s.rmse_interior / s.reference_mean,
+        s.reference_s
+    );
+}

@@ -28,6 +28,10 @@ pub struct GlossyOptions {
     /// Override of the camera resolution (width, height).
     pub resolution: Option<(u32, u32)>,
     pub quiet: bool,
+    /// Written preview: n × n positions per pixel (a box filter like the path
+    /// tracer's, so silhouettes do not alias into the error); `render_ms` is the
+    /// one-position frame.
+    pub subpixels: u32,
     pub settings: Settings,
 }
 
@@ -40,6 +44,7 @@ impl GlossyOptions {
             reference_spp: None,
             resolution: None,
             quiet: false,
+            subpixels: 2,
             settings: Settings::default(),
         }
     }
@@ -62,6 +67,8 @@ pub struct GlossySummary {
     pub image_mean: f64,
     pub reference_mean: f64,
     pub rmse: f64,
+    /// RMSE over pixels whose corners and centre see the same object (no edge).
+    pub rmse_interior: f64,
     pub reference_s: f64,
 }
 
@@ -225,7 +232,9 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
     };
     let transfer = transfer(&scene, &accel, opts)?;
     let env = PrefilteredEnv::new(scene.environment.as_ref().expect("checked by precompute"));
-    let (image, render_ms) = time_frame(&transfer, &env, &scene, &accel, &camera);
+    let (_, render_ms) = time_frame(&transfer, &env, &scene, &accel, &camera);
+    let image =
+        glossy::render_supersampled(&transfer, &env, &scene, &accel, &camera, opts.subpixels);
     let (reference, reference_s) = reference(&scene, &accel, &camera, opts)?;
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| out_err(&opts.out_dir, e))?;
     let name = scene.name();
@@ -236,6 +245,26 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         .map(|(a, b)| (luminance(*a) - luminance(*b)).abs())
         .collect();
     let rmse = output::metrics::rmse(&image, &reference)? as f64;
+    let interior = interior_pixels(&accel, &camera);
+    let pick = |img: &[Vec3]| -> Vec<Vec3> {
+        img.iter()
+            .zip(&interior)
+            .filter(|(_, &k)| k)
+            .map(|(c, _)| *c)
+            .collect()
+    };
+    let rmse_interior = output::metrics::rmse(&pick(&image), &pick(&reference))? as f64;
+    let scale = 4.0 / mean_luminance(&reference).max(1e-12) as f32;
+    let error_rgb: Vec<Vec3> = error
+        .iter()
+        .map(|e| output::colormap::viridis((e * scale).min(1.0)))
+        .collect();
+    output::write_png(
+        &opts.out_dir.join(format!("{name}_error.png")),
+        &error_rgb,
+        w,
+        h,
+    )?;
     let mut exr = OutputImage::new(w, h);
     exr.push_vec3("", ["R", "G", "B"], &image);
     exr.push_vec3("reference.", ["R", "G", "B"], &reference);
@@ -244,6 +273,12 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
     output::write_exr(&exr_path, &exr)?;
     let png = opts.out_dir.join(format!("{name}.png"));
     output::write_png(&png, &image, w, h)?;
+    output::write_png(
+        &opts.out_dir.join(format!("{name}_reference.png")),
+        &reference,
+        w,
+        h,
+    )?;
     let orbit = orbit_views(&transfer, &env, &scene, &accel, &camera, opts)?;
     let levels_png = opts.out_dir.join(format!("{name}_levels.png"));
     let levels = level_image(&transfer, &accel, &camera);
@@ -264,11 +299,36 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         image_mean: mean_luminance(&image),
         reference_mean: mean_luminance(&reference),
         rmse,
+        rmse_interior,
         reference_s,
     };
     write_json(&summary, opts, &scene, &orbit)?;
     write_stats_page(&summary, &levels_png, &transfer)?;
     Ok(summary)
+}
+
+/// Pixels whose centre and four corners hit the same mesh (or all miss).
+fn interior_pixels(accel: &Accel, camera: &Camera) -> Vec<bool> {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let id = |x: f32, y: f32| -> i64 {
+        match accel
+            .intersect(&camera.generate_ray(Vec2::new(x, y)))
+            .map(|hit| hit.prim)
+        {
+            None => -1,
+            Some(crate::accel::PrimRef::Triangle { mesh, .. }) => mesh as i64,
+            Some(crate::accel::PrimRef::Sphere(s)) => 1 << 40 | s as i64,
+        }
+    };
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let c = id(x + 0.5, y + 0.5);
+            [(x, y), (x + 1.0, y), (x, y + 1.0), (x + 1.0, y + 1.0)]
+                .iter()
+                .all(|&(a, b)| id(a, b) == c)
+        })
+        .collect()
 }
 
 fn orbit_views(
@@ -359,6 +419,8 @@ fn write_json(
         "image_mean": s.image_mean,
         "reference_mean": s.reference_mean,
         "rmse": s.rmse,
+        "rmse_interior": s.rmse_interior,
+        "subpixels": opts.subpixels,
         "rmse_over_mean": s.rmse / s.reference_mean.max(1e-12),
         "reference_s": s.reference_s,
         "reference_spp": opts.reference_spp.unwrap_or(256),
@@ -398,6 +460,14 @@ fn write_stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> crate
                 s.reference_mean
             ),
         ),
+        (
+            "RMSE away from silhouettes",
+            format!(
+                "{:.4} ({:.1} % of the mean)",
+                s.rmse_interior,
+                100.0 * s.rmse_interior / s.reference_mean.max(1e-12)
+            ),
+        ),
         ("reference", format!("{:.1} s", s.reference_s)),
     ];
     for (k, v) in rows {
@@ -413,5 +483,7 @@ fn write_stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> crate
         .map(|f| f.to_string_lossy().into_owned())
         .unwrap_or_default();
     md += &format!("\n![mesh coloured by angular level (viridis, dark = level 0), resolved edges dark]({file})\n");
+    let name = file.trim_end_matches("_levels.png");
+    md += &format!("\n| preview | path tracer (direct + one bounce) |\n|---|---|\n| ![]({name}.png) | ![]({name}_reference.png) |\n");
     write_bytes(&s.stats_page, md.as_bytes())
 }

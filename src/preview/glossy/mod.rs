@@ -36,7 +36,9 @@ pub struct Settings {
     pub diffuse_samples: u32,
     /// BRDF samples per fitted view direction (Eq. 9).
     pub fit_samples: u32,
-    /// Highest icosahedral level of view directions (the paper: 5 levels, 0–4).
+    /// Highest icosahedral level of view directions (the paper allows 5 levels,
+    /// 0–4; level 4 has ~4× the slices of level 3 and the 10-minute teapot bar
+    /// does not fit it on 2 cores, so the default stops at level 3, ≈ 8° apart).
     pub max_angular_level: usize,
     /// Mean relative L2 distance (App. A, over the slices' squared norms) below
     /// which a level's slices count as predicted by the coarser ones.
@@ -57,15 +59,18 @@ pub struct Settings {
     pub initial_edge_fraction: f32,
     /// Stop refining at this many vertices.
     pub max_vertices: usize,
+    /// Uniform 1-to-4 splits of every triangle before anything else (0: none); with
+    /// `spatial: false`, the uniform mesh the adaptive one is compared against.
+    pub uniform_levels: u8,
 }
 
 impl Default for Settings {
     fn default() -> Self {
         Self {
-            samples: 64,
+            samples: 32,
             diffuse_samples: 256,
             fit_samples: 4096,
-            max_angular_level: 4,
+            max_angular_level: 3,
             angular_threshold: 0.05,
             spatial_threshold: 0.05,
             spatial: true,
@@ -74,6 +79,7 @@ impl Default for Settings {
             batch: 200,
             initial_edge_fraction: 1.0 / 16.0,
             max_vertices: 60_000,
+            uniform_levels: 0,
         }
     }
 }
@@ -304,6 +310,11 @@ pub fn precompute(
     let fits = material_fits(scene, &ico, settings)?;
     let interp = interp_vertex(scene);
     let mut mesh = AdaptiveMesh::new(&scene.meshes);
+    for _ in 0..settings.uniform_levels {
+        for f in mesh.leaves().collect::<Vec<_>>() {
+            mesh.split(f, &interp);
+        }
+    }
     let diagonal = accel
         .bounds()
         .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-6));
@@ -370,7 +381,7 @@ fn compute_new_vertices(
         .map(|i| {
             let vt = compute_vertex(ctx, settings, &t.mesh.vertices[i], i as u32);
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if d % 16 == 0 || d == total {
+            if d.is_multiple_of(16) || d == total {
                 progress(phase, d, total);
             }
             vt
@@ -466,24 +477,43 @@ pub fn render(
     accel: &Accel,
     camera: &Camera,
 ) -> Vec<Vec3> {
+    render_supersampled(t, env, scene, accel, camera, 1)
+}
+
+/// [`render`] with an n × n grid of sample positions per pixel, averaged (a box
+/// filter, as the path tracer's): for comparing with it away from aliasing.
+pub fn render_supersampled(
+    t: &Transfer,
+    env: &PrefilteredEnv,
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+    n: u32,
+) -> Vec<Vec3> {
+    let n = n.max(1);
     let lobes = vertex_lobes(t, camera);
     let (w, h) = (camera.width as usize, camera.height as usize);
     let background = scene.environment.as_ref();
     let mut image = vec![Vec3::ZERO; w * h];
     image.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, px) in row.iter_mut().enumerate() {
-            let ray = camera.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            *px = match accel.intersect(&ray) {
-                None => background.map_or(Vec3::ZERO, |e| e.eval(ray.dir)),
-                Some(hit) => match hit.prim {
-                    PrimRef::Triangle { mesh, tri } => t
-                        .mesh
-                        .locate(mesh, tri, hit.bary)
-                        .map_or(Vec3::ZERO, |(ids, wts)| shade(&lobes, env, ids, wts)),
-                    PrimRef::Sphere(_) => Vec3::ZERO,
-                },
-            };
-            *px = crate::math::finite_or_zero(*px);
+            let mut sum = Vec3::ZERO;
+            for k in 0..n * n {
+                let sub = Vec2::new((k % n) as f32 + 0.5, (k / n) as f32 + 0.5) / n as f32;
+                let ray = camera.generate_ray(Vec2::new(x as f32, y as f32) + sub);
+                let c = match accel.intersect(&ray) {
+                    None => background.map_or(Vec3::ZERO, |e| e.eval(ray.dir)),
+                    Some(hit) => match hit.prim {
+                        PrimRef::Triangle { mesh, tri } => t
+                            .mesh
+                            .locate(mesh, tri, hit.bary)
+                            .map_or(Vec3::ZERO, |(ids, wts)| shade(&lobes, env, ids, wts)),
+                        PrimRef::Sphere(_) => Vec3::ZERO,
+                    },
+                };
+                sum += crate::math::finite_or_zero(c);
+            }
+            *px = sum / (n * n) as f32;
         }
     });
     image
@@ -491,12 +521,9 @@ pub fn render(
 
 fn shade(lobes: &[[Lobe; 6]], env: &PrefilteredEnv, ids: [u32; 3], w: [f32; 3]) -> Vec3 {
     let mut c = Vec3::ZERO;
-    for k in 0..6 {
-        let l = slice::blend(&[
-            (lobes[ids[0] as usize][k], w[0]),
-            (lobes[ids[1] as usize][k], w[1]),
-            (lobes[ids[2] as usize][k], w[2]),
-        ]);
+    let [a, b, cc] = ids.map(|i| &lobes[i as usize]);
+    for ((la, lb), lc) in a.iter().zip(b).zip(cc) {
+        let l = slice::blend(&[(*la, w[0]), (*lb, w[1]), (*lc, w[2])]);
         if luminance(l.alpha) > 0.0 {
             c += l.alpha * env.lookup(l.mu, l.kappa);
         }
