@@ -231,7 +231,15 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         None => scene.camera.clone(),
     };
     let transfer = transfer(&scene, &accel, opts)?;
-    let env = PrefilteredEnv::new(scene.environment.as_ref().expect("checked by precompute"));
+    let env = scene
+        .environment
+        .as_ref()
+        .ok_or_else(|| crate::Error::Scene {
+            path: scene.path.clone(),
+            location: "environment".into(),
+            message: "the glossy preview needs an [environment]".into(),
+        })?;
+    let env = PrefilteredEnv::new(env);
     let (_, render_ms) = time_frame(&transfer, &env, &scene, &accel, &camera);
     let image =
         glossy::render_supersampled(&transfer, &env, &scene, &accel, &camera, opts.subpixels);

@@ -89,6 +89,8 @@ impl Default for Settings {
 pub struct VertexTransfer {
     /// Highest angular level computed.
     pub level: u8,
+    /// Mean noise of its slices (see [`slice::TraceContext::trace`]).
+    pub noise: f32,
     pub diffuse: Slice,
     /// One slice per icosphere slot of levels ≤ `level`; empty without a glossy part.
     pub glossy: Vec<Slice>,
@@ -222,9 +224,11 @@ fn compute_vertex(ctx: &TraceContext, settings: &Settings, v: &Vertex, id: u32) 
         frame: Frame::from_normal(v.normal),
         material: v.material,
     };
-    let diffuse = ctx.trace(&at, None, settings.diffuse_samples, seed(id, u32::MAX));
+    let (diffuse, diffuse_noise) =
+        ctx.trace(&at, None, settings.diffuse_samples, seed(id, u32::MAX));
     let mut vt = VertexTransfer {
         level: 0,
+        noise: diffuse_noise,
         diffuse,
         glossy: Vec::new(),
     };
@@ -236,9 +240,13 @@ fn compute_vertex(ctx: &TraceContext, settings: &Settings, v: &Vertex, id: u32) 
         let wo = fit::clamp_view(ico.slot_direction(slot as u32));
         ctx.trace(&at, Some(wo), settings.samples, seed(id, slot as u32))
     };
-    vt.glossy = (0..ico.slot_end[0]).map(trace).collect();
+    let mean_noise =
+        |s: &[(Slice, f32)]| s.iter().map(|x| x.1 as f64).sum::<f64>() / s.len().max(1) as f64;
+    let first: Vec<(Slice, f32)> = (0..ico.slot_end[0]).map(trace).collect();
+    let mut noise = mean_noise(&first);
+    vt.glossy = first.into_iter().map(|x| x.0).collect();
     for level in 1..=settings.max_angular_level.min(ico.max_level()) {
-        let new: Vec<Slice> = (ico.slot_end[level - 1]..ico.slot_end[level])
+        let new: Vec<(Slice, f32)> = (ico.slot_end[level - 1]..ico.slot_end[level])
             .map(trace)
             .collect();
         let err: f64 = new
@@ -246,16 +254,22 @@ fn compute_vertex(ctx: &TraceContext, settings: &Settings, v: &Vertex, id: u32) 
             .enumerate()
             .map(|(k, s)| {
                 let dir = ico.slot_direction((ico.slot_end[level - 1] + k) as u32);
-                relative_distance(s, &glossy_slice(ico, &vt, dir))
+                relative_distance(&s.0, &glossy_slice(ico, &vt, dir))
             })
             .sum::<f64>()
             / new.len().max(1) as f64;
-        vt.glossy.extend(new);
+        // Both the computed and the predicted slices carry noise.
+        let new_noise = mean_noise(&new);
+        let excess = err - (new_noise + noise);
+        noise = (noise * vt.glossy.len() as f64 + new_noise * new.len() as f64)
+            / (vt.glossy.len() + new.len()) as f64;
+        vt.glossy.extend(new.into_iter().map(|x| x.0));
         vt.level = level as u8;
-        if err < settings.angular_threshold {
+        if excess < settings.angular_threshold {
             break;
         }
     }
+    vt.noise = noise as f32;
     vt
 }
 
@@ -287,7 +301,8 @@ fn vertex_distance(t: &Transfer, ico: &Icosphere, a: u32, b: u32) -> f64 {
             &local(slice_at(vb, slot), fb),
         );
     }
-    sum / (n + 1) as f64
+    // Discount what the two vertices' own noise explains.
+    sum / (n + 1) as f64 - (va.noise + vb.noise) as f64
 }
 
 fn face_metric(t: &Transfer, ico: &Icosphere, f: u32) -> f64 {

@@ -107,12 +107,24 @@ impl TraceContext<'_> {
     }
 
     /// Traces `samples` paths from `at`: `wo = None` starts with the diffuse
-    /// component (Td), `Some(wo)` (local frame) with the glossy one (Tg).
-    pub fn trace(&self, at: &SurfaceSample, wo: Option<Vec3>, samples: u32, seed: u32) -> Slice {
+    /// component (Td), `Some(wo)` (local frame) with the glossy one (Tg). Also
+    /// returns the slice's noise: half the relative distance between the estimates
+    /// from the even and the odd paths, i.e. the expected distance between two
+    /// independent estimates of `samples` paths each (variance halves with twice
+    /// the paths). The subdivision criteria discount it, so that Monte Carlo noise
+    /// alone does not refine.
+    pub fn trace(
+        &self,
+        at: &SurfaceSample,
+        wo: Option<Vec3>,
+        samples: u32,
+        seed: u32,
+    ) -> (Slice, f32) {
         let fit = &self.fits[at.material as usize];
         let entry = wo.and_then(|wo| fit.glossy_at(self.ico, wo));
-        let mut bins = [Bin::default(); 3];
+        let mut halves = [[Bin::default(); 3]; 2];
         for i in 0..samples {
+            let bins = &mut halves[(i % 2) as usize];
             let u = |d: u32| rng(i, d, seed);
             let first = match (wo, &entry) {
                 (None, _) => fit.sample_diffuse([u(0), u(1)]),
@@ -125,11 +137,19 @@ impl TraceContext<'_> {
                 None => bins[0].add(dir, w1),
                 Some(None) => {}
                 Some(Some(y)) => {
-                    self.second_bounce(&y, -dir, w1, &mut bins, [u(3), u(4), u(5), u(6), u(7)])
+                    self.second_bounce(&y, -dir, w1, bins, [u(3), u(4), u(5), u(6), u(7)])
                 }
             }
         }
-        bins.map(|b| b.lobe(samples))
+        let half = samples.div_ceil(2).max(1);
+        let even = halves[0].map(|b| b.lobe(half));
+        let odd = halves[1].map(|b| b.lobe((samples / 2).max(1)));
+        let full = std::array::from_fn(|k| {
+            let mut b = halves[0][k];
+            b.merge(&halves[1][k]);
+            b.lobe(samples)
+        });
+        (full, (0.5 * relative_distance(&even, &odd)) as f32)
     }
 
     /// At the second surface y: one diffuse and one glossy sample (Sec. 5.1), each
@@ -172,6 +192,11 @@ struct Bin {
 }
 
 impl Bin {
+    fn merge(&mut self, other: &Bin) {
+        self.acc.merge(&other.acc);
+        self.rgb += other.rgb;
+    }
+
     fn add(&mut self, dir: Vec3, w: Vec3) {
         let lum = luminance(w) as f64;
         if lum > 0.0 && w.is_finite() {

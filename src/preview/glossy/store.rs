@@ -5,7 +5,7 @@ use super::slice::{Lobe, Slice};
 use super::{PrecomputeStats, Transfer, VertexTransfer};
 use crate::math::Vec3;
 
-const MAGIC: &[u8; 8] = b"GTGLOSS1";
+const MAGIC: &[u8; 8] = b"GTGLOSS2";
 
 pub struct Stored {
     pub split_log: Vec<u32>,
@@ -52,6 +52,7 @@ pub fn encode(t: &Transfer, key: &str) -> Vec<u8> {
     put_u32(&mut out, t.vertices.len() as u32);
     for v in &t.vertices {
         put_u32(&mut out, v.level as u32);
+        put_f32(&mut out, v.noise);
         put_u32(&mut out, v.glossy.len() as u32);
         put_slice(&mut out, &v.diffuse);
         for g in &v.glossy {
@@ -115,6 +116,7 @@ pub fn decode(bytes: &[u8], key: &str) -> Option<Stored> {
     let mut vertices = Vec::with_capacity(n_vertices.min(1 << 24));
     for _ in 0..n_vertices {
         let level = r.u32()? as u8;
+        let noise = r.f32()?;
         let n_glossy = r.u32()? as usize;
         let diffuse = r.slice()?;
         let glossy = (0..n_glossy)
@@ -122,6 +124,7 @@ pub fn decode(bytes: &[u8], key: &str) -> Option<Stored> {
             .collect::<Option<Vec<_>>>()?;
         vertices.push(VertexTransfer {
             level,
+            noise,
             diffuse,
             glossy,
         });
