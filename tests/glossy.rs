@@ -427,6 +427,7 @@ fn glossy_benchmark() {
         spatial: env_or("GLOSSY_SPATIAL", 1) == 1,
         uniform_levels: env_or("GLOSSY_UNIFORM", 0),
         max_vertices: env_or("GLOSSY_MAXV", 60_000),
+        spatial_threshold: env_or("GLOSSY_TAU", 0.05),
         ..Settings::default()
     };
     let scene = gradtrace::scene::load(&scene_path).unwrap();
@@ -489,5 +490,44 @@ fn glossy_benchmark() {
         100.0 * s.rmse / s.reference_mean,
         100.0 * s.rmse_interior / s.reference_mean,
         s.reference_s
+    );
+}
+
+/// The prefiltered levels against the closed form: a vMF-shaped sky
+/// L(s) = e^{σ(s·d − 1)} convolved with γ_{μ,κ} is c(κ)/c(κc) · e^{−σ},
+/// κc = ‖κμ + σd‖ (the same identity as App. A's cross term).
+#[test]
+fn prefiltered_levels_match_the_vmf_convolution_closed_form() {
+    use gradtrace::math::vmf::normaliser;
+    let d = Vec3::new(0.3, 0.8, -0.52).normalize();
+    let sigma = 20.0f64;
+    let env = gradtrace::scene::environment::Environment::GaussianSky {
+        direction: d,
+        sharpness: sigma as f32,
+        peak: Vec3::ONE,
+        ambient: Vec3::ZERO,
+    };
+    let pre = PrefilteredEnv::new(&env);
+    let mut worst = 0.0f64;
+    for level in [0, 2, 4, 6, 8, 10] {
+        let mut level_worst = 0.0f64;
+        let kappa = 0.25f64 * 2f64.powi(level);
+        for k in 0..40 {
+            let a = k as f32 * 0.7;
+            let mu =
+                (d + Vec3::new(a.cos(), 0.3 * a.sin(), a.sin()) * (k as f32 / 40.0)).normalize();
+            let kc = (mu.as_dvec3() * kappa + d.as_dvec3() * sigma).length();
+            let exact = normaliser(kappa) / normaliser(kc) * (-sigma).exp();
+            let got = pre.lookup(mu, kappa as f32).x as f64;
+            let peak = normaliser(kappa) / normaliser(kappa + sigma) * (-sigma).exp();
+            level_worst = level_worst.max((got - exact).abs() / peak);
+        }
+        println!("κ = {kappa}: worst error {level_worst:.4} of the peak");
+        worst = worst.max(level_worst);
+    }
+    println!("worst error relative to the peak: {worst:.4}");
+    assert!(
+        worst < 0.02,
+        "prefiltered levels off by {worst} of the peak"
     );
 }

@@ -43,12 +43,11 @@ impl Grid {
     }
 
     pub fn lookup(&self, d: Vec3) -> Vec3 {
-        bilinear(
-            &self.texels,
-            self.width,
-            self.height,
-            crate::scene::environment::direction_to_latlong(d),
-        )
+        self.lookup_uv(crate::scene::environment::direction_to_latlong(d))
+    }
+
+    fn lookup_uv(&self, uv: crate::math::Vec2) -> Vec3 {
+        bilinear(&self.texels, self.width, self.height, uv)
     }
 }
 
@@ -83,15 +82,17 @@ impl PrefilteredEnv {
         let x = (kappa.max(KAPPA0) / KAPPA0).log2();
         let l = x.floor() as usize;
         let t = x - l as f32;
+        // Every level shares the lat-long parameterisation: map the direction once.
+        let uv = crate::scene::environment::direction_to_latlong(mu);
         let at = |l: usize| {
             if l < LEVELS {
-                self.levels[l].lookup(mu)
+                self.levels[l].lookup_uv(uv)
             } else {
-                self.raw.lookup(mu)
+                self.raw.lookup_uv(uv)
             }
         };
         if l >= LEVELS {
-            return self.raw.lookup(mu);
+            return self.raw.lookup_uv(uv);
         }
         at(l) * (1.0 - t) + at(l + 1) * t
     }
@@ -119,11 +120,12 @@ fn tabulate(env: &Environment) -> Grid {
 }
 
 /// Convolves `src` with a vMF kernel of concentration κ onto a grid of about
-/// 8√κ × 4√κ texels (texel spacing ≤ a third of the kernel's width), summing only
+/// 16√κ × 8√κ texels (≥ 2.5 texels per kernel standard deviation, so bilinear
+/// lookups stay within ~1 % of a smooth peak), summing only
 /// the source texels where the kernel exceeds e^{−16} of its peak; the quadrature
 /// is normalised by the kernel's own sum so that a constant is reproduced exactly.
 fn prefilter(src: &Grid, kappa: f32) -> Grid {
-    let width = ((8.0 * kappa.sqrt()).ceil() as usize).clamp(32, src.width);
+    let width = ((16.0 * kappa.sqrt()).ceil() as usize).clamp(64, src.width);
     let height = (width / 2).max(2);
     let kappa = kappa as f64;
     let cos_cut = (1.0 - 16.0 / kappa).max(-1.0);
