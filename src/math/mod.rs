@@ -8,6 +8,7 @@ pub mod quadrature;
 pub mod sampler;
 pub mod scalar;
 pub mod sh;
+pub mod vmf;
 pub mod warp;
 
 pub use glam::{Vec2, Vec3, Vec3A};

@@ -1,1 +1,497 @@
 //! `gradtrace preview glossy`: precompute transfer (cached) → render views → reference → preview.json.
+//!
+//! The reference is the path tracer with `max_depth = 3` (camera, first surface,
+//! one bounce, then the environment): exactly the light paths the transfer holds
+//! (direct and one-bounce interreflections), under the same environment.
+
+use crate::accel::Accel;
+use crate::math::{luminance, Vec2, Vec3};
+use crate::output::{self, OutputImage};
+use crate::preview::glossy::{self, PrefilteredEnv, Settings, Transfer};
+use crate::render::{self, RenderOptions};
+use crate::scene::{Camera, Integrator, Scene};
+use indicatif::{ProgressBar, ProgressStyle};
+use sha2::{Digest, Sha256};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of one `preview glossy` run.
+#[derive(Clone, Debug)]
+pub struct GlossyOptions {
+    pub scene: PathBuf,
+    pub out_dir: PathBuf,
+    /// Also render N views on a circle around the scene (`orbit_NNN.png`).
+    pub orbit: Option<u32>,
+    /// Samples per pixel of the path-traced reference (default 256).
+    pub reference_spp: Option<u32>,
+    /// Override of the camera resolution (width, height).
+    pub resolution: Option<(u32, u32)>,
+    pub quiet: bool,
+    /// Written preview: n × n positions per pixel (a box filter like the path
+    /// tracer's, so silhouettes do not alias into the error); `render_ms` is the
+    /// one-position frame.
+    pub subpixels: u32,
+    pub settings: Settings,
+}
+
+impl GlossyOptions {
+    pub fn new(scene: impl Into<PathBuf>) -> Self {
+        Self {
+            scene: scene.into(),
+            out_dir: PathBuf::from("out"),
+            orbit: None,
+            reference_spp: None,
+            resolution: None,
+            quiet: false,
+            subpixels: 2,
+            settings: Settings::default(),
+        }
+    }
+}
+
+/// What a run wrote and measured.
+#[derive(Clone, Debug)]
+pub struct GlossySummary {
+    pub exr: PathBuf,
+    pub png: PathBuf,
+    pub json: PathBuf,
+    pub stats_page: PathBuf,
+    pub cached: bool,
+    pub precompute_s: f64,
+    pub render_ms: f64,
+    pub vertices_initial: usize,
+    pub vertices_final: usize,
+    pub angular_levels: Vec<usize>,
+    pub bytes: usize,
+    pub image_mean: f64,
+    pub reference_mean: f64,
+    pub rmse: f64,
+    /// RMSE over pixels whose corners and centre see the same object (no edge).
+    pub rmse_interior: f64,
+    pub reference_s: f64,
+}
+
+fn out_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
+    crate::Error::Output {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(1);
+    pb.set_style(
+        ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} ({eta} left)")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The cache key: the scene's content, every precompute setting, the crate version.
+fn cache_key(scene: &Scene, settings: &Settings) -> crate::Result<String> {
+    let mut h = Sha256::new();
+    h.update(scene.content_hash()?.as_bytes());
+    h.update(format!("{settings:?}").as_bytes());
+    h.update(env!("CARGO_PKG_VERSION").as_bytes());
+    Ok(hex(&h.finalize()))
+}
+
+fn write_bytes(path: &Path, bytes: &[u8]) -> crate::Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| out_err(dir, e))?;
+    }
+    output::write_atomic(path, |w| w.write_all(bytes).map_err(|e| e.to_string()))
+}
+
+/// The transfer from the cache, or precomputed (and cached) with a progress bar.
+fn transfer(scene: &Scene, accel: &Accel, opts: &GlossyOptions) -> crate::Result<Transfer> {
+    let key = cache_key(scene, &opts.settings)?;
+    let path = opts
+        .out_dir
+        .join("cache")
+        .join(format!("glossy-{}.bin", &key[..16]));
+    if let Ok(bytes) = std::fs::read(&path) {
+        if let Some(t) = Transfer::decode(&bytes, &key, scene, &opts.settings) {
+            return Ok(t);
+        }
+    }
+    let pb = progress_bar(opts.quiet);
+    let progress = |phase: &str, done: u64, total: u64| {
+        pb.set_message(phase.to_string());
+        pb.set_length(total);
+        pb.set_position(done);
+    };
+    let t = glossy::precompute(scene, accel, &opts.settings, &progress)?;
+    pb.finish_and_clear();
+    write_bytes(&path, &t.encode(&key))?;
+    Ok(t)
+}
+
+/// The path-traced reference (direct + one bounce), cached as an EXR.
+fn reference(
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+    opts: &GlossyOptions,
+) -> crate::Result<(Vec<Vec3>, f64)> {
+    let spp = opts.reference_spp.unwrap_or(256);
+    let mut h = Sha256::new();
+    h.update(scene.content_hash()?.as_bytes());
+    h.update(
+        format!(
+            "{spp} {}x{} {}",
+            camera.width,
+            camera.height,
+            env!("CARGO_PKG_VERSION")
+        )
+        .as_bytes(),
+    );
+    let path = opts
+        .out_dir
+        .join("cache")
+        .join(format!("reference-{}.exr", &hex(&h.finalize())[..16]));
+    if let Ok(img) = output::read_exr(&path) {
+        if let (Some(rgb), Some(t)) = (img.vec3("", ["R", "G", "B"]), img.channel("time.s")) {
+            if rgb.len() == (camera.width * camera.height) as usize {
+                return Ok((rgb, t.data.first().copied().unwrap_or(0.0) as f64));
+            }
+        }
+    }
+    let pb = progress_bar(opts.quiet);
+    pb.set_message("reference");
+    let progress = |done: usize, total: usize| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    };
+    let ropts = RenderOptions {
+        spp: Some(spp),
+        max_depth: Some(3),
+        integrator: Some(Integrator::Path),
+        resolution: Some((camera.width, camera.height)),
+        ..Default::default()
+    };
+    let start = Instant::now();
+    let out = render::render(scene, accel, &ropts, &progress)?;
+    let secs = start.elapsed().as_secs_f64();
+    pb.finish_and_clear();
+    let mut img = OutputImage::new(out.width, out.height);
+    img.push_vec3("", ["R", "G", "B"], &out.beauty);
+    img.push_scalar("time.s", vec![secs as f32; out.width * out.height]);
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| out_err(dir, e))?;
+    }
+    output::write_exr(&path, &img)?;
+    Ok((out.beauty, secs))
+}
+
+/// Fastest of three frames, in milliseconds (the first frame warms caches).
+fn time_frame(
+    t: &Transfer,
+    env: &PrefilteredEnv,
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+) -> (Vec<Vec3>, f64) {
+    let mut best = f64::INFINITY;
+    let mut image = Vec::new();
+    for _ in 0..3 {
+        let start = Instant::now();
+        image = glossy::render(t, env, scene, accel, camera);
+        best = best.min(start.elapsed().as_secs_f64() * 1e3);
+    }
+    (image, best)
+}
+
+fn mean_luminance(img: &[Vec3]) -> f64 {
+    img.iter().map(|c| luminance(*c) as f64).sum::<f64>() / img.len().max(1) as f64
+}
+
+/// Runs `preview glossy` end to end.
+pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
+    let scene = crate::scene::load(&opts.scene)?;
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    let camera = match opts.resolution {
+        Some((w, h)) => {
+            scene
+                .camera
+                .with_resolution(w, h)
+                .map_err(|message| crate::Error::Option {
+                    option: "--resolution".into(),
+                    message,
+                })?
+        }
+        None => scene.camera.clone(),
+    };
+    let transfer = transfer(&scene, &accel, opts)?;
+    let env = scene
+        .environment
+        .as_ref()
+        .ok_or_else(|| crate::Error::Scene {
+            path: scene.path.clone(),
+            location: "environment".into(),
+            message: "the glossy preview needs an [environment]".into(),
+        })?;
+    let env = PrefilteredEnv::new(env);
+    let (_, render_ms) = time_frame(&transfer, &env, &scene, &accel, &camera);
+    let image =
+        glossy::render_supersampled(&transfer, &env, &scene, &accel, &camera, opts.subpixels);
+    let (reference, reference_s) = reference(&scene, &accel, &camera, opts)?;
+    std::fs::create_dir_all(&opts.out_dir).map_err(|e| out_err(&opts.out_dir, e))?;
+    let name = scene.name();
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let error: Vec<f32> = image
+        .iter()
+        .zip(&reference)
+        .map(|(a, b)| (luminance(*a) - luminance(*b)).abs())
+        .collect();
+    let rmse = output::metrics::rmse(&image, &reference)? as f64;
+    let interior = interior_pixels(&accel, &camera);
+    let pick = |img: &[Vec3]| -> Vec<Vec3> {
+        img.iter()
+            .zip(&interior)
+            .filter(|(_, &k)| k)
+            .map(|(c, _)| *c)
+            .collect()
+    };
+    let rmse_interior = output::metrics::rmse(&pick(&image), &pick(&reference))? as f64;
+    let scale = 4.0 / mean_luminance(&reference).max(1e-12) as f32;
+    let error_rgb: Vec<Vec3> = error
+        .iter()
+        .map(|e| output::colormap::viridis((e * scale).min(1.0)))
+        .collect();
+    output::write_png(
+        &opts.out_dir.join(format!("{name}_error.png")),
+        &error_rgb,
+        w,
+        h,
+    )?;
+    let mut exr = OutputImage::new(w, h);
+    exr.push_vec3("", ["R", "G", "B"], &image);
+    exr.push_vec3("reference.", ["R", "G", "B"], &reference);
+    exr.push_scalar("error.Y", error);
+    let exr_path = opts.out_dir.join(format!("{name}.exr"));
+    output::write_exr(&exr_path, &exr)?;
+    let png = opts.out_dir.join(format!("{name}.png"));
+    output::write_png(&png, &image, w, h)?;
+    output::write_png(
+        &opts.out_dir.join(format!("{name}_reference.png")),
+        &reference,
+        w,
+        h,
+    )?;
+    let orbit = orbit_views(&transfer, &env, &scene, &accel, &camera, opts)?;
+    let levels_png = opts.out_dir.join(format!("{name}_levels.png"));
+    let levels = level_image(&transfer, &accel, &camera);
+    output::write_png(&levels_png, &levels, w, h)?;
+    let s = &transfer.stats;
+    let summary = GlossySummary {
+        json: opts.out_dir.join("preview.json"),
+        stats_page: opts.out_dir.join(format!("{name}_stats.md")),
+        exr: exr_path,
+        png,
+        cached: s.cached,
+        precompute_s: s.precompute_s,
+        render_ms,
+        vertices_initial: s.vertices_initial,
+        vertices_final: s.vertices_final,
+        angular_levels: s.angular_levels.clone(),
+        bytes: transfer.bytes(),
+        image_mean: mean_luminance(&image),
+        reference_mean: mean_luminance(&reference),
+        rmse,
+        rmse_interior,
+        reference_s,
+    };
+    write_json(&summary, opts, &scene, &orbit)?;
+    write_stats_page(&summary, &levels_png, &transfer)?;
+    Ok(summary)
+}
+
+/// Pixels whose centre and four corners hit the same mesh (or all miss).
+fn interior_pixels(accel: &Accel, camera: &Camera) -> Vec<bool> {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let id = |x: f32, y: f32| -> i64 {
+        match accel
+            .intersect(&camera.generate_ray(Vec2::new(x, y)))
+            .map(|hit| hit.prim)
+        {
+            None => -1,
+            Some(crate::accel::PrimRef::Triangle { mesh, .. }) => mesh as i64,
+            Some(crate::accel::PrimRef::Sphere(s)) => 1 << 40 | s as i64,
+        }
+    };
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let c = id(x + 0.5, y + 0.5);
+            [(x, y), (x + 1.0, y), (x, y + 1.0), (x + 1.0, y + 1.0)]
+                .iter()
+                .all(|&(a, b)| id(a, b) == c)
+        })
+        .collect()
+}
+
+fn orbit_views(
+    t: &Transfer,
+    env: &PrefilteredEnv,
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+    opts: &GlossyOptions,
+) -> crate::Result<Vec<(String, f64)>> {
+    let n = opts.orbit.unwrap_or(0);
+    let mut out = Vec::new();
+    for k in 0..n {
+        let angle = std::f32::consts::TAU * k as f32 / n as f32;
+        let rel = camera.from - camera.to;
+        let (s, c) = angle.sin_cos();
+        let from = camera.to + Vec3::new(c * rel.x + s * rel.z, rel.y, -s * rel.x + c * rel.z);
+        let cam = Camera::new(
+            from,
+            camera.to,
+            camera.up,
+            camera.fov_y,
+            camera.width,
+            camera.height,
+        )
+        .map_err(|message| crate::Error::Option {
+            option: "--orbit".into(),
+            message,
+        })?;
+        let start = Instant::now();
+        let img = glossy::render(t, env, scene, accel, &cam);
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let file = format!("orbit_{k:03}.png");
+        output::write_png(
+            &opts.out_dir.join(&file),
+            &img,
+            cam.width as usize,
+            cam.height as usize,
+        )?;
+        out.push((file, ms));
+    }
+    Ok(out)
+}
+
+/// The mesh seen from the camera, each point coloured by the angular level of its
+/// nearest vertex (viridis, level 0 dark), resolved triangle edges darkened.
+fn level_image(t: &Transfer, accel: &Accel, camera: &Camera) -> Vec<Vec3> {
+    let levels = t.vertex_levels();
+    let top = (levels.iter().copied().max().unwrap_or(0)).max(1) as f32;
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let mut img = vec![Vec3::splat(1.0); w * h];
+    for (i, px) in img.iter_mut().enumerate() {
+        let ray = camera.generate_ray(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5));
+        let Some(hit) = accel.intersect(&ray) else {
+            continue;
+        };
+        let crate::accel::PrimRef::Triangle { mesh, tri } = hit.prim else {
+            continue;
+        };
+        if let Some((ids, wts)) = t.mesh.locate(mesh, tri, hit.bary) {
+            let k = (0..3)
+                .max_by(|&a, &b| wts[a].total_cmp(&wts[b]))
+                .unwrap_or(0);
+            let c = output::colormap::viridis(levels[ids[k] as usize] as f32 / top);
+            let edge = wts.iter().copied().fold(f32::INFINITY, f32::min) < 0.03;
+            *px = if edge { c * 0.35 } else { c };
+        }
+    }
+    img
+}
+
+fn write_json(
+    s: &GlossySummary,
+    opts: &GlossyOptions,
+    scene: &Scene,
+    orbit: &[(String, f64)],
+) -> crate::Result<()> {
+    let json = serde_json::json!({
+        "method": "glossy-transfer",
+        "scene": scene.name(),
+        "precompute_s": s.precompute_s,
+        "cached": s.cached,
+        "render_ms": s.render_ms,
+        "vertices_initial": s.vertices_initial,
+        "vertices_final": s.vertices_final,
+        "angular_levels": s.angular_levels,
+        "bytes": s.bytes,
+        "image_mean": s.image_mean,
+        "reference_mean": s.reference_mean,
+        "rmse": s.rmse,
+        "rmse_interior": s.rmse_interior,
+        "subpixels": opts.subpixels,
+        "rmse_over_mean": s.rmse / s.reference_mean.max(1e-12),
+        "reference_s": s.reference_s,
+        "reference_spp": opts.reference_spp.unwrap_or(256),
+        "reference_max_depth": 3,
+        "orbit": orbit.iter().map(|(f, ms)| serde_json::json!({"file": f, "render_ms": ms})).collect::<Vec<_>>(),
+        "settings": format!("{:?}", opts.settings),
+    });
+    let text = serde_json::to_string_pretty(&json).map_err(|e| out_err(&s.json, e))?;
+    write_bytes(&s.json, text.as_bytes())
+}
+
+fn write_stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> crate::Result<()> {
+    let mut md = String::from(
+        "# Glossy transfer: precomputation statistics\n\n| quantity | value |\n|---|---|\n",
+    );
+    let rows = [
+        ("vertices, initial", s.vertices_initial.to_string()),
+        ("vertices, final", s.vertices_final.to_string()),
+        ("spatial iterations", t.stats.iterations.to_string()),
+        ("slices", t.stats.slices.to_string()),
+        (
+            "precompute",
+            format!(
+                "{:.1} s{}",
+                s.precompute_s,
+                if s.cached { " (cached)" } else { "" }
+            ),
+        ),
+        ("memory", format!("{:.1} MB", s.bytes as f64 / 1e6)),
+        ("render", format!("{:.1} ms / frame", s.render_ms)),
+        (
+            "RMSE vs path tracer",
+            format!(
+                "{:.4} ({:.1} % of the mean {:.4})",
+                s.rmse,
+                100.0 * s.rmse / s.reference_mean.max(1e-12),
+                s.reference_mean
+            ),
+        ),
+        (
+            "RMSE away from silhouettes",
+            format!(
+                "{:.4} ({:.1} % of the mean)",
+                s.rmse_interior,
+                100.0 * s.rmse_interior / s.reference_mean.max(1e-12)
+            ),
+        ),
+        ("reference", format!("{:.1} s", s.reference_s)),
+    ];
+    for (k, v) in rows {
+        md += &format!("| {k} | {v} |\n");
+    }
+    md +=
+        "\n## Angular levels per vertex (the paper's Fig. 8)\n\n| level | vertices |\n|---|---|\n";
+    for (l, n) in s.angular_levels.iter().enumerate() {
+        md += &format!("| {l} | {n} |\n");
+    }
+    let file = levels_png
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    md += &format!("\n![mesh coloured by angular level (viridis, dark = level 0), resolved edges dark]({file})\n");
+    let name = file.trim_end_matches("_levels.png");
+    md += &format!("\n| preview | path tracer (direct + one bounce) |\n|---|---|\n| ![]({name}.png) | ![]({name}_reference.png) |\n");
+    write_bytes(&s.stats_page, md.as_bytes())
+}

@@ -1,1 +1,598 @@
-//! Glossy transfer: adaptive precomputed radiance transfer with von Mises–Fisher lobes, rendered from vMF-prefiltered environment levels.
+//! scene + BVH → glossy transfer (adaptive precomputed radiance transfer with
+//! von Mises–Fisher lobes, "Adaptive Precomputation of Glossy Interreflections")
+//! → images rendered from vMF-prefiltered environment levels in milliseconds.
+//!
+//! Per mesh vertex: a view-independent diffuse slice (Eq. 3's Td) and one glossy
+//! slice per icosahedral view direction in the vertex's frame (Tg), each three
+//! weighted vMF lobes (direct, indirect diffuse, indirect glossy; Sec. 5). Angular
+//! levels are added while computed slices differ from interpolated ones (Sec. 4.2);
+//! triangles whose vertices' transfer differs most are split 1-to-4 (Sec. 4.3).
+
+pub mod envmap;
+pub mod fit;
+pub mod icosphere;
+pub mod mesh;
+pub mod slice;
+mod store;
+
+use crate::accel::{Accel, PrimRef};
+use crate::math::{luminance, Frame, Vec2, Vec3};
+use crate::scene::{Camera, Scene};
+use fit::MaterialFit;
+use icosphere::Icosphere;
+use mesh::{AdaptiveMesh, Vertex};
+use rayon::prelude::*;
+use slice::{blend_slices, relative_distance, Lobe, Slice, SurfaceSample, TraceContext};
+use std::time::Instant;
+
+pub use envmap::PrefilteredEnv;
+
+/// Every precompute setting (all of them key the cache).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Paths per glossy slice (per vertex and view direction).
+    pub samples: u32,
+    /// Paths for the view-independent diffuse slice of a vertex.
+    pub diffuse_samples: u32,
+    /// BRDF samples per fitted view direction (Eq. 9).
+    pub fit_samples: u32,
+    /// Highest icosahedral level of view directions (the paper allows 5 levels,
+    /// 0–4; level 4 has ~4× the slices of level 3 and the 10-minute teapot bar
+    /// does not fit it on 2 cores, so the default stops at level 3, ≈ 8° apart).
+    pub max_angular_level: usize,
+    /// Mean relative L2 distance (App. A, over the slices' squared norms) below
+    /// which a level's slices count as predicted by the coarser ones.
+    pub angular_threshold: f64,
+    /// Largest relative distance between a triangle's vertices it may keep.
+    pub spatial_threshold: f64,
+    /// Spatial subdivision on/off (off: the initial mesh, as Green et al.).
+    pub spatial: bool,
+    /// Deepest 1-to-4 level below a scene triangle.
+    pub max_spatial_level: u8,
+    /// Triangles smaller than this fraction of the scene's squared diagonal stay.
+    pub min_area_fraction: f32,
+    /// Faces split per iteration before their new vertices are computed (the paper: 200).
+    pub batch: usize,
+    /// Initial tessellation: triangles with an edge longer than this fraction of
+    /// the scene diagonal are split first (a two-triangle floor has no interior
+    /// vertex to catch a shadow with).
+    pub initial_edge_fraction: f32,
+    /// Stop refining at this many vertices.
+    pub max_vertices: usize,
+    /// Uniform 1-to-4 splits of every triangle before anything else (0: none); with
+    /// `spatial: false`, the uniform mesh the adaptive one is compared against.
+    pub uniform_levels: u8,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            samples: 32,
+            diffuse_samples: 256,
+            fit_samples: 4096,
+            max_angular_level: 3,
+            angular_threshold: 0.05,
+            spatial_threshold: 0.05,
+            spatial: true,
+            max_spatial_level: 3,
+            min_area_fraction: 1e-6,
+            batch: 200,
+            initial_edge_fraction: 1.0 / 16.0,
+            max_vertices: 60_000,
+            uniform_levels: 0,
+        }
+    }
+}
+
+/// Transfer at one vertex.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexTransfer {
+    /// Highest angular level computed.
+    pub level: u8,
+    /// Mean noise of its slices (see [`slice::TraceContext::trace`]).
+    pub noise: f32,
+    pub diffuse: Slice,
+    /// One slice per icosphere slot of levels ≤ `level`; empty without a glossy part.
+    pub glossy: Vec<Slice>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PrecomputeStats {
+    pub vertices_initial: usize,
+    pub vertices_final: usize,
+    /// Vertices per highest angular level (index = level).
+    pub angular_levels: Vec<usize>,
+    pub precompute_s: f64,
+    pub iterations: usize,
+    pub slices: usize,
+    /// Loaded from the cache rather than computed.
+    pub cached: bool,
+}
+
+pub struct Transfer {
+    pub mesh: AdaptiveMesh,
+    pub vertices: Vec<VertexTransfer>,
+    pub frames: Vec<Frame>,
+    pub ico: Icosphere,
+    pub stats: PrecomputeStats,
+}
+
+/// Progress: (phase, done, total).
+pub type Progress<'a> = &'a (dyn Fn(&str, u64, u64) + Sync);
+
+fn error(scene: &Scene, message: String) -> crate::Error {
+    crate::Error::Scene {
+        path: scene.path.clone(),
+        location: "glossy preview".into(),
+        message,
+    }
+}
+
+/// What the preview models: meshes lit only by the environment.
+fn check_scene(scene: &Scene) -> crate::Result<()> {
+    if scene.environment.is_none() {
+        return Err(error(
+            scene,
+            "needs an [environment] (distant lighting)".into(),
+        ));
+    }
+    if scene.emitter_count() > 0 {
+        return Err(error(
+            scene,
+            "lights only by the environment; remove the [[lights]] and emitting shapes".into(),
+        ));
+    }
+    if let Some(s) = scene.spheres.first() {
+        return Err(error(
+            scene,
+            format!(
+                "transfer lives on mesh vertices; sphere `{}` has none (use a mesh)",
+                s.name
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn material_fits(
+    scene: &Scene,
+    ico: &Icosphere,
+    settings: &Settings,
+) -> crate::Result<Vec<MaterialFit>> {
+    scene
+        .materials
+        .iter()
+        .zip(&scene.material_names)
+        .map(|(m, name)| {
+            MaterialFit::new(m, ico, settings.fit_samples)
+                .map_err(|e| error(scene, format!("material `{name}`: {e}")))
+        })
+        .collect()
+}
+
+/// A vertex from barycentrics of an original triangle, as the path tracer shades it.
+fn interp_vertex(scene: &Scene) -> impl Fn(u32, u32, Vec3) -> Vertex + '_ {
+    move |mesh, tri, b| {
+        let m = &scene.meshes[mesh as usize];
+        let t = m.triangles[tri as usize];
+        let p = t.map(|i| m.positions[i as usize]);
+        let n_geo = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Y);
+        let normal = if m.normals.is_empty() {
+            n_geo
+        } else {
+            let n = t.map(|i| m.normals[i as usize]);
+            (n[0] * b.x + n[1] * b.y + n[2] * b.z).normalize_or(n_geo)
+        };
+        Vertex {
+            position: p[0] * b.x + p[1] * b.y + p[2] * b.z,
+            normal,
+            geometric_normal: n_geo,
+            material: m.material,
+        }
+    }
+}
+
+fn seed(vertex: u32, slot: u32) -> u32 {
+    let mut x = (vertex as u64) << 32 | slot as u64;
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
+    x ^= x >> 33;
+    (x ^ (x >> 29)) as u32
+}
+
+/// The glossy slice of a vertex at local view direction `wo`, interpolated from
+/// its computed slices at their finest level (Eq. 6).
+pub fn glossy_slice(ico: &Icosphere, vt: &VertexTransfer, wo: Vec3) -> Slice {
+    if vt.glossy.is_empty() {
+        return [Lobe::default(); 3];
+    }
+    let loc = ico.locate(fit::clamp_view(wo), vt.level as usize);
+    let corners: Vec<(&Slice, f32)> = loc
+        .slots
+        .iter()
+        .zip(loc.weights)
+        .map(|(s, w)| (&vt.glossy[*s as usize], w))
+        .collect();
+    blend_slices(&corners)
+}
+
+/// Angular refinement at one vertex (Sec. 4.2).
+fn compute_vertex(ctx: &TraceContext, settings: &Settings, v: &Vertex, id: u32) -> VertexTransfer {
+    let at = SurfaceSample {
+        position: v.position,
+        geometric_normal: v.geometric_normal,
+        frame: Frame::from_normal(v.normal),
+        material: v.material,
+    };
+    let (diffuse, diffuse_noise) =
+        ctx.trace(&at, None, settings.diffuse_samples, seed(id, u32::MAX));
+    let mut vt = VertexTransfer {
+        level: 0,
+        noise: diffuse_noise,
+        diffuse,
+        glossy: Vec::new(),
+    };
+    if ctx.fits[v.material as usize].glossy.is_none() {
+        return vt;
+    }
+    let ico = ctx.ico;
+    let trace = |slot: usize| {
+        let wo = fit::clamp_view(ico.slot_direction(slot as u32));
+        ctx.trace(&at, Some(wo), settings.samples, seed(id, slot as u32))
+    };
+    let mean_noise =
+        |s: &[(Slice, f32)]| s.iter().map(|x| x.1 as f64).sum::<f64>() / s.len().max(1) as f64;
+    let first: Vec<(Slice, f32)> = (0..ico.slot_end[0]).map(trace).collect();
+    let mut noise = mean_noise(&first);
+    vt.glossy = first.into_iter().map(|x| x.0).collect();
+    for level in 1..=settings.max_angular_level.min(ico.max_level()) {
+        let new: Vec<(Slice, f32)> = (ico.slot_end[level - 1]..ico.slot_end[level])
+            .map(trace)
+            .collect();
+        let err: f64 = new
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let dir = ico.slot_direction((ico.slot_end[level - 1] + k) as u32);
+                relative_distance(&s.0, &glossy_slice(ico, &vt, dir))
+            })
+            .sum::<f64>()
+            / new.len().max(1) as f64;
+        // Both the computed and the predicted slices carry noise.
+        let new_noise = mean_noise(&new);
+        let excess = err - (new_noise + noise);
+        noise = (noise * vt.glossy.len() as f64 + new_noise * new.len() as f64)
+            / (vt.glossy.len() + new.len()) as f64;
+        vt.glossy.extend(new.into_iter().map(|x| x.0));
+        vt.level = level as u8;
+        if excess < settings.angular_threshold {
+            break;
+        }
+    }
+    vt.noise = noise as f32;
+    vt
+}
+
+/// Mean relative distance between two vertices' transfer over the slots of the
+/// finer one (missing slices interpolated), μ compared in each vertex's own frame.
+fn vertex_distance(t: &Transfer, ico: &Icosphere, a: u32, b: u32) -> f64 {
+    let (va, vb) = (&t.vertices[a as usize], &t.vertices[b as usize]);
+    let (fa, fb) = (&t.frames[a as usize], &t.frames[b as usize]);
+    let local = |s: Slice, f: &Frame| {
+        s.map(|l| Lobe {
+            mu: f.to_local(l.mu),
+            ..l
+        })
+    };
+    let mut sum = relative_distance(&local(va.diffuse, fa), &local(vb.diffuse, fb));
+    let level = va.level.max(vb.level) as usize;
+    let n = if va.glossy.is_empty() && vb.glossy.is_empty() {
+        0
+    } else {
+        ico.slot_end[level]
+    };
+    let slice_at = |vt: &VertexTransfer, slot: usize| match vt.glossy.get(slot) {
+        Some(s) => *s,
+        None => glossy_slice(ico, vt, ico.slot_direction(slot as u32)),
+    };
+    for slot in 0..n {
+        sum += relative_distance(
+            &local(slice_at(va, slot), fa),
+            &local(slice_at(vb, slot), fb),
+        );
+    }
+    // Discount what the two vertices' own noise explains.
+    sum / (n + 1) as f64 - (va.noise + vb.noise) as f64
+}
+
+fn face_metric(t: &Transfer, ico: &Icosphere, f: u32) -> f64 {
+    let v = t.mesh.face_vertices(f);
+    vertex_distance(t, ico, v[0], v[1])
+        .max(vertex_distance(t, ico, v[1], v[2]))
+        .max(vertex_distance(t, ico, v[2], v[0]))
+}
+
+/// Precomputes the transfer of `scene` (Sec. 4–5).
+pub fn precompute(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &Settings,
+    progress: Progress,
+) -> crate::Result<Transfer> {
+    check_scene(scene)?;
+    let start = Instant::now();
+    let ico = Icosphere::new(settings.max_angular_level.max(fit::FIT_LEVEL));
+    let fits = material_fits(scene, &ico, settings)?;
+    let interp = interp_vertex(scene);
+    let mut mesh = AdaptiveMesh::new(&scene.meshes);
+    for _ in 0..settings.uniform_levels {
+        for f in mesh.leaves().collect::<Vec<_>>() {
+            mesh.split(f, &interp);
+        }
+    }
+    let diagonal = accel
+        .bounds()
+        .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-6));
+    loop {
+        let long: Vec<u32> = mesh
+            .leaves()
+            .filter(|&f| mesh.face_longest_edge(f) > settings.initial_edge_fraction * diagonal)
+            .collect();
+        if long.is_empty() || mesh.vertices.len() > settings.max_vertices {
+            break;
+        }
+        for f in long {
+            mesh.split(f, &interp);
+        }
+    }
+    let ctx = TraceContext {
+        scene,
+        accel,
+        fits: &fits,
+        ico: &ico,
+    };
+    let vertices_initial = mesh.vertices.len();
+    let mut t = Transfer {
+        frames: Vec::new(),
+        vertices: Vec::new(),
+        mesh,
+        ico: Icosphere::new(0),
+        stats: PrecomputeStats {
+            vertices_initial,
+            ..Default::default()
+        },
+    };
+    compute_new_vertices(&ctx, settings, &mut t, "initial vertices", progress);
+    if settings.spatial {
+        refine_spatially(&ctx, settings, &mut t, diagonal, &interp, progress);
+    }
+    t.mesh.resolve();
+    t.ico = ico;
+    let mut hist = vec![0usize; settings.max_angular_level + 1];
+    for v in &t.vertices {
+        hist[v.level as usize] += 1;
+    }
+    t.stats.angular_levels = hist;
+    t.stats.vertices_final = t.vertices.len();
+    t.stats.slices = t.vertices.iter().map(|v| v.glossy.len() + 1).sum();
+    t.stats.precompute_s = start.elapsed().as_secs_f64();
+    Ok(t)
+}
+
+/// Computes the transfer of every vertex not yet computed, in parallel; the result
+/// depends only on the vertex ids, not on the thread count.
+fn compute_new_vertices(
+    ctx: &TraceContext,
+    settings: &Settings,
+    t: &mut Transfer,
+    phase: &str,
+    progress: Progress,
+) {
+    let first = t.vertices.len();
+    let total = (t.mesh.vertices.len() - first) as u64;
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let new: Vec<VertexTransfer> = (first..t.mesh.vertices.len())
+        .into_par_iter()
+        .map(|i| {
+            let vt = compute_vertex(ctx, settings, &t.mesh.vertices[i], i as u32);
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if d.is_multiple_of(16) || d == total {
+                progress(phase, d, total);
+            }
+            vt
+        })
+        .collect();
+    t.frames.extend(
+        t.mesh.vertices[first..]
+            .iter()
+            .map(|v| Frame::from_normal(v.normal)),
+    );
+    t.vertices.extend(new);
+}
+
+/// Sec. 4.3: split the `batch` leaves with the largest vertex-to-vertex difference
+/// above the threshold, compute the new vertices, repeat.
+fn refine_spatially(
+    ctx: &TraceContext,
+    settings: &Settings,
+    t: &mut Transfer,
+    diagonal: f32,
+    interp: &dyn Fn(u32, u32, Vec3) -> Vertex,
+    progress: Progress,
+) {
+    let min_area = settings.min_area_fraction * diagonal * diagonal;
+    let mut metric: Vec<f64> = Vec::new();
+    loop {
+        let faces = t.mesh.face_count();
+        metric.resize(faces, f64::NAN);
+        let todo: Vec<u32> = t
+            .mesh
+            .leaves()
+            .filter(|&f| metric[f as usize].is_nan())
+            .collect();
+        let computed: Vec<(u32, f64)> = todo
+            .par_iter()
+            .map(|&f| (f, face_metric(t, ctx.ico, f)))
+            .collect();
+        for (f, m) in computed {
+            metric[f as usize] = m;
+        }
+        let mut candidates: Vec<(u32, f64)> = t
+            .mesh
+            .leaves()
+            .filter(|&f| {
+                t.mesh.face_level(f) < settings.max_spatial_level && t.mesh.face_area(f) >= min_area
+            })
+            .map(|f| (f, metric[f as usize]))
+            .filter(|&(_, m)| m > settings.spatial_threshold)
+            .collect();
+        if candidates.is_empty() || t.mesh.vertices.len() >= settings.max_vertices {
+            break;
+        }
+        candidates.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        for &(f, _) in candidates.iter().take(settings.batch) {
+            t.mesh.split(f, interp);
+        }
+        t.stats.iterations += 1;
+        let phase = format!("spatial iteration {}", t.stats.iterations);
+        compute_new_vertices(ctx, settings, t, &phase, progress);
+    }
+}
+
+/// Per-vertex lobes for one camera (the paper's vertex shader): Td's three and the
+/// glossy slice for the direction to the camera, in world space.
+fn vertex_lobes(t: &Transfer, camera: &Camera) -> Vec<[Lobe; 6]> {
+    t.mesh
+        .vertices
+        .par_iter()
+        .zip(&t.vertices)
+        .zip(&t.frames)
+        .map(|((v, vt), frame)| {
+            let mut wo = frame.to_local((camera.from - v.position).normalize_or(frame.n));
+            wo.z = wo.z.abs();
+            let g = glossy_slice(&t.ico, vt, wo);
+            [
+                vt.diffuse[0],
+                vt.diffuse[1],
+                vt.diffuse[2],
+                g[0],
+                g[1],
+                g[2],
+            ]
+        })
+        .collect()
+}
+
+/// Renders one view (Sec. 6.2): per pixel centre, the hit triangle's lobes blended
+/// barycentrically and each looked up at its κ's level; rows in parallel.
+pub fn render(
+    t: &Transfer,
+    env: &PrefilteredEnv,
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+) -> Vec<Vec3> {
+    render_supersampled(t, env, scene, accel, camera, 1)
+}
+
+/// [`render`] with an n × n grid of sample positions per pixel, averaged (a box
+/// filter, as the path tracer's): for comparing with it away from aliasing.
+pub fn render_supersampled(
+    t: &Transfer,
+    env: &PrefilteredEnv,
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+    n: u32,
+) -> Vec<Vec3> {
+    let n = n.max(1);
+    let lobes = vertex_lobes(t, camera);
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let background = scene.environment.as_ref();
+    let mut image = vec![Vec3::ZERO; w * h];
+    image.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, px) in row.iter_mut().enumerate() {
+            let mut sum = Vec3::ZERO;
+            for k in 0..n * n {
+                let sub = Vec2::new((k % n) as f32 + 0.5, (k / n) as f32 + 0.5) / n as f32;
+                let ray = camera.generate_ray(Vec2::new(x as f32, y as f32) + sub);
+                let c = match accel.intersect(&ray) {
+                    None => background.map_or(Vec3::ZERO, |e| e.eval(ray.dir)),
+                    Some(hit) => match hit.prim {
+                        PrimRef::Triangle { mesh, tri } => t
+                            .mesh
+                            .locate(mesh, tri, hit.bary)
+                            .map_or(Vec3::ZERO, |(ids, wts)| shade(&lobes, env, ids, wts)),
+                        PrimRef::Sphere(_) => Vec3::ZERO,
+                    },
+                };
+                sum += crate::math::finite_or_zero(c);
+            }
+            *px = sum / (n * n) as f32;
+        }
+    });
+    image
+}
+
+fn shade(lobes: &[[Lobe; 6]], env: &PrefilteredEnv, ids: [u32; 3], w: [f32; 3]) -> Vec3 {
+    let mut c = Vec3::ZERO;
+    let [a, b, cc] = ids.map(|i| &lobes[i as usize]);
+    for ((la, lb), lc) in a.iter().zip(b).zip(cc) {
+        let l = slice::blend(&[(*la, w[0]), (*lb, w[1]), (*lc, w[2])]);
+        if luminance(l.alpha) > 0.0 {
+            c += l.alpha * env.lookup(l.mu, l.kappa);
+        }
+    }
+    c
+}
+
+impl Transfer {
+    /// Bytes of the transfer data (slices at 7 f32 per lobe, plus the mesh's vertices).
+    pub fn bytes(&self) -> usize {
+        let lobe = 7 * 4;
+        self.stats.slices * 3 * lobe + self.mesh.vertices.len() * std::mem::size_of::<Vertex>()
+    }
+
+    /// Each vertex's highest angular level (for the statistics image).
+    pub fn vertex_levels(&self) -> Vec<u8> {
+        self.vertices.iter().map(|v| v.level).collect()
+    }
+
+    /// The transfer as cache bytes under `key`.
+    pub fn encode(&self, key: &str) -> Vec<u8> {
+        store::encode(self, key)
+    }
+
+    /// A transfer encoded under `key`, its mesh rebuilt from the split log; `None`
+    /// if the bytes are stale (another key) or unreadable.
+    pub fn decode(bytes: &[u8], key: &str, scene: &Scene, settings: &Settings) -> Option<Transfer> {
+        let s = store::decode(bytes, key)?;
+        let ico = Icosphere::new(settings.max_angular_level.max(fit::FIT_LEVEL));
+        let interp = interp_vertex(scene);
+        let mut mesh = AdaptiveMesh::new(&scene.meshes);
+        for f in s.split_log {
+            if (f as usize) >= mesh.face_count() {
+                return None;
+            }
+            mesh.split(f, &interp);
+        }
+        if mesh.vertices.len() != s.vertices.len() {
+            return None;
+        }
+        mesh.resolve();
+        let frames = mesh
+            .vertices
+            .iter()
+            .map(|v| Frame::from_normal(v.normal))
+            .collect();
+        let mut stats = s.stats;
+        stats.cached = true;
+        Some(Transfer {
+            mesh,
+            vertices: s.vertices,
+            frames,
+            ico,
+            stats,
+        })
+    }
+}

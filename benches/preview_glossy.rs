@@ -1,0 +1,37 @@
+//! Glossy-transfer preview: one 512 × 512 frame of the e = 128 teapot from
+//! precomputed transfer (the issue's ≤ 50 ms bar), the environment prefilter, and
+//! a small precomputation. The frame bench precomputes with reduced settings (the
+//! frame's cost depends on the pixel count and the mesh, not on how the slices
+//! were estimated); the full-setting figures come from `gradtrace preview glossy`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use gradtrace::accel::Accel;
+use gradtrace::preview::glossy::{self, PrefilteredEnv, Settings};
+use gradtrace::scene;
+use std::path::Path;
+
+fn teapot_frame(c: &mut Criterion) {
+    let scene = scene::load(Path::new("scenes/glossy_teapot.toml")).expect("bundled scene loads");
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    let settings = Settings {
+        samples: 8,
+        diffuse_samples: 16,
+        max_angular_level: 2,
+        spatial: false,
+        ..Settings::default()
+    };
+    let t = glossy::precompute(&scene, &accel, &settings, &|_, _, _| {}).unwrap();
+    let env_src = scene.environment.as_ref().unwrap();
+    let env = PrefilteredEnv::new(env_src);
+    let camera = scene.camera.with_resolution(512, 512).unwrap();
+    let mut group = c.benchmark_group("preview_glossy");
+    group.sample_size(20);
+    group.bench_function("teapot_frame_512x512", |b| {
+        b.iter(|| glossy::render(&t, &env, &scene, &accel, &camera))
+    });
+    group.bench_function("prefilter_sky", |b| b.iter(|| PrefilteredEnv::new(env_src)));
+    group.finish();
+}
+
+criterion_group!(benches, teapot_frame);
+criterion_main!(benches);

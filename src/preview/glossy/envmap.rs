@@ -1,0 +1,177 @@
+//! The environment prefiltered with vMF kernels (Sec. 6.2): level ℓ holds
+//! E_κ(d) = ∫ γ_{d,κ}(s) L(s) ds for κ = KAPPA0 · 2^ℓ (κ doubles per level, as
+//! the paper's mipmap), each on a lat-long grid just fine enough for its kernel;
+//! past the last level the raw environment. A lobe of any κ is looked up between
+//! the two levels around it, linearly in log κ.
+
+use crate::math::Vec3;
+use crate::scene::environment::{bilinear, latlong_to_direction, Environment};
+use glam::DVec3;
+use rayon::prelude::*;
+
+pub const KAPPA0: f32 = 0.25;
+/// Levels κ = 0.25 … 4096.
+pub const LEVELS: usize = 15;
+/// Resolution of the grid an analytic environment is tabulated on.
+const ANALYTIC_WIDTH: usize = 512;
+
+/// A lat-long grid in the scene's convention (columns centred at (i + ½)/W,
+/// rows at v = j/(H − 1)).
+#[derive(Clone, Debug)]
+pub struct Grid {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<Vec3>,
+}
+
+impl Grid {
+    fn direction(&self, i: usize, j: usize) -> Vec3 {
+        let u = (i as f32 + 0.5) / self.width as f32;
+        let v = j as f32 / (self.height - 1) as f32;
+        latlong_to_direction(crate::math::Vec2::new(u, v))
+    }
+
+    /// Solid angle of texel row j (its band of θ, clamped at the poles).
+    fn row_solid_angle(&self, j: usize) -> f64 {
+        let dt = std::f64::consts::PI / (self.height - 1) as f64;
+        let t = j as f64 * dt;
+        let (lo, hi) = (
+            (t - 0.5 * dt).max(0.0),
+            (t + 0.5 * dt).min(std::f64::consts::PI),
+        );
+        2.0 * std::f64::consts::PI / self.width as f64 * (lo.cos() - hi.cos())
+    }
+
+    pub fn lookup(&self, d: Vec3) -> Vec3 {
+        self.lookup_uv(crate::scene::environment::direction_to_latlong(d))
+    }
+
+    fn lookup_uv(&self, uv: crate::math::Vec2) -> Vec3 {
+        bilinear(&self.texels, self.width, self.height, uv)
+    }
+}
+
+pub struct PrefilteredEnv {
+    pub levels: Vec<Grid>,
+    pub raw: Grid,
+}
+
+impl PrefilteredEnv {
+    pub fn new(env: &Environment) -> Self {
+        let raw = match env {
+            Environment::Image {
+                width,
+                height,
+                texels,
+                scale,
+            } => Grid {
+                width: *width,
+                height: (*height).max(2),
+                texels: texels.iter().map(|t| *t * *scale).collect(),
+            },
+            other => tabulate(other),
+        };
+        let levels = (0..LEVELS)
+            .map(|l| prefilter(&raw, KAPPA0 * 2f32.powi(l as i32)))
+            .collect();
+        Self { levels, raw }
+    }
+
+    /// ∫ γ_{μ,κ}(s) L(s) ds, interpolated between levels in log₂ κ.
+    pub fn lookup(&self, mu: Vec3, kappa: f32) -> Vec3 {
+        let x = (kappa.max(KAPPA0) / KAPPA0).log2();
+        let l = x.floor() as usize;
+        let t = x - l as f32;
+        // Every level shares the lat-long parameterisation: map the direction once.
+        let uv = crate::scene::environment::direction_to_latlong(mu);
+        let at = |l: usize| {
+            if l < LEVELS {
+                self.levels[l].lookup_uv(uv)
+            } else {
+                self.raw.lookup_uv(uv)
+            }
+        };
+        if l >= LEVELS {
+            return self.raw.lookup_uv(uv);
+        }
+        at(l) * (1.0 - t) + at(l + 1) * t
+    }
+
+    pub fn bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .chain([&self.raw])
+            .map(|g| g.texels.len() * 12)
+            .sum()
+    }
+}
+
+fn tabulate(env: &Environment) -> Grid {
+    let mut g = Grid {
+        width: ANALYTIC_WIDTH,
+        height: ANALYTIC_WIDTH / 2,
+        texels: Vec::new(),
+    };
+    g.texels = (0..g.height)
+        .flat_map(|j| (0..g.width).map(move |i| (i, j)))
+        .map(|(i, j)| env.eval(g.direction(i, j)))
+        .collect();
+    g
+}
+
+/// Convolves `src` with a vMF kernel of concentration κ onto a grid of about
+/// 16√κ × 8√κ texels (≥ 2.5 texels per kernel standard deviation, so bilinear
+/// lookups stay within ~1 % of a smooth peak), summing only
+/// the source texels where the kernel exceeds e^{−16} of its peak; the quadrature
+/// is normalised by the kernel's own sum so that a constant is reproduced exactly.
+fn prefilter(src: &Grid, kappa: f32) -> Grid {
+    let width = ((16.0 * kappa.sqrt()).ceil() as usize).clamp(64, src.width);
+    let height = (width / 2).max(2);
+    let kappa = kappa as f64;
+    let cos_cut = (1.0 - 16.0 / kappa).max(-1.0);
+    let src_dirs: Vec<DVec3> = (0..src.height)
+        .flat_map(|j| (0..src.width).map(move |i| (i, j)))
+        .map(|(i, j)| src.direction(i, j).as_dvec3())
+        .collect();
+    let row_w: Vec<f64> = (0..src.height).map(|j| src.row_solid_angle(j)).collect();
+    let row_cos: Vec<f64> = (0..src.height)
+        .map(|j| (std::f64::consts::PI * j as f64 / (src.height - 1) as f64).cos())
+        .collect();
+    let dst = Grid {
+        width,
+        height,
+        texels: Vec::new(),
+    };
+    let texels = (0..height * width)
+        .into_par_iter()
+        .map(|k| {
+            let d = dst.direction(k % width, k / width).as_dvec3();
+            let theta_d = d.y.clamp(-1.0, 1.0).acos();
+            let mut sum = DVec3::ZERO;
+            let mut wsum = 0.0;
+            for j in 0..src.height {
+                // Rows farther in θ than the cut cannot hold a texel inside it.
+                let theta_s = row_cos[j].clamp(-1.0, 1.0).acos();
+                if (theta_s - theta_d).cos() < cos_cut {
+                    continue;
+                }
+                for i in 0..src.width {
+                    let s = src_dirs[j * src.width + i];
+                    let c = d.dot(s);
+                    if c < cos_cut {
+                        continue;
+                    }
+                    let w = (kappa * (c - 1.0)).exp() * row_w[j];
+                    sum += src.texels[j * src.width + i].as_dvec3() * w;
+                    wsum += w;
+                }
+            }
+            if wsum > 0.0 {
+                (sum / wsum).as_vec3()
+            } else {
+                src.lookup(d.as_vec3())
+            }
+        })
+        .collect();
+    Grid { texels, ..dst }
+}

@@ -1,0 +1,145 @@
+//! The transfer cache: a little-endian binary file holding the cache key, the
+//! mesh's split log (replayed to rebuild it) and every vertex's slices.
+
+use super::slice::{Lobe, Slice};
+use super::{PrecomputeStats, Transfer, VertexTransfer};
+use crate::math::Vec3;
+
+const MAGIC: &[u8; 8] = b"GTGLOSS2";
+
+pub struct Stored {
+    pub split_log: Vec<u32>,
+    pub vertices: Vec<VertexTransfer>,
+    pub stats: PrecomputeStats,
+}
+
+fn put_u32(out: &mut Vec<u8>, x: u32) {
+    out.extend_from_slice(&x.to_le_bytes());
+}
+
+fn put_f32(out: &mut Vec<u8>, x: f32) {
+    out.extend_from_slice(&x.to_le_bytes());
+}
+
+fn put_slice(out: &mut Vec<u8>, s: &Slice) {
+    for l in s {
+        for x in [
+            l.mu.x, l.mu.y, l.mu.z, l.kappa, l.alpha.x, l.alpha.y, l.alpha.z,
+        ] {
+            put_f32(out, x);
+        }
+    }
+}
+
+pub fn encode(t: &Transfer, key: &str) -> Vec<u8> {
+    let mut out = Vec::with_capacity(t.bytes() + 1024);
+    out.extend_from_slice(MAGIC);
+    put_u32(&mut out, key.len() as u32);
+    out.extend_from_slice(key.as_bytes());
+    let s = &t.stats;
+    out.extend_from_slice(&s.precompute_s.to_le_bytes());
+    for x in [s.vertices_initial, s.iterations, s.slices] {
+        put_u32(&mut out, x as u32);
+    }
+    put_u32(&mut out, s.angular_levels.len() as u32);
+    for &x in &s.angular_levels {
+        put_u32(&mut out, x as u32);
+    }
+    put_u32(&mut out, t.mesh.split_log.len() as u32);
+    for &f in &t.mesh.split_log {
+        put_u32(&mut out, f);
+    }
+    put_u32(&mut out, t.vertices.len() as u32);
+    for v in &t.vertices {
+        put_u32(&mut out, v.level as u32);
+        put_f32(&mut out, v.noise);
+        put_u32(&mut out, v.glossy.len() as u32);
+        put_slice(&mut out, &v.diffuse);
+        for g in &v.glossy {
+            put_slice(&mut out, g);
+        }
+    }
+    out
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Option<&[u8]> {
+        let s = self.bytes.get(self.at..self.at.checked_add(n)?)?;
+        self.at += n;
+        Some(s)
+    }
+    fn u32(&mut self) -> Option<u32> {
+        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
+    }
+    fn f32(&mut self) -> Option<f32> {
+        let x = f32::from_le_bytes(self.take(4)?.try_into().ok()?);
+        x.is_finite().then_some(x)
+    }
+    fn slice(&mut self) -> Option<Slice> {
+        let mut s = [Lobe::default(); 3];
+        for l in &mut s {
+            let v: Vec<f32> = (0..7).map(|_| self.f32()).collect::<Option<_>>()?;
+            *l = Lobe {
+                mu: Vec3::new(v[0], v[1], v[2]),
+                kappa: v[3],
+                alpha: Vec3::new(v[4], v[5], v[6]),
+            };
+        }
+        Some(s)
+    }
+}
+
+pub fn decode(bytes: &[u8], key: &str) -> Option<Stored> {
+    let mut r = Reader { bytes, at: 0 };
+    if r.take(8)? != MAGIC {
+        return None;
+    }
+    let n = r.u32()? as usize;
+    if r.take(n)? != key.as_bytes() {
+        return None;
+    }
+    let precompute_s = f64::from_le_bytes(r.take(8)?.try_into().ok()?);
+    let (vertices_initial, iterations, slices) =
+        (r.u32()? as usize, r.u32()? as usize, r.u32()? as usize);
+    let levels = r.u32()? as usize;
+    let angular_levels = (0..levels.min(64))
+        .map(|_| r.u32().map(|x| x as usize))
+        .collect::<Option<Vec<_>>>()?;
+    let splits = r.u32()? as usize;
+    let split_log = (0..splits).map(|_| r.u32()).collect::<Option<Vec<_>>>()?;
+    let n_vertices = r.u32()? as usize;
+    let mut vertices = Vec::with_capacity(n_vertices.min(1 << 24));
+    for _ in 0..n_vertices {
+        let level = r.u32()? as u8;
+        let noise = r.f32()?;
+        let n_glossy = r.u32()? as usize;
+        let diffuse = r.slice()?;
+        let glossy = (0..n_glossy)
+            .map(|_| r.slice())
+            .collect::<Option<Vec<_>>>()?;
+        vertices.push(VertexTransfer {
+            level,
+            noise,
+            diffuse,
+            glossy,
+        });
+    }
+    Some(Stored {
+        split_log,
+        stats: PrecomputeStats {
+            vertices_initial,
+            vertices_final: n_vertices,
+            angular_levels,
+            precompute_s,
+            iterations,
+            slices,
+            cached: true,
+        },
+        vertices,
+    })
+}
