@@ -45,6 +45,11 @@ enum Command {
     /// Compare two EXRs' beauty (R, G, B): RMSE, relMSE, FLIP and an error-map
     /// PNG; exit status 1 when --threshold is exceeded.
     Diff(DiffArgs),
+    /// Fast approximate previews, always scored against the path tracer:
+    /// `shadow-field` (soft shadows from SH shadow fields, rigid and deforming
+    /// occluders) or `glossy` (precomputed glossy transfer with vMF lobes).
+    #[command(subcommand)]
+    Preview(PreviewCommand),
     /// Merge the parts of a split render (tiles from --tile/--crop, sample ranges
     /// from --spp-range) into the whole image: tiles are checked to cover it
     /// exactly once, sample ranges combined weighted by their sample counts.
@@ -60,6 +65,39 @@ struct MergeArgs {
     #[arg(long, value_name = "FULL.exr")]
     out: PathBuf,
     /// No summary line.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Subcommand, Debug)]
+enum PreviewCommand {
+    /// Precompute (cached) a shadow field per object and light, shade every pixel,
+    /// and write DIR/<scene>.exr (R,G,B, reference.R/G/B, error.Y), a PNG and
+    /// DIR/preview.json.
+    ShadowField(PreviewArgs),
+    /// Precompute (cached) the environment-light transfer as vMF lobes, refined
+    /// in angle and space, render the view (and --orbit views), and write
+    /// DIR/<scene>.exr, PNGs, DIR/preview.json and a statistics page.
+    Glossy(PreviewArgs),
+}
+
+#[derive(Args, Debug)]
+struct PreviewArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Output folder [default: out/preview-<method>/<scene-stem>].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// shadow-field: render N frames of the scene's [animation] (0: the block's count).
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+    /// glossy: also render N views on an orbit around the scene.
+    #[arg(long, value_name = "N")]
+    orbit: Option<u32>,
+    /// Samples per pixel of the path-traced reference [default: the method's].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    reference_spp: Option<u32>,
+    /// No progress output and no summary.
     #[arg(long, short)]
     quiet: bool,
 }
@@ -417,6 +455,49 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 );
             }
         }
+        Command::Preview(PreviewCommand::ShadowField(a)) => {
+            use pipeline::preview::shadow_field::{run, ShadowFieldOptions};
+            let mut opts = ShadowFieldOptions::new(&a.scene);
+            opts.out_dir = a
+                .out
+                .unwrap_or_else(|| preview_dir("shadow-field", &a.scene));
+            (opts.frames, opts.reference_spp, opts.quiet) = (a.frames, a.reference_spp, a.quiet);
+            let s = run(&opts)?;
+            if !a.quiet {
+                println!(
+                    "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), ≥ {:.0}× faster than the path tracer at equal error; wrote {}",
+                    s.entities,
+                    s.precompute_s,
+                    if s.precompute_cached { " (cached)" } else { "" },
+                    s.render_s,
+                    s.rmse,
+                    100.0 * s.rmse_relative,
+                    s.speedup_equal_error_lower_bound,
+                    s.exr.display()
+                );
+            }
+        }
+        Command::Preview(PreviewCommand::Glossy(a)) => {
+            use pipeline::preview::glossy::{run, GlossyOptions};
+            let mut opts = GlossyOptions::new(&a.scene);
+            opts.out_dir = a.out.unwrap_or_else(|| preview_dir("glossy", &a.scene));
+            (opts.orbit, opts.reference_spp, opts.quiet) = (a.orbit, a.reference_spp, a.quiet);
+            let s = run(&opts)?;
+            if !a.quiet {
+                println!(
+                    "glossy: {} → {} vertices, precompute {:.1} s{}, frame {:.1} ms, RMSE {:.3e} ({:.1}% of the mean); wrote {} and {}",
+                    s.vertices_initial,
+                    s.vertices_final,
+                    s.precompute_s,
+                    if s.cached { " (cached)" } else { "" },
+                    s.render_ms,
+                    s.rmse,
+                    100.0 * s.rmse / s.reference_mean.max(1e-12),
+                    s.exr.display(),
+                    s.stats_page.display()
+                );
+            }
+        }
         Command::Merge(args) => {
             let job = pipeline::merge::MergeJob {
                 parts: args.parts,
@@ -443,6 +524,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// `out/preview-<method>/<scene path>`: the folder a preview writes when not told.
+fn preview_dir(method: &str, scene: &std::path::Path) -> PathBuf {
+    let name = compare::default_dir(scene);
+    let name = name.file_name().map_or("scene".into(), |n| n.to_owned());
+    PathBuf::from("out")
+        .join(format!("preview-{method}"))
+        .join(name)
 }
 
 /// This process's command line, for the EXR header (arguments with spaces quoted).

@@ -152,7 +152,8 @@ pub fn run(
 ) -> Result<Vec<ReportRow>> {
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
-    let per_seed = 1 + opts.strategies.len() * opts.budgets.len() + opts.budgets.len();
+    let baselines = 2 + usize::from(crate::denoise::available());
+    let per_seed = 1 + (opts.strategies.len() + baselines) * opts.budgets.len();
     let steps = 2 + per_seed * opts.seeds as usize + 2;
     let phase = super::progress::Phase::new(mode, "compare", steps as u64, "runs");
     let progress = |msg: &str| {
@@ -333,7 +334,82 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
             spp: spp_eq,
         };
         runs.push(full_run("uniform-all-pixels", kind, k, out, secs));
+        runs.extend(other_baselines(
+            plan, &base, budget, spp_eq, target, k, progress,
+        )?);
     }
+    Ok(runs)
+}
+
+/// The baselines besides uniform, at the `target` wall time of the gradient run
+/// at `budget`: the Cycles-style per-pixel adaptive sampler and, where the build
+/// has OIDN, the denoised uniform render and the gradient run denoised.
+fn other_baselines(
+    plan: &Plan,
+    base: &RenderOptions,
+    budget: f32,
+    spp_eq: u32,
+    target: f64,
+    k: u32,
+    progress: &dyn Fn(&str),
+) -> Result<Vec<Run>> {
+    use crate::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
+    let mut runs = Vec::new();
+    // Blender's default threshold; a first round small enough to fit the time.
+    let mut cycles = NoiseAdaptive::new(0.01, (8 * spp_eq).max(16));
+    cycles.min_spp = cycles.min_spp.min((spp_eq / 2).max(4));
+    cycles.time_limit = Some(std::time::Duration::from_secs_f64(target));
+    let t = Instant::now();
+    let out = render_noise_adaptive(plan.scene, plan.accel, base, &cycles, &|_, _| {})?;
+    let secs = t.elapsed().as_secs_f64();
+    let counts = out.spp_map.as_deref().unwrap_or(&[]);
+    let total: f64 = counts.iter().map(|&c| f64::from(c)).sum();
+    let mean = (total / counts.len().max(1) as f64).round() as u32;
+    progress(&format!(
+        "seed {k}: cycles-adaptive at the time of {:.0}%: mean {mean} spp, {secs:.2} s",
+        budget * 100.0
+    ));
+    let kind = RunKind::Baseline {
+        budget,
+        spp: mean as u32,
+    };
+    let mut run = full_run("cycles-adaptive", kind, k, out, secs);
+    run.samples = total as usize;
+    runs.push(run);
+    if !crate::denoise::available() {
+        return Ok(runs);
+    }
+    let with_aovs = RenderOptions {
+        spp: Some(spp_eq),
+        aovs: true,
+        ..base.clone()
+    };
+    let t = Instant::now();
+    let out = render(plan.scene, plan.accel, &with_aovs, &|_, _| {})?;
+    let (w, h) = (out.width, out.height);
+    let clean = crate::denoise::denoise(
+        &out.beauty,
+        out.albedo.as_deref(),
+        out.normal.as_deref(),
+        w,
+        h,
+    )?;
+    let secs = t.elapsed().as_secs_f64();
+    progress(&format!(
+        "seed {k}: oidn-uniform, {spp_eq} spp + denoise, {secs:.2} s"
+    ));
+    let mut run = full_run(
+        "oidn-uniform",
+        RunKind::Baseline {
+            budget,
+            spp: spp_eq,
+        },
+        k,
+        out,
+        secs,
+    );
+    run.image = clean;
+    runs.push(run);
     Ok(runs)
 }
 
@@ -447,6 +523,10 @@ fn notes(
             if plan.opts.seeds == 1 { "" } else { "s" }
         )),
         sec8,
+        (!crate::denoise::available()).then(|| format!(
+            "oidn-uniform (the denoised baseline) is not in this report: {}",
+            crate::denoise::unavailable_reason()
+        )),
         Some(format!(
             "compare spent {outside_s:.2} s of its {total_s:.1} s outside rendering (metrics, report, cache): {:.1}%.",
             100.0 * outside_s / total_s.max(1e-9)
