@@ -103,32 +103,7 @@ pub fn loglog_svg(
                 .y_desc(y_desc)
                 .draw()
                 .map_err(|e| e.to_string())?;
-            let grid = BLACK.mix(0.12);
-            let label_font = ("sans-serif", 14).into_font();
-            for t in nice_ticks(x0, x1) {
-                let lx = t.log10();
-                let (ly0, ly1) = (y0.log10(), y1.log10());
-                chart
-                    .draw_series(LineSeries::new([(lx, ly0), (lx, ly1)], grid))
-                    .map_err(|e| e.to_string())?;
-                let (px, py) = chart.backend_coord(&(lx, ly0));
-                let style =
-                    TextStyle::from(label_font.clone()).pos(Pos::new(HPos::Center, VPos::Top));
-                root.draw(&Text::new(format_tick(t), (px, py + 6), style))
-                    .map_err(|e| e.to_string())?;
-            }
-            for t in nice_ticks(y0, y1) {
-                let ly = t.log10();
-                let (lx0, lx1) = (x0.log10(), x1.log10());
-                chart
-                    .draw_series(LineSeries::new([(lx0, ly), (lx1, ly)], grid))
-                    .map_err(|e| e.to_string())?;
-                let (px, py) = chart.backend_coord(&(lx0, ly));
-                let style =
-                    TextStyle::from(label_font.clone()).pos(Pos::new(HPos::Right, VPos::Center));
-                root.draw(&Text::new(format_tick(t), (px - 6, py), style))
-                    .map_err(|e| e.to_string())?;
-            }
+            draw_ticks(&root, &mut chart, (x0, x1), (y0, y1))?;
             for (i, s) in series.iter().enumerate() {
                 let color = PALETTE[i % PALETTE.len()];
                 let xy: Vec<(f64, f64)> = s
@@ -173,6 +148,44 @@ pub fn loglog_svg(
         }
     }
     Ok(svg)
+}
+
+/// The 1-2-5 grid lines and tick labels of a log-log chart spanning
+/// `x0..x1` × `y0..y1` (data units; the chart itself is in log10 units).
+fn draw_ticks(
+    root: &DrawingArea<SVGBackend, plotters::coord::Shift>,
+    chart: &mut ChartContext<
+        SVGBackend,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Result<(), String> {
+    let grid = BLACK.mix(0.12);
+    let label_font = ("sans-serif", 14).into_font();
+    for t in nice_ticks(x0, x1) {
+        let lx = t.log10();
+        let (ly0, ly1) = (y0.log10(), y1.log10());
+        chart
+            .draw_series(LineSeries::new([(lx, ly0), (lx, ly1)], grid))
+            .map_err(|e| e.to_string())?;
+        let (px, py) = chart.backend_coord(&(lx, ly0));
+        let style = TextStyle::from(label_font.clone()).pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw(&Text::new(format_tick(t), (px, py + 6), style))
+            .map_err(|e| e.to_string())?;
+    }
+    for t in nice_ticks(y0, y1) {
+        let ly = t.log10();
+        let (lx0, lx1) = (x0.log10(), x1.log10());
+        chart
+            .draw_series(LineSeries::new([(lx0, ly), (lx1, ly)], grid))
+            .map_err(|e| e.to_string())?;
+        let (px, py) = chart.backend_coord(&(lx0, ly));
+        let style = TextStyle::from(label_font.clone()).pos(Pos::new(HPos::Right, VPos::Center));
+        root.draw(&Text::new(format_tick(t), (px - 6, py), style))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
 
 /// [min, max] of positive values widened by 25 % on each side in log space (and to
