@@ -251,19 +251,23 @@ fn exr_error(path: &Path, e: exr::error::Error) -> Error {
     }
 }
 
+/// The most pixels an EXR part may declare to be read: 2²⁸, the largest image
+/// a scene may ask for (`scene::MAX_PIXELS`).
+pub const MAX_READ_PIXELS: u64 = 1 << 28;
+
 /// Rejects, from the header alone, a file whose parts claim more than
-/// [`crate::scene::MAX_PIXELS`] pixels: the reader would allocate them before
-/// noticing the file is short, and an allocation failure aborts the process.
+/// [`MAX_READ_PIXELS`] pixels: the reader would allocate them before noticing
+/// the file is short, and an allocation failure aborts the process.
 fn check_header_size(path: &Path) -> crate::Result<()> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
     for h in &meta.headers {
         let (w, ht) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
-        if w.saturating_mul(ht) > crate::scene::MAX_PIXELS {
+        if w.saturating_mul(ht) > MAX_READ_PIXELS {
             return Err(Error::Asset {
                 path: path.to_path_buf(),
                 message: format!(
                     "the header declares {w}×{ht} pixels, more than the {} supported",
-                    crate::scene::MAX_PIXELS
+                    MAX_READ_PIXELS
                 ),
             });
         }
