@@ -1,11 +1,11 @@
 //! The `gradtrace` binary: help text, one-line errors with status 1, outputs left
 //! untouched by failed runs, and end-to-end renders of a tiny inline scene.
 
+mod common;
+use common::{run_in, temp_dir};
 use gradtrace::output::read_exr;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_gradtrace");
+use std::path::Path;
+use std::process::Output;
 
 /// A 16x12 white sphere in a uniform white environment, 2 spp.
 const TINY_SCENE: &str = r#"
@@ -29,30 +29,6 @@ material = "white"
 type = "constant"
 radiance = [1, 1, 1]
 "#;
-
-/// A fresh, empty directory in the system temp dir, unique per test and process.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("gradtrace-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the binary runs");
-    println!(
-        "$ gradtrace {}\n-> {:?}\nstdout: {}stderr: {}",
-        args.join(" "),
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 /// Every entry below `dir`, relative and sorted.
 fn tree(dir: &Path) -> Vec<String> {

@@ -3,33 +3,9 @@
 //! nothing); with `--features oidn` (after `eval "$(scripts/setup_oidn.sh)"`)
 //! denoising a noisy render must bring it much closer to a converged one.
 
+mod common;
+use common::{run_in, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_gradtrace");
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("gradtrace-denoise-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn gradtrace(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the binary runs");
-    println!(
-        "$ gradtrace {}\n-> {:?}\nstdout: {}stderr: {}",
-        args.join(" "),
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 fn cornell() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml")
@@ -57,7 +33,7 @@ fn default_build_says_how_to_enable_the_denoiser() {
         "--width",
         "4096",
     ];
-    let out = gradtrace(
+    let out = run_in(
         &dir,
         &[&args[..], &["--height", "4096", "--out", "x.exr"]].concat(),
     );
@@ -87,7 +63,7 @@ fn denoise_rejects_adaptive_renders() {
         "--strategy",
         "uniform",
     ];
-    let out = gradtrace(&dir, &args);
+    let out = run_in(&dir, &args);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -161,9 +137,9 @@ mod with_oidn {
             "32",
         ];
         let base = [&base[..], &["--height", "24", "--seed", "5"]].concat();
-        let out = gradtrace(&dir, &[&base[..], &["--out", "plain.exr"]].concat());
+        let out = run_in(&dir, &[&base[..], &["--out", "plain.exr"]].concat());
         assert_eq!(out.status.code(), Some(0));
-        let out = gradtrace(
+        let out = run_in(
             &dir,
             &[&base[..], &["--denoise", "--out", "dn.exr"]].concat(),
         );

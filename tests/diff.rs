@@ -3,38 +3,16 @@
 //! status, and one clear error (naming the file) that writes nothing for bad
 //! input.
 
+mod common;
+use common::{run_in, temp_dir};
 use gradtrace::output::metrics::RELMSE_EPS;
 use gradtrace::output::{write_exr, OutputImage};
 use gradtrace::pipeline::diff::{self, DiffMetric, DiffOptions};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
-const BIN: &str = env!("CARGO_BIN_EXE_gradtrace");
 const W: usize = 20;
 const H: usize = 15;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("gradtrace-diff-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn gradtrace(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the binary runs");
-    println!(
-        "$ gradtrace {}\n-> {:?}\nstdout: {}stderr: {}",
-        args.join(" "),
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 fn stderr_lines(out: &Output) -> Vec<String> {
     String::from_utf8_lossy(&out.stderr)
@@ -104,7 +82,7 @@ fn identical_files_give_zero_and_exit_0() {
     );
     assert!(!report.exceeds_threshold());
 
-    let out = gradtrace(&dir, &["diff", "a.exr", "b.exr", "--threshold", "0"]);
+    let out = run_in(&dir, &["diff", "a.exr", "b.exr", "--threshold", "0"]);
     assert_eq!(out.status.code(), Some(0));
     assert!(out.stderr.is_empty());
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -174,24 +152,24 @@ fn known_perturbation_gives_the_closed_form_and_exit_1_above_the_threshold() {
     }
 
     let below = format!("{}", want_rmse * 0.99);
-    let out = gradtrace(&dir, &["diff", "img.exr", "ref.exr", "--threshold", &below]);
+    let out = run_in(&dir, &["diff", "img.exr", "ref.exr", "--threshold", &below]);
     assert_eq!(out.status.code(), Some(1));
     let err = stderr_lines(&out);
     assert_eq!(err.len(), 1, "{err:?}");
     assert!(err[0].starts_with("error: img.exr differs from ref.exr: rmse"));
     assert!(err[0].contains("above --threshold"), "{err:?}");
     let above = format!("{}", want_rmse * 1.01);
-    let out = gradtrace(&dir, &["diff", "img.exr", "ref.exr", "--threshold", &above]);
+    let out = run_in(&dir, &["diff", "img.exr", "ref.exr", "--threshold", &above]);
     assert_eq!(out.status.code(), Some(0));
 
     // The threshold applies to the chosen metric: here relMSE < RMSE.
     assert!(want_relmse < 0.99 * want_rmse);
     let args = ["diff", "img.exr", "ref.exr", "--metric", "relmse"];
     let relmse_below = format!("{}", want_relmse * 0.99);
-    let out = gradtrace(&dir, &[&args[..], &["--threshold", &relmse_below]].concat());
+    let out = run_in(&dir, &[&args[..], &["--threshold", &relmse_below]].concat());
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr_lines(&out)[0].contains(": relmse "));
-    let out = gradtrace(&dir, &[&args[..], &["--threshold", &below]].concat());
+    let out = run_in(&dir, &[&args[..], &["--threshold", &below]].concat());
     assert_eq!(out.status.code(), Some(0), "RMSE's threshold passes relMSE");
 }
 
@@ -228,7 +206,7 @@ fn bad_inputs_are_one_error_line_and_write_nothing() {
         ),
     ];
     for (args, needles) in cases {
-        let out = gradtrace(&dir, &[&["diff"][..], args].concat());
+        let out = run_in(&dir, &[&["diff"][..], args].concat());
         assert_eq!(out.status.code(), Some(1));
         assert!(out.stdout.is_empty());
         let err = stderr_lines(&out);
@@ -245,11 +223,11 @@ fn bad_inputs_are_one_error_line_and_write_nothing() {
 fn error_map_goes_where_asked_and_never_over_an_input() {
     let dir = temp_dir("map");
     write_rgb(&dir.join("a.exr"), W, H, &pattern(W, H));
-    let out = gradtrace(&dir, &["diff", "a.exr", "a.exr", "--error-map", "m.png"]);
+    let out = run_in(&dir, &["diff", "a.exr", "a.exr", "--error-map", "m.png"]);
     assert_eq!(out.status.code(), Some(0));
     assert!(dir.join("m.png").is_file());
     assert!(!dir.join("a.diff.png").exists());
-    let out = gradtrace(&dir, &["diff", "a.exr", "a.exr", "--error-map", "a.exr"]);
+    let out = run_in(&dir, &["diff", "a.exr", "a.exr", "--error-map", "a.exr"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr_lines(&out)[0].contains("is one of the inputs"));
     assert!(gradtrace::output::read_exr(&dir.join("a.exr")).is_ok());

@@ -98,3 +98,36 @@ pub fn perspective_floor(p: glam::Vec2, lift: f32) -> (f32, glam::Vec2) {
     let q = 0.02 * (1.0 + 0.006 * p.y) * (1.0 + lift);
     (1.0 / q, glam::Vec2::new(0.0, 0.02 * 0.006 * (1.0 + lift)))
 }
+
+/// The `gradtrace` binary of this build.
+pub const BIN: &str = env!("CARGO_BIN_EXE_gradtrace");
+
+/// A fresh, empty directory in the system temp dir, unique per test file (the
+/// test binary's name), test and process.
+pub fn temp_dir(name: &str) -> std::path::PathBuf {
+    let exe = std::env::current_exe().unwrap_or_default();
+    let file = exe
+        .file_stem()
+        .map_or("test".into(), |s| s.to_string_lossy().into_owned());
+    let dir = std::env::temp_dir().join(format!("gradtrace-{file}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs the binary with `args` in `dir`, printing the call and what it printed.
+pub fn run_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    let out = std::process::Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the binary runs");
+    println!(
+        "$ gradtrace {}\n-> {:?}\nstdout: {}stderr: {}",
+        args.join(" "),
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
