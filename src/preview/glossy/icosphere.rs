@@ -35,46 +35,7 @@ pub struct Located {
 impl Icosphere {
     /// The sets up to and including `max_level`.
     pub fn new(max_level: usize) -> Self {
-        let t = (1.0 + 5f32.sqrt()) / 2.0;
-        let mut vertices: Vec<Vec3> = [
-            (-1.0, t, 0.0),
-            (1.0, t, 0.0),
-            (-1.0, -t, 0.0),
-            (1.0, -t, 0.0),
-            (0.0, -1.0, t),
-            (0.0, 1.0, t),
-            (0.0, -1.0, -t),
-            (0.0, 1.0, -t),
-            (t, 0.0, -1.0),
-            (t, 0.0, 1.0),
-            (-t, 0.0, -1.0),
-            (-t, 0.0, 1.0),
-        ]
-        .iter()
-        .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-        .collect();
-        let base: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
+        let (mut vertices, base) = crate::math::icosahedron();
         let mut faces = vec![base];
         let mut level_end = vec![vertices.len()];
         for level in 0..max_level {
