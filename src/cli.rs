@@ -34,9 +34,10 @@ pub(crate) enum Command {
     /// Print what a scene holds (geometry, materials, lights, camera, settings) and
     /// the BVH build time.
     Info(InfoArgs),
-    /// Render a cached high-quality reference, every adaptive-sampling strategy at
-    /// several budgets and equal-time baselines, and write `out/<scene>/report.html`
-    /// (self-contained), `report.json` and `report.md`.
+    /// Render a content-keyed cached reference, every adaptive-sampling strategy at
+    /// several budgets (over --seeds repetitions) and the baselines a user would
+    /// pick instead at equal time, and write `<out>/report.html` (with its
+    /// `report-assets/`), `report.json` and `report.md`.
     Compare(CompareArgs),
     /// Compare two EXRs' beauty (R, G, B): RMSE, relMSE, FLIP and an error-map
     /// PNG; exit status 1 when --threshold is exceeded.
