@@ -19,7 +19,7 @@ use std::time::Duration;
 #[derive(Parser, Debug)]
 #[command(
     name = "gradtrace",
-    version = pipeline::render::VERSION,
+    version = pipeline::VERSION,
     about = "CPU path tracer: renders a TOML scene file to a multi-layer EXR and a PNG"
 )]
 pub(crate) struct Cli {

@@ -821,12 +821,14 @@ fn html(
 ) -> String {
     let (w, h) = (input.width, input.height);
     // Thumbnails scale smoothly; a click opens the full-size file.
-    let img = |name: &str, alt: &str| {
+    // `extra` follows the caption inside the figure (an error map's colour bar).
+    let figure = |name: &str, alt: &str, extra: &str| {
         format!(
-            "<figure><a href=\"{ASSET_DIR}/{name}\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{ASSET_DIR}/{name}\"></a><figcaption>{a}</figcaption></figure>",
+            "<figure><a href=\"{ASSET_DIR}/{name}\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{ASSET_DIR}/{name}\"></a><figcaption>{a}</figcaption>{extra}</figure>",
             a = esc(alt)
         )
     };
+    let img = |name: &str, alt: &str| figure(name, alt, "");
     let mut s = String::new();
     let _ = write!(
         s,
@@ -874,10 +876,15 @@ fn html(
     let legend = legend_svg(error_scale);
     s += "<p>Error maps: |luminance(run) − luminance(reference)|, linear units, one scale for all maps.</p>\n<div class=\"grid\">\n";
     for card in cards {
-        let (run, row) = (
-            &input.runs[card.run],
-            rows.iter().find(|r| r.name == input.runs[card.run].name),
-        );
+        let run = &input.runs[card.run];
+        // The run's own row: same method, kind and setting (a name alone would
+        // find the method at another budget).
+        let row = rows.iter().find(|r| {
+            r.name == run.name
+                && r.kind == run.kind.name()
+                && r.budget == run.kind.budget()
+                && r.equal_time_budget == run.kind.group()
+        });
         let name = format!("{} ({})", run.name, run.kind.short());
         let _ = write!(s, "<div class=\"card\"><h3>{}</h3>", esc(&name));
         if let Some(row) = row {
@@ -890,11 +897,7 @@ fn html(
         }
         s += "<div class=\"imgs\">";
         s += &img(&card.image, &name);
-        s += &format!(
-            "<figure>{}{legend}</figure>",
-            &img(&card.error, "error map")
-                ["<figure>".len()..img(&card.error, "error map").len() - "</figure>".len()]
-        );
+        s += &figure(&card.error, "error map", &legend);
         if let Some(m) = &card.samples {
             s += &img(
                 m,

@@ -240,7 +240,7 @@ pub fn compare(
         scene: scene.name(),
         scene_hash,
         command: opts.command.clone(),
-        version: super::version(),
+        version: super::VERSION.into(),
         threads: rayon::current_num_threads(),
         width: w as usize,
         height: h as usize,
@@ -663,7 +663,7 @@ fn reference_key(scene_hash: &str, opts: &RenderOptions) -> String {
     use sha2::{Digest, Sha256};
     let text = format!(
         "gradtrace reference v1\nscene {scene_hash}\noptions {opts:?}\nversion {}\n",
-        super::version()
+        super::VERSION
     );
     Sha256::digest(text.as_bytes())
         .iter()
@@ -716,7 +716,7 @@ fn cached_reference(plan: &Plan, scene_hash: &str) -> Result<(Vec<Vec3>, Referen
     crate::output::write_exr(&exr, &image_of_render(&out))?;
     let sidecar = serde_json::json!({
         "cache_key": key, "scene_hash": scene_hash, "spp": plan.reference_spp,
-        "time_s": secs, "options": format!("{opts:?}"), "version": super::version(),
+        "time_s": secs, "options": format!("{opts:?}"), "version": super::VERSION,
     });
     crate::output::write_atomic(&meta, |f| {
         use std::io::Write;

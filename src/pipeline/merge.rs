@@ -257,7 +257,7 @@ fn merge(parts: &[Part], out: &Path, command: &str, whole_image: bool) -> Result
         .filter_map(|p| p.header.get(attr::RENDER_TIME_S)?.parse::<f64>().ok())
         .sum();
     let mut attributes = vec![
-        (attr::VERSION.into(), super::render::VERSION.into()),
+        (attr::VERSION.into(), super::VERSION.into()),
         (attr::COMMAND.into(), command.into()),
         (attr::SPP.into(), (range.1 - range.0).to_string()),
         (attr::SPP_RANGE.into(), format!("{}:{}", range.0, range.1)),

@@ -68,7 +68,11 @@ pub fn info(path: &Path) -> Result<String> {
 }
 
 /// The renderer's version: the crate version and the git commit it was built
-/// from (`build.rs`), e.g. `0.1.0 (4342f2c)`, as `--version` prints it.
-pub fn version() -> String {
-    render::VERSION.to_string()
-}
+/// from (`build.rs`), e.g. `0.1.0 (4342f2c)`, as `--version` prints it and every
+/// EXR header and report records it.
+pub const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (",
+    env!("GRADTRACE_GIT_COMMIT"),
+    ")"
+);

@@ -71,11 +71,6 @@ impl Phase {
         }
     }
 
-    /// A phase that shows nothing.
-    pub fn hidden() -> Self {
-        Self::new(ProgressMode::Quiet, "", 0, "")
-    }
-
     /// Reports `done` of `total` (monotone: an older, smaller count from another
     /// thread never moves the bar back).
     pub fn set(&self, done: u64, total: u64) {

@@ -23,14 +23,6 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The crate version and the git commit it was built from (`build.rs`).
-pub const VERSION: &str = concat!(
-    env!("CARGO_PKG_VERSION"),
-    " (",
-    env!("GRADTRACE_GIT_COMMIT"),
-    ")"
-);
-
 /// The sample cap of a `--time-limit` render without `--spp`.
 pub const TIME_LIMIT_MAX_SPP: u32 = 1 << 20;
 
@@ -308,7 +300,7 @@ pub fn provenance(
     let seed = opts.seed.unwrap_or(scene.settings.seed);
     let range = (out.first_sample, out.first_sample + out.spp);
     let mut attributes: Vec<(String, String)> = vec![
-        (attr::VERSION.into(), VERSION.into()),
+        (attr::VERSION.into(), super::VERSION.into()),
         (attr::COMMAND.into(), command.into()),
         (attr::SCENE_SHA256.into(), scene.content_hash()?),
         (attr::SPP.into(), out.spp.to_string()),
@@ -384,7 +376,7 @@ fn run_adaptive(
     drop(phase);
     let rec = &out.reconstruction;
     let mut attributes = vec![
-        (attr::VERSION.into(), VERSION.into()),
+        (attr::VERSION.into(), super::VERSION.into()),
         (attr::COMMAND.into(), job.command.clone()),
         (attr::SCENE_SHA256.into(), scene.content_hash()?),
         (

@@ -80,20 +80,6 @@ impl Interpolation {
             Interpolation::Gradient => "gradient",
         }
     }
-
-    /// Parses [`Interpolation::name`]; the error lists the valid choices.
-    pub fn from_name(name: &str) -> Result<Self> {
-        match name {
-            "linear" => Ok(Interpolation::Linear),
-            "gradient" => Ok(Interpolation::Gradient),
-            _ => Err(Error::Option {
-                option: "interpolation".into(),
-                message: format!(
-                    "unknown interpolation '{name}', expected one of: linear, gradient"
-                ),
-            }),
-        }
-    }
 }
 
 /// The reconstructed image and the sample-density plane, row-major, top row first.
