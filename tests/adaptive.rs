@@ -632,6 +632,82 @@ fn gradient_noise_does_not_draw_samples() {
     );
 }
 
+/// Fireflies: at about 3% of the positions one path of a 256-path estimate carries
+/// 256× the pixel's value (+1.0 on a 0.2 background); where it is one of the 16
+/// gradient paths, its gradient too. The estimator reports the variances such a
+/// path gives its estimate (≈ X²/N² per channel), as the renderer's point
+/// estimator does. A firefly must not draw samples away from the real feature (the
+/// bump): with the variances reported, both the `variance` and the `gradient`
+/// strategy keep at least 90% of the share of samples they put near the bump on the
+/// clean image, and without them (the check that this test can fail) `variance`
+/// loses it.
+#[test]
+fn fireflies_do_not_draw_samples() {
+    let (w, h) = (128u32, 128u32);
+    let hash = |p: Vec2| {
+        ((p.x * 12.9898 + p.y * 78.233).sin() * 43758.547)
+            .fract()
+            .abs()
+    };
+    let bump_at = Vec2::new(40.0, 80.0);
+    let is_firefly = move |p: Vec2| hash(p) < 0.03 && p.distance(bump_at) > 12.0;
+    let image = |fireflies: bool, report: bool| {
+        move |p: Vec2| {
+            let mut v = bump(p);
+            if report {
+                v.radiance_variance = Some(0.0);
+                v.gradient_variance = Some(0.0);
+            }
+            if fireflies && is_firefly(p) {
+                let x = 1.0; // X / N: the one path's share of the mean
+                v.radiance += Vec3::splat(x);
+                let g = 40.0 / 16.0; // the same path's gradient over 16 gradient paths
+                let in_gradient = hash(p + Vec2::splat(0.5)) < 0.5;
+                if in_gradient {
+                    v.grad_u += Vec3::splat(g);
+                }
+                if report {
+                    v.radiance_variance = Some(3.0 * x * x);
+                    v.gradient_variance = Some(if in_gradient { 3.0 * g * g } else { 0.0 });
+                }
+            }
+            v
+        }
+    };
+    let near_bump = |s: &gradtrace::adaptive::Sample| s.pos.distance(bump_at) < 9.0;
+    for strategy in [Strategy::Variance, Strategy::Gradient] {
+        let share = |fireflies: bool, report: bool| {
+            let settings = Settings::new(strategy, 0.1);
+            let set = refine(&image(fireflies, report), w, h, &settings).unwrap();
+            let near = set.samples.iter().filter(|s| near_bump(s)).count();
+            let on_fireflies = set.samples.iter().filter(|s| is_firefly(s.pos)).count();
+            let frac = near as f32 / set.samples.len() as f32;
+            println!(
+                "{}: fireflies {fireflies}, variances reported {report}: {:.1}% of the \
+                 samples within 9 px of the bump, {on_fireflies} firefly samples",
+                strategy.name(),
+                100.0 * frac
+            );
+            frac
+        };
+        let clean = share(false, true);
+        let unreported = share(true, false);
+        let reported = share(true, true);
+        assert!(
+            reported >= 0.9 * clean,
+            "{}: fireflies drew samples away from the bump: {reported} vs {clean} clean",
+            strategy.name()
+        );
+        if strategy == Strategy::Variance {
+            assert!(
+                unreported < 0.8 * clean,
+                "the unreported fireflies should have drawn samples (test power): \
+                 {unreported} vs {clean}"
+            );
+        }
+    }
+}
+
 /// When the budget cannot refine every object boundary to pixel size, the boundaries
 /// with the larger radiance jump go first, whatever the strategy: two discs, one in
 /// strong contrast with the background and one barely different from it.

@@ -75,6 +75,11 @@ pub struct SampleValue {
     /// Jacobian), when the estimator is Monte Carlo. The gradient strategies subtract
     /// it from |∇I|², so noise alone does not draw samples.
     pub gradient_variance: Option<f32>,
+    /// Variance of the radiance estimate (summed over R, G, B), when the estimator is
+    /// Monte Carlo. Radiance differences between samples (the `variance` strategy's
+    /// metric, the jump that orders boundary cells) subtract it, so a firefly — one
+    /// path carrying a sample's whole estimate — does not draw samples.
+    pub radiance_variance: Option<f32>,
 }
 
 impl SampleValue {
@@ -93,6 +98,7 @@ impl SampleValue {
             durand: None,
             vis_gradient: None,
             gradient_variance: None,
+            radiance_variance: None,
         }
     }
 
@@ -124,13 +130,25 @@ impl SampleValue {
         (self.grad_u.length_squared() + self.grad_v.length_squared()).sqrt()
     }
 
-    /// [`Self::gradient_norm`] with the estimator's noise taken out:
-    /// √max(|Ĵ|² − Var, 0), since E|Ĵ|² = |J|² + Var for an unbiased estimate Ĵ.
+    /// |I_a − I_b| less the noise of the two estimates: max(|Î_a − Î_b| − σ, 0) with
+    /// σ² = Var_a + Var_b (soft thresholding at one standard deviation). A one-path
+    /// firefly of N (deviation X/N, variance ≈ X²/N² per channel) moves |Î_a − Î_b|
+    /// by about σ and so contributes only the true difference, while a contrast well
+    /// above the noise keeps its size. (√max(|Δ̂|² − σ², 0), unbiased for |Δ|², would
+    /// keep the cross term 2Δ·f under its root: √(2|Δ|X/N) ≫ |Δ|.)
+    pub fn contrast_denoised(&self, other: &SampleValue) -> f32 {
+        let var = |v: &SampleValue| v.radiance_variance.unwrap_or(0.0).max(0.0);
+        let sigma = (var(self) + var(other)).sqrt();
+        ((self.radiance - other.radiance).length() - sigma).max(0.0)
+    }
+
+    /// [`Self::gradient_norm`] less the estimator's noise: max(|Ĵ| − σ, 0) with σ² the
+    /// variance of Ĵ, the same soft threshold as [`Self::contrast_denoised`] and for
+    /// the same reason: √max(|Ĵ|² − σ², 0), though unbiased for |J|², keeps a
+    /// firefly's cross term 2J·f under its root and lets one outlier path draw samples.
     pub fn gradient_norm_denoised(&self) -> f32 {
-        let sq = self.grad_u.length_squared() + self.grad_v.length_squared();
-        (sq - self.gradient_variance.unwrap_or(0.0).max(0.0))
-            .max(0.0)
-            .sqrt()
+        let sigma = self.gradient_variance.unwrap_or(0.0).max(0.0).sqrt();
+        (self.gradient_norm() - sigma).max(0.0)
     }
 }
 

@@ -609,8 +609,9 @@ impl Tree {
             return 0.0;
         }
         match self.settings.strategy {
-            // Sec. 9.2: the intensity difference of neighbours is a central difference.
-            Strategy::Variance => (va.radiance - vb.radiance).length() / d,
+            // Sec. 9.2: the intensity difference of neighbours is a central difference
+            // (less the estimators' noise, so that fireflies do not draw samples).
+            Strategy::Variance => va.contrast_denoised(vb) / d,
             // |J_a − J_b| / d ≈ |H d̂|: a Hessian estimate from analytic gradients
             // (the second-order criterion of Sec. 9.3).
             Strategy::SecondOrder => {
@@ -671,7 +672,7 @@ impl Tree {
         for &n in &nb {
             let link = if surfaces_differ(here, &self.surface[n as usize], tol) {
                 let (va, vb) = (&self.values[id as usize], &self.values[n as usize]);
-                Link::Boundary((va.radiance - vb.radiance).length())
+                Link::Boundary(va.contrast_denoised(vb))
             } else if pairs {
                 Link::Pair(self.pair_metric(id, n))
             } else {

@@ -27,6 +27,7 @@ pub fn sample_value(e: &PointEstimate) -> SampleValue {
     let mut v = SampleValue::new(e.radiance, e.grad_u, e.grad_v);
     v.vis_gradient = Some(e.vis_gradient);
     v.gradient_variance = e.gradient_variance;
+    v.radiance_variance = e.radiance_variance;
     v.object_id = NO_OBJECT;
     v.depth = f32::INFINITY;
     v.durand = Some(0.0);
@@ -146,6 +147,7 @@ mod tests {
                         grad_v: Vec3::ZERO,
                         vis_gradient: 0.0,
                         gradient_variance: None,
+                        radiance_variance: None,
                         surface,
                         back_facing: false,
                     });

@@ -26,6 +26,10 @@ pub struct PointEstimate {
     /// Variance of the mean gradient (summed over components), from the samples'
     /// spread; `None` with a single gradient sample.
     pub gradient_variance: Option<f32>,
+    /// Variance of the mean radiance (summed over R, G, B), from the `spp` samples'
+    /// spread; `None` with a single sample. Lets the quadtree tell a firefly (one
+    /// path carrying the estimate) from a real contrast.
+    pub radiance_variance: Option<f32>,
     /// The surface exactly at the point; `None` for the background.
     pub surface: Option<SurfaceAt>,
     /// The first camera sample's path ended on the far side of a bump map's
@@ -84,7 +88,7 @@ impl<'a> PointEstimator<'a> {
         // the same whatever order or thread evaluates it.
         let key = hash2(p.x.to_bits(), p.y.to_bits());
         let (mut radiance, mut gu, mut gv, mut vis) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0f32);
-        let mut sq = 0.0f32;
+        let (mut sq, mut radiance_sq) = (0.0f32, 0.0f32);
         let mut first = None;
         for s in 0..self.spp {
             // A pixel-sized box footprint around p, as the full render's pixels have.
@@ -98,6 +102,7 @@ impl<'a> PointEstimator<'a> {
                 s < self.gradient_spp,
             );
             radiance += r.radiance;
+            radiance_sq += r.radiance.length_squared();
             if let Some(g) = r.gradient {
                 let t = g.total();
                 gu += t[0];
@@ -118,6 +123,10 @@ impl<'a> PointEstimator<'a> {
             let mean_sq = grad_u.length_squared() + grad_v.length_squared();
             ((sq / ng - mean_sq) / (ng - 1.0)).max(0.0)
         });
+        let radiance_variance = (self.spp > 1).then(|| {
+            let mean = radiance / n;
+            ((radiance_sq / n - mean.length_squared()) / (n - 1.0)).max(0.0)
+        });
         let surface = self.surface_at(p);
         let back_facing = surface.is_some_and(|c| {
             first
@@ -130,6 +139,7 @@ impl<'a> PointEstimator<'a> {
             grad_v,
             vis_gradient: vis / ng,
             gradient_variance,
+            radiance_variance,
             surface,
             back_facing,
         }
