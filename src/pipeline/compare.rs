@@ -214,8 +214,8 @@ pub fn compare(
 
     let mut runs = Vec::new();
     for k in 0..opts.seeds {
-        let seed_runs = seed_runs(&plan, k, progress)?;
-        rendering_s += seed_runs.iter().map(|r| r.wall_time_s).sum::<f64>();
+        let (seed_runs, seconds) = seed_runs(&plan, k, progress)?;
+        rendering_s += seconds;
         runs.extend(seed_runs);
     }
     warn_identical_sample_sets(&runs, progress);
@@ -272,9 +272,13 @@ fn repetition_seed(base: u32, k: u32) -> u32 {
     }
 }
 
+/// The gradient strategy's reconstruction denoised: what a user would combine.
+const GRADIENT_OIDN: &str = "gradient+oidn";
+
 /// One repetition: the full render, every strategy × budget, and for every budget
-/// the baselines at the `gradient` run's wall time.
-fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
+/// the baselines at the `gradient` run's wall time. Also returns the seconds spent
+/// rendering (and denoising), each counted once.
+fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, f64)> {
     let seed = repetition_seed(plan.base.seed.unwrap_or(plan.scene.settings.seed), k);
     let base = RenderOptions {
         seed: Some(seed),
@@ -292,8 +296,10 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
         full,
         full_time,
     )];
+    let mut denoise_s = 0.0;
     for &budget in &plan.opts.budgets {
         let mut gradient_time = None;
+        let mut denoiser_time = None;
         for &strategy in &plan.opts.strategies {
             let settings = Settings::new(strategy, budget);
             let out = render_adaptive(
@@ -313,6 +319,16 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
             ));
             if strategy == Strategy::Gradient {
                 gradient_time = Some(out.stats.wall_s);
+                if crate::denoise::available() {
+                    let (run, gbuffer_s, denoiser_s) = denoised_run(plan, &base, &out, budget, k)?;
+                    progress(&format!(
+                        "seed {k}: {GRADIENT_OIDN} at {:.0}%, G-buffer {gbuffer_s:.2} s + denoise {denoiser_s:.2} s",
+                        budget * 100.0
+                    ));
+                    denoise_s += gbuffer_s + denoiser_s;
+                    denoiser_time = Some(denoiser_s);
+                    runs.push(run);
+                }
             }
             runs.push(adaptive_run(
                 strategy.name(),
@@ -325,14 +341,8 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
         // strategies, the first strategy's time stands in.
         let target =
             gradient_time.unwrap_or_else(|| runs.last().map_or(full_time, |r| r.wall_time_s));
-        let spp_eq = ((plan.spp as f64 * target / full_time).round() as u32).max(1);
-        let (out, secs) = timed_render(
-            plan,
-            &RenderOptions {
-                spp: Some(spp_eq),
-                ..base.clone()
-            },
-        )?;
+        let guess = ((plan.spp as f64 * target / full_time).round() as u32).max(1);
+        let (out, secs, spp_eq) = equal_time_render(plan, &base, guess, target)?;
         progress(&format!(
             "seed {k}: uniform-all-pixels at the time of {:.0}%: {spp_eq} spp, {secs:.2} s",
             budget * 100.0
@@ -342,11 +352,61 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
             spp: spp_eq,
         };
         runs.push(full_run("uniform-all-pixels", kind, k, out, secs));
-        runs.extend(other_baselines(
-            plan, &base, budget, spp_eq, target, k, progress,
-        )?);
+        let equal = EqualTime {
+            budget,
+            spp: spp_eq,
+            target,
+            denoiser_s: denoiser_time,
+        };
+        runs.extend(other_baselines(plan, &base, &equal, k, progress)?);
     }
-    Ok(runs)
+    let rendering_s = runs
+        .iter()
+        .filter(|r| r.name != GRADIENT_OIDN)
+        .map(|r| r.wall_time_s)
+        .sum::<f64>()
+        + denoise_s;
+    Ok((runs, rendering_s))
+}
+
+/// `out` (the gradient strategy's reconstruction) denoised with OIDN, guided by a
+/// one-ray-per-pixel G-buffer; its wall time is the adaptive render's plus both.
+/// Returns the run, the G-buffer's and the denoiser's seconds.
+fn denoised_run(
+    plan: &Plan,
+    base: &RenderOptions,
+    out: &AdaptiveRender,
+    budget: f32,
+    k: u32,
+) -> Result<(Run, f64, f64)> {
+    let t = Instant::now();
+    let gbuffer = super::render::gbuffer(plan.scene, plan.accel, base)?;
+    let gbuffer_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let clean = super::render::denoise_with(&out.reconstruction.image, &gbuffer)?;
+    let denoiser_s = t.elapsed().as_secs_f64();
+    let extra = gbuffer_s + denoiser_s;
+    let run = Run {
+        name: GRADIENT_OIDN.into(),
+        kind: RunKind::Adaptive { budget },
+        seed: k,
+        samples: out.samples.samples.len(),
+        wall_time_s: out.stats.wall_s + extra,
+        overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s + extra,
+        image: clean,
+        sample_positions: out.samples.samples.iter().map(|s| s.pos).collect(),
+    };
+    Ok((run, gbuffer_s, denoiser_s))
+}
+
+/// What the baselines at one budget are given: the gradient run's wall time
+/// (`target`), the spp a full render fits in it, and the denoiser's time on this
+/// image when it ran (the denoised baseline renders less to leave room for it).
+struct EqualTime {
+    budget: f32,
+    spp: u32,
+    target: f64,
+    denoiser_s: Option<f64>,
 }
 
 /// The baselines besides uniform, at the `target` wall time of the gradient run
@@ -355,12 +415,16 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<Vec<Run>> {
 fn other_baselines(
     plan: &Plan,
     base: &RenderOptions,
-    budget: f32,
-    spp_eq: u32,
-    target: f64,
+    equal: &EqualTime,
     k: u32,
     progress: &dyn Fn(&str),
 ) -> Result<Vec<Run>> {
+    let &EqualTime {
+        budget,
+        spp: spp_eq,
+        target,
+        denoiser_s,
+    } = equal;
     use crate::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
     let mut runs = Vec::new();
     // Blender's default threshold; a first round small enough to fit the time.
@@ -387,8 +451,11 @@ fn other_baselines(
     if !crate::denoise::available() {
         return Ok(runs);
     }
+    // Denoise time included: the render gets what the denoiser leaves of the target.
+    let left = denoiser_s.map_or(1.0, |d| ((target - d) / target).clamp(0.25, 1.0));
+    let spp_oidn = ((f64::from(spp_eq) * left).round() as u32).max(1);
     let with_aovs = RenderOptions {
-        spp: Some(spp_eq),
+        spp: Some(spp_oidn),
         aovs: true,
         ..base.clone()
     };
@@ -404,13 +471,13 @@ fn other_baselines(
     )?;
     let secs = t.elapsed().as_secs_f64();
     progress(&format!(
-        "seed {k}: oidn-uniform, {spp_eq} spp + denoise, {secs:.2} s"
+        "seed {k}: oidn-uniform, {spp_oidn} spp + denoise, {secs:.2} s"
     ));
     let mut run = full_run(
         "oidn-uniform",
         RunKind::Baseline {
             budget,
-            spp: spp_eq,
+            spp: spp_oidn,
         },
         k,
         out,
@@ -422,10 +489,12 @@ fn other_baselines(
 }
 
 /// Two strategies that placed exactly the same samples at one budget and seed
-/// (forced boundary cells can take the whole budget) are one result twice.
+/// (forced boundary cells can take the whole budget) are one result twice. (The
+/// denoised gradient run shares its samples by construction.)
 fn warn_identical_sample_sets(runs: &[Run], progress: &dyn Fn(&str)) {
-    for (i, a) in runs.iter().enumerate() {
-        for b in &runs[i + 1..] {
+    let strategies: Vec<&Run> = runs.iter().filter(|r| r.name != GRADIENT_OIDN).collect();
+    for (i, a) in strategies.iter().enumerate() {
+        for b in &strategies[i + 1..] {
             if a.seed == b.seed
                 && a.kind == b.kind
                 && matches!(a.kind, RunKind::Adaptive { .. })
@@ -586,6 +655,37 @@ fn largest_surface(plan: &Plan) -> Result<Option<(u32, Vec<bool>)>> {
 }
 
 /// Every pixel rendered with `opts`, and the wall time it took.
+/// A full render at the `target` wall time: `guess` spp (scaled from the full
+/// render's time), and once more at the spp its own time implies when it missed the
+/// target by more than 15% (the machine's load can change between the two renders,
+/// and an equal-time comparison must not hand a baseline half the time).
+fn equal_time_render(
+    plan: &Plan,
+    base: &RenderOptions,
+    guess: u32,
+    target: f64,
+) -> Result<(RenderOutput, f64, u32)> {
+    let at = |spp: u32| {
+        timed_render(
+            plan,
+            &RenderOptions {
+                spp: Some(spp),
+                ..base.clone()
+            },
+        )
+    };
+    let (out, secs) = at(guess)?;
+    if (secs / target - 1.0).abs() <= 0.15 || secs <= 0.0 {
+        return Ok((out, secs, guess));
+    }
+    let spp = ((f64::from(guess) * target / secs).round() as u32).max(1);
+    if spp == guess {
+        return Ok((out, secs, guess));
+    }
+    let (out, secs) = at(spp)?;
+    Ok((out, secs, spp))
+}
+
 fn timed_render(plan: &Plan, opts: &RenderOptions) -> Result<(RenderOutput, f64)> {
     let t = Instant::now();
     let out = render(plan.scene, plan.accel, opts, &|_, _| {})?;

@@ -87,6 +87,8 @@ pub enum SummaryKind {
         seconds: f64,
         quadtree_s: f64,
         reconstruct_s: f64,
+        /// The G-buffer pass and the denoiser's wall time, with `--denoise`.
+        denoise_s: Option<f64>,
     },
 }
 
@@ -121,12 +123,18 @@ impl fmt::Display for RenderSummary {
                 seconds,
                 quadtree_s,
                 reconstruct_s,
-            } => write!(
-                f,
-                "{} at budget {}: {samples} samples, {seconds:.3} s (quadtree {quadtree_s:.3} s, reconstruction {reconstruct_s:.3} s)",
-                settings.strategy.name(),
-                settings.budget
-            )?,
+                denoise_s,
+            } => {
+                write!(
+                    f,
+                    "{} at budget {}: {samples} samples, {seconds:.3} s (quadtree {quadtree_s:.3} s, reconstruction {reconstruct_s:.3} s)",
+                    settings.strategy.name(),
+                    settings.budget
+                )?;
+                if let Some(d) = denoise_s {
+                    write!(f, ", denoised in {d:.3} s")?;
+                }
+            }
         }
         write!(
             f,
@@ -394,10 +402,21 @@ fn run_adaptive(
         ..ExrHeader::default()
     };
     let mut image = image_of_reconstruction(rec);
-    if job.options.aovs {
-        add_aovs(&mut image, scene, accel, &job.options)?;
+    let mut shown = rec.image.clone();
+    let mut denoise_s = None;
+    if job.options.aovs || job.denoise {
+        let t0 = Instant::now();
+        let gbuffer = gbuffer(scene, accel, &job.options)?;
+        if job.options.aovs {
+            add_aovs(&mut image, &gbuffer);
+        }
+        if job.denoise {
+            shown = denoise_with(&rec.image, &gbuffer)?;
+            swap_in_denoised(&mut image, &shown);
+            denoise_s = Some(t0.elapsed().as_secs_f64());
+        }
     }
-    write_output_set_with_header(&image, &header, &rec.image, exr, png)?;
+    write_output_set_with_header(&image, &header, &shown, exr, png)?;
     Ok(RenderSummary {
         width: rec.width,
         height: rec.height,
@@ -409,20 +428,21 @@ fn run_adaptive(
             seconds: out.stats.wall_s,
             quadtree_s: out.stats.quadtree_s,
             reconstruct_s: out.stats.reconstruct_s,
+            denoise_s,
         },
     })
 }
 
-/// The AOV layers of an adaptive render (normal, depth, albedo, object id), from
-/// one camera ray per pixel: what the reconstructed radiance sits on, at a cost of
-/// one primary ray and hit per pixel (a 256-spp adaptive sample costs hundreds).
-fn add_aovs(
-    image: &mut crate::output::OutputImage,
+/// The AOVs of an adaptive render (normal, depth, albedo, object id), from one
+/// camera ray per pixel: what the reconstructed radiance sits on, at a cost of one
+/// primary ray and hit per pixel (a 256-spp adaptive sample costs hundreds). Also
+/// the denoiser's guides when a reconstruction is denoised.
+pub(crate) fn gbuffer(
     scene: &crate::scene::Scene,
     accel: &crate::accel::Accel,
     opts: &RenderOptions,
-) -> Result<()> {
-    let gbuffer = render::render(
+) -> Result<RenderOutput> {
+    render::render(
         scene,
         accel,
         &RenderOptions {
@@ -433,14 +453,39 @@ fn add_aovs(
             ..opts.clone()
         },
         &|_, _| {},
-    )?;
-    // Every layer but the beauty (`R,G,B`) and the one-sample variance.
-    let aovs = image_of_render(&gbuffer)
+    )
+}
+
+/// Every layer of `gbuffer` but its beauty (`R,G,B`) and its one-sample variance.
+fn add_aovs(image: &mut OutputImage, gbuffer: &RenderOutput) {
+    let aovs = image_of_render(gbuffer)
         .channels
         .into_iter()
         .filter(|c| c.name.contains('.') && !c.name.starts_with(crate::output::names::VARIANCE));
     image.channels.extend(aovs);
-    Ok(())
+}
+
+/// `beauty` denoised by OIDN, guided by the G-buffer's albedo and normal.
+pub(crate) fn denoise_with(beauty: &[Vec3], gbuffer: &RenderOutput) -> Result<Vec<Vec3>> {
+    denoise::denoise(
+        beauty,
+        gbuffer.albedo.as_deref(),
+        gbuffer.normal.as_deref(),
+        gbuffer.width,
+        gbuffer.height,
+    )
+}
+
+/// The denoised beauty becomes `R,G,B`; the noisy one stays as `noisy.R/G/B`.
+fn swap_in_denoised(image: &mut OutputImage, clean: &[Vec3]) {
+    for ch in image
+        .channels
+        .iter_mut()
+        .filter(|c| RGB.contains(&c.name.as_str()))
+    {
+        ch.name = format!("noisy.{}", ch.name);
+    }
+    image.push_vec3("", RGB, clean);
 }
 
 /// Fails before any work on options that do not go together.
@@ -460,10 +505,11 @@ fn check_combinations(job: &RenderJob) -> Result<()> {
         );
     }
     if job.denoise {
-        if job.adaptive.is_some() || job.noise_adaptive.is_some() {
+        if job.noise_adaptive.is_some() {
             return bad(
                 "--denoise",
-                "denoises full renders only, not --strategy reconstructions",
+                "denoises full renders and --strategy reconstructions, not \
+                 --noise-threshold renders (their pixels carry unequal noise)",
             );
         }
         if job.resume.is_some() || job.options.sample_range.is_some() {
@@ -495,13 +541,6 @@ fn full_image(
     let (albedo, normal) = (out.albedo.as_deref(), out.normal.as_deref());
     let clean: Vec<Vec3> = denoise::denoise(&out.beauty, albedo, normal, out.width, out.height)?;
     let seconds = t0.elapsed().as_secs_f64();
-    for ch in image
-        .channels
-        .iter_mut()
-        .filter(|c| RGB.contains(&c.name.as_str()))
-    {
-        ch.name = format!("noisy.{}", ch.name);
-    }
-    image.push_vec3("", RGB, &clean);
+    swap_in_denoised(&mut image, &clean);
     Ok((image, Some(clean), Some(seconds)))
 }
