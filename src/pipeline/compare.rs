@@ -461,14 +461,9 @@ fn other_baselines(
     };
     let t = Instant::now();
     let out = render(plan.scene, plan.accel, &with_aovs, &|_, _| {})?;
-    let (w, h) = (out.width, out.height);
-    let clean = crate::denoise::denoise(
-        &out.beauty,
-        out.albedo.as_deref(),
-        out.normal.as_deref(),
-        w,
-        h,
-    )?;
+    let t_denoise = Instant::now();
+    let clean = super::render::denoise_with(&out.beauty, &out)?;
+    let denoised_in = t_denoise.elapsed().as_secs_f64();
     let secs = t.elapsed().as_secs_f64();
     progress(&format!(
         "seed {k}: oidn-uniform, {spp_oidn} spp + denoise, {secs:.2} s"
@@ -483,6 +478,7 @@ fn other_baselines(
         out,
         secs,
     );
+    run.overhead_s = denoised_in;
     run.image = clean;
     runs.push(run);
     Ok(runs)
