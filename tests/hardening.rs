@@ -304,6 +304,37 @@ fn a_missing_or_unreadable_mtl_library_is_named() {
     }
 }
 
+/// A bad value inside an MTL library names the scene key, the OBJ, and the MTL
+/// file and line that set it (tobj alone does not say which library it was).
+#[test]
+fn a_bad_mtl_value_names_the_mtl_file_and_line() {
+    let dir = scratch("mtl_value");
+    let mtl = "newmtl red\nKd 0.8 0.1 0.1\n\nnewmtl shiny\nKd 0.5 0.5 0.5\nKs 0.2 0.2 0.2\nNs -3\n";
+    std::fs::write(dir.join("good.mtl"), "newmtl blue\nKd 0.1 0.1 0.8\n").unwrap();
+    std::fs::write(dir.join("m.mtl"), mtl).unwrap();
+    let obj = format!("mtllib good.mtl\nmtllib m.mtl\nusemtl shiny\n{SQUARE_OBJ}");
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    let text = format!("{CAM}[[shapes]]\ntype = \"mesh\"\nfile = \"m.obj\"\n");
+    let msg = err_in(&dir, &text);
+    assert_has(
+        &msg,
+        &[
+            "shapes[0].file (line 8",
+            "m.obj",
+            "m.mtl line 7",
+            "`shiny`",
+            "`Ns`",
+            "-3",
+        ],
+    );
+    assert!(!msg.contains("good.mtl"), "{msg}");
+    let mtl = mtl
+        .replace("Kd 0.8 0.1 0.1", "Kd 0.8 -0.1 0.1")
+        .replace("Ns -3", "Ns 3");
+    std::fs::write(dir.join("m.mtl"), mtl).unwrap();
+    assert_has(&err_in(&dir, &text), &["m.mtl line 2", "`red`", "`Kd`"]);
+}
+
 #[test]
 fn scene_files_are_size_limited_and_must_be_regular_files() {
     let dir = scratch("limits");

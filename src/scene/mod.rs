@@ -43,7 +43,8 @@ pub fn load_from_str(text: &str, path: &Path) -> crate::Result<Scene> {
 }
 
 /// The MTL files an OBJ names with `mtllib` that exist beside it (tobj reads
-/// them itself, so the parser never sees their paths).
+/// them itself, so the parser never sees their paths). Like tobj, the rest of the
+/// line is one file name (spaces included).
 fn mtl_libraries(obj: &Path) -> crate::Result<Vec<PathBuf>> {
     let text = std::fs::read(obj).map_err(|source| crate::Error::Io {
         path: obj.to_path_buf(),
@@ -53,8 +54,8 @@ fn mtl_libraries(obj: &Path) -> crate::Result<Vec<PathBuf>> {
     Ok(String::from_utf8_lossy(&text)
         .lines()
         .filter_map(|l| l.trim_start().strip_prefix("mtllib"))
-        .flat_map(|rest| rest.split_whitespace())
-        .map(|name| dir.join(name))
+        .filter(|rest| rest.starts_with(char::is_whitespace))
+        .map(|rest| dir.join(rest.trim()))
         .filter(|p| p.is_file())
         .collect())
 }

@@ -47,6 +47,35 @@ fn finite3(v: [f32; 3]) -> Option<Vec3> {
     v.is_finite().then_some(v)
 }
 
+/// Where material `name`'s `key` is set: the MTL file (of those the OBJ at `obj`
+/// names) and the 1-based line. tobj does not say which library a material came
+/// from, so an error about a value is located by reading them again.
+fn locate_mtl_key(obj: &Path, name: &str, key: &str) -> Option<(PathBuf, usize)> {
+    for lib in super::mtl_libraries(obj).ok()? {
+        let text = std::fs::read_to_string(&lib).ok()?;
+        let mut inside = false;
+        for (i, line) in text.lines().enumerate() {
+            let mut words = line.split_whitespace();
+            match words.next() {
+                Some("newmtl") => inside = words.collect::<Vec<_>>().join(" ") == name,
+                Some(k) if inside && k == key => return Some((lib, i + 1)),
+                _ => {}
+            }
+        }
+    }
+    None
+}
+
+/// An error about `key` of MTL material `name`, naming the MTL file and line where
+/// they can be found (the error's path stays the OBJ the scene names).
+fn mtl_value_err(obj: &Path, name: &str, key: &str, what: String) -> crate::Error {
+    let place = match locate_mtl_key(obj, name, key) {
+        Some((lib, line)) => format!("{} line {line}: ", lib.display()),
+        None => String::new(),
+    };
+    asset_err(obj, format!("{place}material `{name}`: `{key}` {what}"))
+}
+
 /// Converts one MTL material; non-finite or negative values are an error rather
 /// than a silent black or NaN surface.
 fn convert_material(path: &Path, m: &tobj::Material) -> crate::Result<ObjMaterial> {
@@ -55,12 +84,11 @@ fn convert_material(path: &Path, m: &tobj::Material) -> crate::Result<ObjMateria
             None => Ok(None),
             Some(c) => match finite3(c) {
                 Some(c) if c.min_element() >= 0.0 => Ok(Some(c)),
-                _ => Err(asset_err(
+                _ => Err(mtl_value_err(
                     path,
-                    format!(
-                        "material `{}`: `{key}` must be finite and non-negative, got {c:?}",
-                        m.name
-                    ),
+                    &m.name,
+                    key,
+                    format!("must be finite and non-negative, got {c:?}"),
                 )),
             },
         }
@@ -74,12 +102,11 @@ fn convert_material(path: &Path, m: &tobj::Material) -> crate::Result<ObjMateria
         // MTL's default Ns is 0 (a cosine-free, i.e. uniform, lobe); keep it as is.
         let exponent = m.shininess.unwrap_or(0.0);
         if !(exponent.is_finite() && exponent >= 0.0) {
-            return Err(asset_err(
+            return Err(mtl_value_err(
                 path,
-                format!(
-                    "material `{}`: `Ns` must be finite and non-negative, got {exponent}",
-                    m.name
-                ),
+                &m.name,
+                "Ns",
+                format!("must be finite and non-negative, got {exponent}"),
             ));
         }
         Material::BlinnPhong { kd, ks, exponent }
