@@ -210,6 +210,54 @@ fn check_dimensions(path: &Path, width: u64, height: u64) -> crate::Result<()> {
     Ok(())
 }
 
+/// A Radiance `.hdr` image: the header is read and checked (dimensions, and the
+/// file's length against what such an image can take) before any pixel data, so a
+/// huge or lying file is refused without being read.
+fn read_hdr(path: &Path) -> crate::Result<(usize, usize, Vec<Vec3>)> {
+    use std::io::{BufReader, Read};
+    let io = |source| crate::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let asset = |message: String| crate::Error::Asset {
+        path: path.to_path_buf(),
+        message,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let mut reader = BufReader::new(file);
+    let mut signature = Vec::with_capacity(7);
+    (&mut reader)
+        .take(7)
+        .read_to_end(&mut signature)
+        .map_err(io)?;
+    // Radiance files may start with "#?RGBE" (Mitsuba and others write it) as well
+    // as "#?RADIANCE"; the `image` decoder accepts only the latter.
+    if signature == b"#?RGBE\n" {
+        signature = b"#?RADIANCE\n".to_vec();
+    }
+    let stream = BufReader::new(std::io::Cursor::new(signature).chain(reader));
+    let decoder = image::codecs::hdr::HdrDecoder::new(stream)
+        .map_err(|e| asset(format!("invalid .hdr image: {e}")))?;
+    let meta = decoder.metadata();
+    let (w, h) = (u64::from(meta.width), u64::from(meta.height));
+    check_dimensions(path, w, h)?;
+    // At most 4 bytes a texel, plus a 4-byte run-length header a scanline and one
+    // count byte per 128 bytes of literal data; a header of at most 64 KiB.
+    let most = 4 * w * h + (4 * w * h).div_ceil(128) + 4 * h + (64 << 10);
+    if len > most {
+        return Err(asset(format!(
+            "the file is {len} bytes, more than a {w}×{h} Radiance image can take ({most})"
+        )));
+    }
+    let img = image::DynamicImage::from_decoder(decoder)
+        .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
+        .into_rgb32f();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let texels = img.pixels().map(|p| Vec3::from(p.0)).collect();
+    Ok((w, h, texels))
+}
+
 /// The EXR's header sizes, read without touching pixel data.
 fn check_exr_header(path: &Path) -> crate::Result<()> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| match e {
@@ -246,27 +294,7 @@ pub fn load_latlong(path: &Path, scale: f32) -> crate::Result<Environment> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let (width, height, texels) = match ext.as_str() {
-        "hdr" => {
-            let mut bytes = std::fs::read(path).map_err(|source| crate::Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })?;
-            // Radiance files may start with "#?RGBE" (Mitsuba and others write it)
-            // as well as "#?RADIANCE"; the `image` decoder accepts only the latter.
-            if bytes.starts_with(b"#?RGBE\n") {
-                bytes.splice(0..6, b"#?RADIANCE".iter().copied());
-            }
-            let header = image::codecs::hdr::HdrDecoder::new(bytes.as_slice())
-                .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
-                .metadata();
-            check_dimensions(path, header.width as u64, header.height as u64)?;
-            let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Hdr)
-                .map_err(|e| asset(format!("invalid .hdr image: {e}")))?
-                .into_rgb32f();
-            let (w, h) = (img.width() as usize, img.height() as usize);
-            let texels = img.pixels().map(|p| Vec3::from(p.0)).collect::<Vec<_>>();
-            (w, h, texels)
-        }
+        "hdr" => read_hdr(path)?,
         "exr" => {
             check_exr_header(path)?;
             use exr::prelude::*;
@@ -377,6 +405,17 @@ mod tests {
             (texels[1] - Vec3::new(2.0, 1.0, 0.5)).abs().max_element() < 0.02,
             "{:?}",
             texels[1]
+        );
+        // The same image followed by 1 MiB the header does not account for: refused
+        // before the pixels are decoded, naming the sizes.
+        let padded = dir.join("padded.hdr");
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes.resize(bytes.len() + (1 << 20), 0);
+        std::fs::write(&padded, bytes).unwrap();
+        let msg = load_latlong(&padded, 1.0).unwrap_err().to_string();
+        assert!(
+            msg.contains("padded.hdr") && msg.contains("2×1 Radiance image"),
+            "{msg}"
         );
         std::fs::remove_dir_all(&dir).ok();
     }
