@@ -152,12 +152,19 @@ pub fn run(
 ) -> Result<Vec<ReportRow>> {
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
-    let baselines = 2 + usize::from(crate::denoise::available());
-    let per_seed = 1 + (opts.strategies.len() + baselines) * opts.budgets.len();
-    let steps = 3 + per_seed * opts.seeds as usize + 2;
+    let oidn = crate::denoise::available();
+    let baselines = 2 + usize::from(oidn);
+    let gradient_oidn = usize::from(oidn && opts.strategies.contains(&Strategy::Gradient));
+    let per_budget = opts.strategies.len() + gradient_oidn + baselines;
+    let per_seed = 1 + per_budget * opts.budgets.len();
+    // The reference, every seed's runs, the interpolation grid and the report.
+    let steps = 1 + per_seed * opts.seeds as usize + 2;
     let phase = super::progress::Phase::new(mode, "compare", steps as u64, "runs");
+    // One step per finished run; warnings are messages, not steps.
     let progress = |msg: &str| {
-        phase.inc(1);
+        if !msg.starts_with("warning") {
+            phase.inc(1);
+        }
         phase.message(msg);
     };
     super::with_threads(threads, || compare(&scene, &accel, opts, &progress))?
@@ -296,7 +303,9 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
         full,
         full_time,
     )];
-    let mut denoise_s = 0.0;
+    // Rendering and denoising that no run's wall time holds (the G-buffers and
+    // denoisers of the derived gradient+oidn runs, discarded equal-time attempts).
+    let mut extra_s = 0.0;
     for &budget in &plan.opts.budgets {
         let mut gradient_time = None;
         let mut denoiser_time = None;
@@ -325,7 +334,7 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
                         "seed {k}: {GRADIENT_OIDN} at {:.0}%, G-buffer {gbuffer_s:.2} s + denoise {denoiser_s:.2} s",
                         budget * 100.0
                     ));
-                    denoise_s += gbuffer_s + denoiser_s;
+                    extra_s += gbuffer_s + denoiser_s;
                     denoiser_time = Some(denoiser_s);
                     runs.push(run);
                 }
@@ -342,7 +351,9 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
         let target =
             gradient_time.unwrap_or_else(|| runs.last().map_or(full_time, |r| r.wall_time_s));
         let guess = ((plan.spp as f64 * target / full_time).round() as u32).max(1);
-        let (out, secs, spp_eq) = equal_time_render(plan, &base, guess, target)?;
+        let uniform = equal_time_render(plan, &base, guess, target)?;
+        let (out, secs, spp_eq) = (uniform.out, uniform.secs, uniform.spp);
+        extra_s += uniform.discarded_s;
         progress(&format!(
             "seed {k}: uniform-all-pixels at the time of {:.0}%: {spp_eq} spp, {secs:.2} s",
             budget * 100.0
@@ -358,14 +369,16 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
             target,
             denoiser_s: denoiser_time,
         };
-        runs.extend(other_baselines(plan, &base, &equal, k, progress)?);
+        let (baselines, discarded_s) = other_baselines(plan, &base, &equal, k, progress)?;
+        runs.extend(baselines);
+        extra_s += discarded_s;
     }
     let rendering_s = runs
         .iter()
         .filter(|r| r.name != GRADIENT_OIDN)
         .map(|r| r.wall_time_s)
         .sum::<f64>()
-        + denoise_s;
+        + extra_s;
     Ok((runs, rendering_s))
 }
 
@@ -418,7 +431,7 @@ fn other_baselines(
     equal: &EqualTime,
     k: u32,
     progress: &dyn Fn(&str),
-) -> Result<Vec<Run>> {
+) -> Result<(Vec<Run>, f64)> {
     let &EqualTime {
         budget,
         spp: spp_eq,
@@ -449,22 +462,21 @@ fn other_baselines(
     run.samples = total as usize;
     runs.push(run);
     if !crate::denoise::available() {
-        return Ok(runs);
+        return Ok((runs, 0.0));
     }
     // Denoise time included: the render gets what the denoiser leaves of the target.
-    let left = denoiser_s.map_or(1.0, |d| ((target - d) / target).clamp(0.25, 1.0));
-    let spp_oidn = ((f64::from(spp_eq) * left).round() as u32).max(1);
+    let denoiser_s = denoiser_s.unwrap_or(0.0).clamp(0.0, 0.75 * target);
+    let guess = ((f64::from(spp_eq) * (target - denoiser_s) / target).round() as u32).max(1);
     let with_aovs = RenderOptions {
-        spp: Some(spp_oidn),
         aovs: true,
         ..base.clone()
     };
-    let t = Instant::now();
-    let out = render(plan.scene, plan.accel, &with_aovs, &|_, _| {})?;
+    let rendered = equal_time_render(plan, &with_aovs, guess, target - denoiser_s)?;
+    let (out, spp_oidn) = (rendered.out, rendered.spp);
     let t_denoise = Instant::now();
     let clean = super::render::denoise_with(&out.beauty, &out)?;
     let denoised_in = t_denoise.elapsed().as_secs_f64();
-    let secs = t.elapsed().as_secs_f64();
+    let secs = rendered.secs + denoised_in;
     progress(&format!(
         "seed {k}: oidn-uniform, {spp_oidn} spp + denoise, {secs:.2} s"
     ));
@@ -481,7 +493,7 @@ fn other_baselines(
     run.overhead_s = denoised_in;
     run.image = clean;
     runs.push(run);
-    Ok(runs)
+    Ok((runs, rendered.discarded_s))
 }
 
 /// Two strategies that placed exactly the same samples at one budget and seed
@@ -653,14 +665,23 @@ fn largest_surface(plan: &Plan) -> Result<Option<(u32, Vec<bool>)>> {
 /// Every pixel rendered with `opts`, and the wall time it took.
 /// A full render at the `target` wall time: `guess` spp (scaled from the full
 /// render's time), and once more at the spp its own time implies when it missed the
-/// target by more than 15% (the machine's load can change between the two renders,
+/// target by more than 10% (the machine's load can change between the two renders,
 /// and an equal-time comparison must not hand a baseline half the time).
+struct EqualTimeRender {
+    out: RenderOutput,
+    /// The kept render's wall time.
+    secs: f64,
+    spp: u32,
+    /// The discarded first attempt's wall time (0 when it was kept): rendering too.
+    discarded_s: f64,
+}
+
 fn equal_time_render(
     plan: &Plan,
     base: &RenderOptions,
     guess: u32,
     target: f64,
-) -> Result<(RenderOutput, f64, u32)> {
+) -> Result<EqualTimeRender> {
     let at = |spp: u32| {
         timed_render(
             plan,
@@ -671,15 +692,22 @@ fn equal_time_render(
         )
     };
     let (out, secs) = at(guess)?;
-    if (secs / target - 1.0).abs() <= 0.15 || secs <= 0.0 {
-        return Ok((out, secs, guess));
+    let spp = ((f64::from(guess) * target / secs.max(1e-9)).round() as u32).max(1);
+    if (secs / target - 1.0).abs() <= 0.10 || spp == guess {
+        return Ok(EqualTimeRender {
+            out,
+            secs,
+            spp: guess,
+            discarded_s: 0.0,
+        });
     }
-    let spp = ((f64::from(guess) * target / secs).round() as u32).max(1);
-    if spp == guess {
-        return Ok((out, secs, guess));
-    }
-    let (out, secs) = at(spp)?;
-    Ok((out, secs, spp))
+    let (out, kept) = at(spp)?;
+    Ok(EqualTimeRender {
+        out,
+        secs: kept,
+        spp,
+        discarded_s: secs,
+    })
 }
 
 fn timed_render(plan: &Plan, opts: &RenderOptions) -> Result<(RenderOutput, f64)> {
