@@ -440,6 +440,21 @@ fn report_writes_three_files_and_assets() {
         head.contains("budget 25%") && head.contains(&format!("{} has the lowest RMSE", best.name)),
         "{head}"
     );
+    // Where FLIP crowns another method, the headline says so; where not, it is silent.
+    let flip_best = contenders
+        .iter()
+        .min_by(|a, b| a.flip.total_cmp(&b.flip))
+        .unwrap();
+    assert_eq!(
+        head.contains(&format!("By FLIP, {} is lowest", flip_best.name)),
+        flip_best.name != best.name,
+        "{head}"
+    );
+    assert_eq!(
+        head.contains("By FLIP"),
+        flip_best.name != best.name,
+        "{head}"
+    );
     assert!(html.contains("class=\"headline\""));
 
     // Markdown: one table per budget, plus the full and interpolation tables.

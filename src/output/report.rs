@@ -520,8 +520,35 @@ fn headline(input: &ReportInput, rows: &[ReportRow]) -> Option<String> {
         .collect::<Vec<_>>()
         .join(", ");
     let seeds = best.seeds;
+    // RMSE decides the sentence; where the other metrics crown another method the
+    // sentence says so, since a denoiser or a smooth reconstruction can win one
+    // metric and lose another.
+    let lowest = |metric: fn(&ReportRow) -> f32| {
+        members
+            .iter()
+            .min_by(|a, b| metric(a).total_cmp(&metric(b)))
+            .copied()
+    };
+    let mut dissent = String::new();
+    for (label, metric) in [
+        (
+            "trimmed relMSE",
+            (|r: &ReportRow| r.relmse_trimmed) as fn(&ReportRow) -> f32,
+        ),
+        ("FLIP", |r: &ReportRow| r.flip),
+    ] {
+        if let Some(r) = lowest(metric).filter(|r| r.name != best.name) {
+            dissent.push_str(&format!(
+                " By {label}, {} is lowest ({:.3e}; {} {:.3e}).",
+                r.name,
+                metric(r),
+                best.name,
+                metric(best)
+            ));
+        }
+    }
     Some(format!(
-        "At equal time on {} (budget {}, about {time:.2} s per image, {seeds} seed{}), {} has the lowest RMSE: {} ({:.2} s); then {others}.",
+        "At equal time on {} (budget {}, about {time:.2} s per image, {seeds} seed{}), {} has the lowest RMSE: {} ({:.2} s); then {others}.{dissent}",
         input.scene,
         percent(b),
         if seeds == 1 { "" } else { "s" },
