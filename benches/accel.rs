@@ -9,7 +9,10 @@
 //! (with our hit counts) are also written to FILE, so that
 //! `scripts/bench_embree.py` traces Embree on exactly the same rays. With
 //! `GRADTRACE_ACCEL_PRESETS=1`, obvhs build presets are compared first by
-//! load-independent figures: SAH cost, node and primitive tests per ray.
+//! load-independent figures: SAH cost, node and primitive tests per ray. With
+//! `GRADTRACE_ACCEL_ONCE=coherent` (or `incoherent`, `all`) each query runs
+//! once over that ray set and the bench exits: for instruction counts, e.g.
+//! `valgrind --tool=callgrind --toggle-collect='*trace_once*' target/release/deps/accel-*`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use gradtrace::accel::Accel;
@@ -103,6 +106,19 @@ fn incoherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
 fn bench_accel(c: &mut Criterion) {
     let bunny = load_bunny();
     let meshes = [bunny];
+    if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
+        let accel = Accel::build(&meshes, &[]);
+        let (lo, hi) = accel.bounds().expect("bunny is not empty");
+        let sets = [
+            ("coherent", coherent_rays(lo, hi)),
+            ("incoherent", incoherent_rays(lo, hi)),
+        ];
+        for (name, rays) in sets.iter().filter(|(n, _)| only == *n || only == "all") {
+            let (closest, any) = trace_once(&accel, rays);
+            println!("{name}: {closest} closest hits, {any} occluded");
+        }
+        std::process::exit(0);
+    }
 
     let mut g = c.benchmark_group("build");
     g.sample_size(10);
@@ -190,6 +206,14 @@ fn bench_accel(c: &mut Criterion) {
         });
     }
     g.finish();
+}
+
+/// One closest-hit and one any-hit pass over `rays` (the callgrind target).
+#[inline(never)]
+fn trace_once(accel: &Accel, rays: &[Ray]) -> (usize, usize) {
+    let closest = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+    let any = rays.iter().filter(|r| accel.occluded(r)).count();
+    (closest, any)
 }
 
 /// SAH cost, build time and traversal work (CWBVH nodes and primitives tested
