@@ -220,6 +220,26 @@ impl Bvh4 {
                     continue;
                 }
                 let t_near = t_near.to_array();
+                let rest = mask & (mask - 1);
+                if rest & (rest - 1) == 0 {
+                    // Two children hit (the common case): the nearer one next.
+                    let (i, j) = (
+                        mask.trailing_zeros() as usize,
+                        rest.trailing_zeros() as usize,
+                    );
+                    let (near, far) = if !SORTED || t_near[i] <= t_near[j] {
+                        (i, j)
+                    } else {
+                        (j, i)
+                    };
+                    stack[sp] = Entry {
+                        node: node.children[far],
+                        t: t_near[far],
+                    };
+                    sp += 1;
+                    cur = node.children[near];
+                    continue;
+                }
                 let (mut ids, mut ts, mut k) = ([0u32; 4], [0f32; 4], 0usize);
                 let mut m = mask;
                 while m != 0 {

@@ -296,10 +296,10 @@ impl Accel {
         let wr = WatertightRay::new(ray.origin, ray.dir);
         if self.needs_heap_stack() {
             let mut stack = vec![Entry::default(); self.bvh.stack_size()];
-            with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack))
+            with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut 0))
         } else {
             let mut stack = [Entry::default(); FIXED_STACK];
-            with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack))
+            with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut 0))
         }
     }
 
@@ -373,6 +373,19 @@ impl Accel {
         let mut work = (0, 0);
         with_axes!(wr.axes, self.closest_with(ray, &wr, &mut stack, &mut work));
         work
+    }
+
+    /// Any-hit traversal that counts BVH4 node tests (see [`Accel::closest_hit_work`]).
+    #[doc(hidden)]
+    pub fn occluded_work(&self, ray: &Ray) -> u32 {
+        if !self.traversable(ray) {
+            return 0;
+        }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        let mut stack = vec![Entry::default(); self.bvh.stack_size()];
+        let mut nodes = 0;
+        with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut nodes));
+        nodes
     }
 
     /// Reference closest hit: every primitive is tested, no BVH. For tests and
@@ -490,6 +503,7 @@ impl Accel {
         ray: &Ray,
         wr: &WatertightRay,
         stack: &mut [Entry],
+        nodes: &mut u32,
     ) -> bool {
         let (node_ray, back_off) = node_ray(ray);
         let mut hit = false;
@@ -497,7 +511,7 @@ impl Accel {
             &node_ray,
             ray.t_max + back_off,
             stack,
-            &mut 0,
+            nodes,
             |first, count| {
                 hit = self.prims[first..first + count]
                     .iter()
