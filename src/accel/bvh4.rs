@@ -114,9 +114,6 @@ pub(super) struct Entry {
     t: f32,
 }
 
-/// Entries of the fixed traversal stack; deeper trees use a heap stack.
-pub(super) const FIXED_STACK: usize = 64;
-
 /// The 4-wide tree; leaf offsets index the primitives in `leaf_order`.
 #[derive(Debug, Default)]
 pub(super) struct Bvh4 {

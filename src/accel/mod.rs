@@ -14,9 +14,8 @@
 //! 3. Its CWBVH traversal clamps the entry distance to a fixed 1e-4, decodes
 //!    u8-quantised boxes on every visit, visits children in octant order and has
 //!    a 32-entry stack that silently clamps in release → not used: the BVH4 is
-//!    traversed nearest-first with a stack sized from the measured depth (a heap
-//!    stack for trees deeper than the fixed one allows,
-//!    [`Accel::needs_heap_stack`]).
+//!    traversed nearest-first with a stack sized from the measured depth
+//!    ([`Accel::stack_size`]).
 //! 4. The build overflows (panics) for boxes wider than ~1e19 and is quadratic
 //!    for coincident boxes → `build.rs` builds in a power-of-two-scaled frame
 //!    and deduplicates boxes first.
@@ -38,9 +37,10 @@ pub use offset::{offset_ray_origin, offset_ray_origin_with_error, SurfacePoint};
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
-use bvh4::{BoxRay, Bvh4, Entry, FIXED_STACK};
+use bvh4::{BoxRay, Bvh4, Entry};
 use obvhs::aabb::Aabb;
 use primitive::{intersect_sphere, with_axes, WatertightRay};
+use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
 /// Which primitive a ray hit.
@@ -272,19 +272,9 @@ impl Accel {
             return None;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        if self.needs_heap_stack() {
-            let mut stack = vec![Entry::default(); self.bvh.stack_size()];
-            with_axes!(
-                wr.axes,
-                self.closest_with(ray, &wr, &mut stack, &mut (0, 0))
-            )
-        } else {
-            let mut stack = [Entry::default(); FIXED_STACK];
-            with_axes!(
-                wr.axes,
-                self.closest_with(ray, &wr, &mut stack, &mut (0, 0))
-            )
-        }
+        with_stack(self.bvh.stack_size(), |stack| {
+            with_axes!(wr.axes, self.closest_with(ray, &wr, stack, &mut (0, 0)))
+        })
     }
 
     /// True if anything is hit with t in [ray.t_min, ray.t_max]. Stops at the first
@@ -294,13 +284,9 @@ impl Accel {
             return false;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        if self.needs_heap_stack() {
-            let mut stack = vec![Entry::default(); self.bvh.stack_size()];
-            with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut 0))
-        } else {
-            let mut stack = [Entry::default(); FIXED_STACK];
-            with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut 0))
-        }
+        with_stack(self.bvh.stack_size(), |stack| {
+            with_axes!(wr.axes, self.any_with(ray, &wr, stack, &mut 0))
+        })
     }
 
     /// Wall-clock time of [`Accel::build`] (AABBs, BVH build, reordering).
@@ -350,14 +336,11 @@ impl Accel {
         self.bvh.nodes.len()
     }
 
-    /// Whether the tree is too deep for the fixed traversal stack.
-    ///
-    /// Each inner node on the current path leaves at most three siblings on the
-    /// stack, so a tree of depth d needs 3(d + 1) + 1 entries; deeper
-    /// (pathological) trees are traversed with a heap stack of that size,
-    /// allocated per query: correct, merely slower.
-    pub fn needs_heap_stack(&self) -> bool {
-        self.bvh.stack_size() > FIXED_STACK
+    /// Entries of the traversal stack this tree needs: each inner node on the
+    /// current path leaves at most three siblings on it, so a tree of depth d
+    /// needs 3(d + 1) + 1 (46 for the bunny).
+    pub fn stack_size(&self) -> usize {
+        self.bvh.stack_size()
     }
 
     /// Closest-hit traversal that counts its work: (BVH4 nodes tested, primitives
@@ -521,6 +504,24 @@ impl Accel {
         );
         hit
     }
+}
+
+thread_local! {
+    /// Each thread's traversal stack, grown to the deepest tree it has
+    /// traversed: no per-query allocation or zeroing (a 64-entry array on the
+    /// call stack cost a 512-byte memset per query, ~5% of a query's instructions).
+    static STACK: RefCell<Vec<Entry>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` on this thread's traversal stack with at least `size` entries.
+#[inline(always)]
+fn with_stack<R>(size: usize, f: impl FnOnce(&mut [Entry]) -> R) -> R {
+    STACK.with_borrow_mut(|stack| {
+        if stack.len() < size {
+            stack.resize(size, Entry::default());
+        }
+        f(stack)
+    })
 }
 
 /// Whether a primitive's box is finite and within [`build::MAX_BUILD_MAGNITUDE`]
