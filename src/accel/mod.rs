@@ -1,4 +1,4 @@
-//! Triangles + exact spheres → one obvhs CWBVH answering closest-hit and any-hit
+//! Triangles + exact spheres → one BVH4 answering closest-hit and any-hit
 //! (shadow) queries.
 //!
 //! One BVH holds every primitive of the scene: the build only sees per-primitive
@@ -532,7 +532,7 @@ fn box_is_buildable(b: &Aabb) -> bool {
 }
 
 /// Rays with NaN/∞ origin or direction, a zero direction, a non-finite `t_min` or
-/// an empty/NaN interval hit nothing (instead of tripping obvhs' debug assertions).
+/// an empty/NaN interval hit nothing (NaN would defeat the slab test's comparisons).
 fn ray_is_valid(ray: &Ray) -> bool {
     ray.origin.is_finite()
         && ray.dir.is_finite()
