@@ -9,7 +9,10 @@
 //! (with our hit counts) are also written to FILE, so that
 //! `scripts/bench_embree.py` traces Embree on exactly the same rays. With
 //! `GRADTRACE_ACCEL_PRESETS=1`, obvhs build presets are compared first by
-//! load-independent figures: SAH cost, node and primitive tests per ray.
+//! load-independent figures: SAH cost, node and primitive tests per ray. With
+//! `GRADTRACE_ACCEL_ONCE=coherent` (or `incoherent`, `all`) each query runs
+//! once over that ray set and the bench exits: for instruction counts, e.g.
+//! `valgrind --tool=callgrind --toggle-collect='*trace_once*' target/release/deps/accel-*`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use gradtrace::accel::Accel;
@@ -103,6 +106,45 @@ fn incoherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
 fn bench_accel(c: &mut Criterion) {
     let bunny = load_bunny();
     let meshes = [bunny];
+    if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
+        let accel = Accel::build(&meshes, &[]);
+        let (lo, hi) = accel.bounds().expect("bunny is not empty");
+        let sets = [
+            ("coherent", coherent_rays(lo, hi)),
+            ("incoherent", incoherent_rays(lo, hi)),
+        ];
+        for (name, rays) in sets.iter().filter(|(n, _)| only == *n || only == "all") {
+            let (closest, any) = trace_once(&accel, rays);
+            println!("{name}: {closest} closest hits, {any} occluded");
+        }
+        std::process::exit(0);
+    }
+    if std::env::var_os("GRADTRACE_ACCEL_TIME").is_some() {
+        let accel = Accel::build(&meshes, &[]);
+        let (lo, hi) = accel.bounds().expect("bunny is not empty");
+        let sets = [
+            ("coherent", coherent_rays(lo, hi)),
+            ("incoherent", incoherent_rays(lo, hi)),
+        ];
+        time_queries(&accel, &sets);
+        for (name, rays) in &sets {
+            let (mut n, mut p, mut o) = (0u64, 0u64, 0u64);
+            for r in rays {
+                let (a, b) = accel.closest_hit_work(r);
+                n += a as u64;
+                p += b as u64;
+                o += accel.occluded_work(r) as u64;
+            }
+            let k = rays.len() as f64;
+            println!(
+                "{name}: closest {:.2} nodes / {:.2} primitives per ray, any-hit {:.2} nodes",
+                n as f64 / k,
+                p as f64 / k,
+                o as f64 / k
+            );
+        }
+        std::process::exit(0);
+    }
 
     let mut g = c.benchmark_group("build");
     g.sample_size(10);
@@ -190,6 +232,42 @@ fn bench_accel(c: &mut Criterion) {
         });
     }
     g.finish();
+}
+
+/// Best of 15 interleaved passes per query and ray set, in Mrays/s: on a
+/// shared machine the fastest pass is the one least disturbed by the load.
+fn time_queries(accel: &Accel, sets: &[(&str, Vec<Ray>)]) {
+    type Query<'a> = (&'a str, Box<dyn Fn(&Ray) -> bool + 'a>);
+    let queries: Vec<Query> = vec![
+        ("closest", Box::new(|r| accel.intersect(r).is_some())),
+        ("shadow", Box::new(|r| accel.occluded(r))),
+    ];
+    let mut best = vec![f64::INFINITY; queries.len() * sets.len()];
+    for _ in 0..15 {
+        for (qi, (_, q)) in queries.iter().enumerate() {
+            for (si, (_, rays)) in sets.iter().enumerate() {
+                let t = std::time::Instant::now();
+                black_box(rays.iter().filter(|r| q(black_box(r))).count());
+                let dt = t.elapsed().as_secs_f64();
+                let b = &mut best[qi * sets.len() + si];
+                *b = b.min(dt);
+            }
+        }
+    }
+    for (qi, (qn, _)) in queries.iter().enumerate() {
+        for (si, (sn, rays)) in sets.iter().enumerate() {
+            let mrays = rays.len() as f64 / best[qi * sets.len() + si] / 1e6;
+            println!("{qn}/{sn}: {mrays:.2} Mrays/s");
+        }
+    }
+}
+
+/// One closest-hit and one any-hit pass over `rays` (the callgrind target).
+#[inline(never)]
+fn trace_once(accel: &Accel, rays: &[Ray]) -> (usize, usize) {
+    let closest = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+    let any = rays.iter().filter(|r| accel.occluded(r)).count();
+    (closest, any)
 }
 
 /// SAH cost, build time and traversal work (CWBVH nodes and primitives tested

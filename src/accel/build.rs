@@ -1,17 +1,14 @@
-//! Primitive boxes → obvhs CWBVH, built so that it cannot fail on any finite input
+//! Primitive boxes → obvhs BVH2 → our BVH4 (`bvh4.rs`), built so that it cannot fail on any finite input
 //! and stays O(n log n) when many boxes coincide.
 //!
 //! Two defects of building directly with obvhs 0.4 in world space (issue 18):
-//! 1. **Overflow.** The build and the BVH2 → CWBVH conversion compare surface
-//!    areas in f32; a box wider than ~1.8e19 has an infinite area, the collapse's
-//!    cost table then never finds a "cheaper" split and `bvh2_to_cwbvh` indexes
-//!    out of bounds. We build in a frame scaled by a power of two `2^-e` that
+//! 1. **Overflow.** The build compares surface areas in f32; a box wider than
+//!    ~1.8e19 has an infinite area (obvhs' CWBVH collapse then indexed out of
+//!    bounds, and PLOC's costs stop ordering). We build in a frame scaled by a power of two `2^-e` that
 //!    brings the largest coordinate into [1, 2): every area is finite, and since
 //!    scaling by a power of two is exact, every comparison — Morton codes, PLOC
-//!    costs, reinsertion, collapse, quantisation — gives the same result as in
-//!    world space would (so scenes that built before build the same tree). The
-//!    CWBVH is brought back to world space exactly: `p · 2^e`, and `e` added to
-//!    the stored exponents.
+//!    costs, reinsertion, collapse — gives the same result as in world space
+//!    would. The BVH4's boxes are brought back to world space exactly (`· 2^e`).
 //! 2. **Coincident boxes.** PLOC pairs mutual nearest neighbours, and obvhs
 //!    breaks cost ties towards the *farthest* candidate (`cost <= best`), so among
 //!    identical boxes (every triangle of a mesh whose vertices collapsed to a few
@@ -21,12 +18,11 @@
 //!    box per distinct value, and each duplicate group becomes a balanced subtree
 //!    under its representative's leaf.
 
+use super::bvh4::Bvh4;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
-use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use std::collections::HashMap;
 
@@ -46,7 +42,7 @@ pub struct BuildPreset {
     pub sort_precision: SortPrecision,
     /// Share of the nodes reinserted per pass (obvhs' `reinsertion_batch_ratio`).
     pub reinsertion_ratio: f32,
-    /// Most primitives per CWBVH leaf (1..=3).
+    /// Most primitives per BVH4 leaf (1..=8).
     pub max_prims_per_leaf: u32,
 }
 
@@ -63,11 +59,11 @@ impl Default for BuildPreset {
     }
 }
 
-/// Builds the CWBVH over `boxes` (unpadded, finite, within
-/// [`MAX_BUILD_MAGNITUDE`]); leaf primitive indices refer to `boxes`.
-pub(super) fn build_cwbvh(boxes: &[Aabb], preset: &BuildPreset) -> CwBvh {
+/// Builds the BVH4 over `boxes` (unpadded, finite, within
+/// [`MAX_BUILD_MAGNITUDE`]); `leaf_order` refers to `boxes`.
+pub(super) fn build_bvh4(boxes: &[Aabb], preset: &BuildPreset) -> Bvh4 {
     if boxes.is_empty() {
-        return CwBvh::default();
+        return Bvh4::from_bvh2(&Bvh2::default(), 1.0, 1);
     }
     let mut total = Aabb::empty();
     for b in boxes {
@@ -89,9 +85,8 @@ pub(super) fn build_cwbvh(boxes: &[Aabb], preset: &BuildPreset) -> CwBvh {
         .collect();
 
     let groups = DuplicateGroups::new(&scaled);
-    // Same pipeline as `obvhs::cwbvh::builder::build_cwbvh`, minus its
-    // debug-only `validate()`, which asserts depth < 32 and would panic on the
-    // pathological scenes we deliberately support (`Accel::needs_heap_stack`).
+    // obvhs' PLOC + reinsertion (as in its `medium_build`), then our own
+    // collapse to the uncompressed BVH4 that traversal uses (`bvh4.rs`).
     let mut bvh2 = PlocBuilder::with_capacity(groups.unique.len()).build(
         preset.search_distance,
         &groups.unique,
@@ -103,10 +98,7 @@ pub(super) fn build_cwbvh(boxes: &[Aabb], preset: &BuildPreset) -> CwBvh {
     if groups.unique.len() < scaled.len() {
         groups.expand(&mut bvh2);
     }
-    let mut bvh = bvh2_to_cwbvh(&bvh2, preset.max_prims_per_leaf.clamp(1, 3), true, false);
-    frame.to_world(&mut bvh);
-    bvh.total_aabb = Aabb::new(total.min - pad, total.max + pad);
-    bvh
+    Bvh4::from_bvh2(&bvh2, frame.inv_scale, preset.max_prims_per_leaf)
 }
 
 /// The power-of-two scale `2^-e` of the build frame, with `e` such that the
@@ -114,7 +106,6 @@ pub(super) fn build_cwbvh(boxes: &[Aabb], preset: &BuildPreset) -> CwBvh {
 struct ScaledFrame {
     scale: f32,
     inv_scale: f32,
-    exponent: i32,
 }
 
 impl ScaledFrame {
@@ -126,19 +117,6 @@ impl ScaledFrame {
         Self {
             scale: pow2(-exponent),
             inv_scale: pow2(exponent),
-            exponent,
-        }
-    }
-
-    /// Node origins times 2^e, stored exponents plus e: exact, so every world
-    /// node box is the scaled-frame box scaled back. Both stay in range: the
-    /// frame's extents are ≥ 2^-16 (the pad), the world's ≤ 2^121.
-    fn to_world(&self, bvh: &mut CwBvh) {
-        for node in &mut bvh.nodes {
-            node.p *= self.inv_scale;
-            for e in &mut node.e {
-                *e = (*e as i32 + self.exponent).clamp(1, 254) as u8;
-            }
         }
     }
 }
@@ -233,31 +211,6 @@ fn balanced_subtree(
     Bvh2Node::new(aabb, 0, first as u32)
 }
 
-/// Surface-area-heuristic cost of a CWBVH relative to its root box: Σ over child
-/// boxes of area(child)/area(root) × (1 per inner child, the primitive count per
-/// leaf child). Child boxes are the quantised ones traversal tests.
-pub(super) fn sah_cost(bvh: &CwBvh) -> f32 {
-    let Some(root) = bvh.nodes.first() else {
-        return 0.0;
-    };
-    let root_area = root.aabb().half_area() as f64;
-    let mut cost = 1.0f64;
-    for node in &bvh.nodes {
-        for child in 0..8 {
-            if node.is_child_empty(child) {
-                continue;
-            }
-            let weight = if node.is_leaf(child) {
-                node.child_primitives(child).1 as f64
-            } else {
-                1.0
-            };
-            cost += weight * node.child_aabb(child).half_area() as f64 / root_area;
-        }
-    }
-    cost as f32
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -281,11 +234,11 @@ mod tests {
         boxes.push(Aabb::new(Vec3A::splat(3.0), Vec3A::splat(4.0)));
         let groups = DuplicateGroups::new(&boxes);
         assert_eq!(groups.unique.len(), 2);
-        let bvh = build_cwbvh(&boxes, &BuildPreset::default());
-        let mut seen = bvh.primitive_indices.clone();
+        let bvh = build_bvh4(&boxes, &BuildPreset::default());
+        let mut seen = bvh.leaf_order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..boxes.len() as u32).collect::<Vec<_>>());
-        // 5000 leaves of ≤ 3 under 8-wide nodes: a handful of levels, not 2500.
-        assert!(super::super::cwbvh_depth(&bvh.nodes) < 10);
+        // 5000 leaves under 4-wide nodes: a handful of levels, not 2500.
+        assert!(bvh.depth < 10, "{}", bvh.depth);
     }
 }

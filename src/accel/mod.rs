@@ -1,4 +1,4 @@
-//! Triangles + exact spheres → one obvhs CWBVH answering closest-hit and any-hit
+//! Triangles + exact spheres → one BVH4 answering closest-hit and any-hit
 //! (shadow) queries.
 //!
 //! One BVH holds every primitive of the scene: the build only sees per-primitive
@@ -6,32 +6,28 @@
 //! intersection routine per primitive (`primitive.rs`), so spheres stay exact
 //! analytic spheres and triangles use the watertight test.
 //!
-//! obvhs 0.4 pitfalls and where they are handled:
+//! obvhs builds the tree (PLOC + reinsertion, `build.rs`); we collapse it into
+//! our own uncompressed 4-wide BVH and traverse that (`bvh4.rs`). obvhs 0.4
+//! pitfalls and where they are handled:
 //! 1. `Triangle::compute_barycentric` is scaled wrongly, 2. its triangle test is
 //!    not watertight → neither is used; see `primitive::WatertightRay`.
-//! 3. Node culling ignores the ray's `tmin` (it clamps the entry distance to a
-//!    fixed 1e-4 instead) → every primitive test filters by `t_min` itself, and
-//!    the traversal ray is backed up so the 1e-4 clamp cannot cull nodes that
-//!    hold hits at t < 1e-4 (`TraversalRay`).
-//! 4. The traversal stack is 32 entries and silently clamps in release → the
-//!    depth of the built tree is measured after every build, and deeper trees are
-//!    traversed with a heap stack sized to the depth ([`Accel::needs_heap_stack`]).
-//!    The depth is a conservative bound (a stack entry is only pushed where a node
-//!    has two or more inner children still to visit), so some deep trees that the
-//!    fixed stack would survive take the slower path; correctness first.
-//!
-//! 5. The build overflows (panics) for boxes wider than ~1e19 and is quadratic
+//! 3. Its CWBVH traversal clamps the entry distance to a fixed 1e-4, decodes
+//!    u8-quantised boxes on every visit, visits children in octant order and has
+//!    a 32-entry stack that silently clamps in release → not used: the BVH4 is
+//!    traversed nearest-first with a stack sized from the measured depth
+//!    ([`Accel::stack_size`]).
+//! 4. The build overflows (panics) for boxes wider than ~1e19 and is quadratic
 //!    for coincident boxes → `build.rs` builds in a power-of-two-scaled frame
 //!    and deduplicates boxes first.
 //!
-//! Robustness of the ray/box test itself: `obvhs::ray::Ray::new` replaces
-//! direction components below `f32::EPSILON` by ±1/EPSILON in the inverse, which
-//! culls valid boxes for axis-parallel rays; we build the obvhs ray ourselves.
-//! Primitive boxes are padded by a scene-relative epsilon so that the rounding
-//! errors of the quantised slab test can never cull a box a ray touches at an
-//! edge or vertex (Ize 2013, "Robust BVH Ray Traversal", makes the same point).
+//! Robustness of the ray/box test itself: direction components are clamped
+//! away from zero (±1e-20) so the reciprocal is finite and `0 · ∞` cannot occur,
+//! exit distances are widened (Ize 2013, "Robust BVH Ray Traversal"), and
+//! primitive boxes are padded by a scene-relative epsilon so that rounding can
+//! never cull a box a ray touches at an edge or vertex.
 
 mod build;
+mod bvh4;
 mod offset;
 mod primitive;
 
@@ -41,12 +37,10 @@ pub use offset::{offset_ray_origin, offset_ray_origin_with_error, SurfacePoint};
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
-use glam::{UVec2, Vec3A};
+use bvh4::{BoxRay, Bvh4, Entry};
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::node::CwBvhNode;
-use obvhs::cwbvh::CwBvh;
-use obvhs::faststack::{FastStack, HeapStack, StackStack};
 use primitive::{intersect_sphere, with_axes, WatertightRay};
+use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
 /// Which primitive a ray hit.
@@ -104,80 +98,45 @@ impl Prim {
     }
 }
 
-/// Traversal state for the `obvhs::traverse!` macro, generic over the stack so
-/// that shallow trees use obvhs' fixed 32-entry stack and deep trees a heap stack.
-struct TraversalState<S> {
-    stack: S,
-    current_group: UVec2,
-    primitive_group: UVec2,
-    oct_inv4: u32,
-    primitive_id: u32,
-    hitmask: u32,
-}
-
-/// Size of obvhs' fixed traversal stack (`cwbvh::TRAVERSAL_STACK_SIZE`, private).
-const OBVHS_STACK_SIZE: usize = 32;
-
-/// The ray handed to obvhs' node test.
+/// The node test's view of a ray, and the shift `back_off` between its
+/// distances and the primitive tests' (node distance = t + back_off).
 ///
-/// obvhs' `CwBvhNode::intersect_ray` computes the box entry as
-/// `max(entry, 1e-4)` — it ignores `ray.tmin` and culls every box whose exit
-/// distance is below 1e-4. A hit at t < 1e-4 (legal for `t_min = 0`) would be lost.
-/// We therefore move the traversal ray's origin back by `back_off` along the
-/// direction (and extend `tmax` by the same amount): every node distance grows by
-/// `back_off` ≥ 2e-4, so no box holding a hit at t ≥ 0 is culled by the clamp.
-/// The exact primitive tests still use the caller's un-moved ray.
-struct TraversalRay {
-    ray: obvhs::ray::Ray,
-    back_off: f32,
-}
-
-impl TraversalRay {
-    fn new(ray: &Ray) -> Self {
-        // Back-off: 2e-4 plus enough ulps of the origin that the shift survives
-        // rounding even for origins far from the world origin, plus |t_min| when
-        // t_min is negative (hits behind the origin are then legal too).
-        let back_off =
-            2.0e-4 + ray.origin.abs().max_element() * (1.0 / 262_144.0) + (-ray.t_min).max(0.0);
-        // obvhs' `Ray::new` maps |d| <= f32::EPSILON to ±1/EPSILON in the inverse,
-        // which for axis-parallel rays turns the "inside the slab" interval into a
-        // short finite one and culls valid boxes. We clamp |d| to 1e-20 instead
-        // (inverse ±1e20: finite, no NaN from 0·∞) and keep the sign consistent
-        // with obvhs' octant test (`d < 0.0`, so −0.0 counts as positive).
-        let fix = |d: f32| {
-            if d.abs() >= 1.0e-20 {
-                d
-            } else if d < 0.0 {
-                -1.0e-20
-            } else {
-                1.0e-20
-            }
-        };
-        let dir = Vec3A::new(fix(ray.dir.x), fix(ray.dir.y), fix(ray.dir.z));
-        let origin = Vec3A::from(ray.origin) - dir * back_off;
-        Self {
-            ray: obvhs::ray::Ray {
-                origin,
-                direction: dir,
-                inv_direction: dir.recip(),
-                tmin: 0.0,
-                tmax: Self::node_t_max(ray.t_max, back_off),
-            },
-            back_off,
+/// Rays with `t_min ≥ 0` are tested as they are. For `t_min < 0` (hits behind
+/// the origin are legal) the node ray's origin is moved back by |t_min| plus a
+/// margin (2e-4 plus enough ulps of the origin that the shift survives
+/// rounding), so that its interval starts at 0, where the slab distances keep
+/// their sign.
+#[inline(always)]
+fn node_ray(ray: &Ray) -> (BoxRay, f32) {
+    // |d| is clamped to 1e-20 (inverse ±1e20: finite, no NaN from 0·∞), with
+    // the sign kept (−0.0 counts as positive, like `d < 0.0` in the node test).
+    let fix = |d: f32| {
+        if d.abs() >= 1.0e-20 {
+            d
+        } else if d < 0.0 {
+            -1.0e-20
+        } else {
+            1.0e-20
         }
+    };
+    let dir = Vec3::new(fix(ray.dir.x), fix(ray.dir.y), fix(ray.dir.z));
+    if ray.t_min >= 0.0 {
+        return (
+            BoxRay::new(ray.origin.to_array(), dir.to_array(), ray.t_min),
+            0.0,
+        );
     }
-
-    /// The node-culling distance for a primitive distance `t`: shifted by the
-    /// back-off and widened by a few ulps (Ize 2013's `1 + 2γ₃` factor, generous).
-    #[inline(always)]
-    fn node_t_max(t: f32, back_off: f32) -> f32 {
-        (t + back_off) * (1.0 + 4.0 * f32::EPSILON)
-    }
+    let back_off = 2.0e-4 + ray.origin.abs().max_element() * (1.0 / 262_144.0) - ray.t_min;
+    let origin = ray.origin - dir * back_off;
+    (
+        BoxRay::new(origin.to_array(), dir.to_array(), 0.0),
+        back_off,
+    )
 }
 
 /// The acceleration structure over all shapes of a scene.
 pub struct Accel {
-    bvh: CwBvh,
+    bvh: Bvh4,
     /// Primitives in BVH leaf order (`prims[i]` is leaf slot `i`).
     prims: Vec<Prim>,
     /// For a primitive in input order (triangles of mesh 0, mesh 1, …, then spheres),
@@ -189,7 +148,6 @@ pub struct Accel {
     triangle_count: usize,
     sphere_count: usize,
     rejected: usize,
-    depth: u32,
     bounds: Option<(Vec3, Vec3)>,
     build_time: Duration,
 }
@@ -264,6 +222,11 @@ impl Accel {
             input_index.push(this);
         }
 
+        if inputs.len() > bvh4::MAX_PRIMITIVES {
+            rejected += inputs.len() - bvh4::MAX_PRIMITIVES;
+            inputs.truncate(bvh4::MAX_PRIMITIVES);
+            input_index.truncate(bvh4::MAX_PRIMITIVES);
+        }
         let triangle_count = inputs
             .iter()
             .filter(|(p, _)| matches!(p, Prim::Triangle { .. }))
@@ -276,12 +239,12 @@ impl Accel {
         }
         let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
         let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
-        let bvh = build::build_cwbvh(&aabbs, preset);
+        let bvh = build::build_bvh4(&aabbs, preset);
 
         // Reorder primitives to leaf order and build the input → slot table.
         let mut slot_of_input = vec![u32::MAX; input_count as usize];
         let prims: Vec<Prim> = bvh
-            .primitive_indices
+            .leaf_order
             .iter()
             .enumerate()
             .map(|(slot, &pi)| {
@@ -290,7 +253,6 @@ impl Accel {
             })
             .collect();
 
-        let depth = cwbvh_depth(&bvh.nodes);
         Self {
             bvh,
             prims,
@@ -299,7 +261,6 @@ impl Accel {
             triangle_count,
             sphere_count,
             rejected,
-            depth,
             bounds,
             build_time: start.elapsed(),
         }
@@ -311,13 +272,9 @@ impl Accel {
             return None;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        if self.needs_heap_stack() {
-            let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
-            with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
-        } else {
-            let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
-            with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
-        }
+        with_stack(self.bvh.stack_size(), |stack| {
+            with_axes!(wr.axes, self.closest_with(ray, &wr, stack, &mut (0, 0)))
+        })
     }
 
     /// True if anything is hit with t in [ray.t_min, ray.t_max]. Stops at the first
@@ -327,13 +284,9 @@ impl Accel {
             return false;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        if self.needs_heap_stack() {
-            let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
-            with_axes!(wr.axes, self.any_with(ray, &wr, stack))
-        } else {
-            let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
-            with_axes!(wr.axes, self.any_with(ray, &wr, stack))
-        }
+        with_stack(self.bvh.stack_size(), |stack| {
+            with_axes!(wr.axes, self.any_with(ray, &wr, stack, &mut 0))
+        })
     }
 
     /// Wall-clock time of [`Accel::build`] (AABBs, BVH build, reordering).
@@ -367,49 +320,30 @@ impl Accel {
         self.bounds
     }
 
-    /// Depth of the deepest inner node of the CWBVH (root = 0). The traversal
-    /// stack never holds more than this many entries.
+    /// Depth of the deepest inner node of the BVH4 (root = 0).
     pub fn depth(&self) -> u32 {
-        self.depth
+        self.bvh.depth
     }
 
-    /// SAH cost of the tree relative to its root box (see `build::sah_cost`).
+    /// SAH cost of the tree relative to its root box (see `Bvh4::sah_cost`).
     #[doc(hidden)]
     pub fn sah_cost(&self) -> f32 {
-        build::sah_cost(&self.bvh)
+        self.bvh.sah_cost()
     }
 
-    /// Number of CWBVH nodes.
+    /// Number of BVH4 inner nodes.
     pub fn node_count(&self) -> usize {
         self.bvh.nodes.len()
     }
 
-    /// Whether the tree is too deep for obvhs' fixed 32-entry stack.
-    ///
-    /// The stack holds at most one entry per level (the remaining siblings of each
-    /// node on the current path), so a depth ≤ 30 is safe with the fixed stack.
-    /// obvhs' `StackStack::push` clamps its index at 31 in release builds, so a
-    /// deeper tree would silently overwrite pending subtrees and *miss* hits. For
-    /// such (pathological) trees we traverse with a heap stack of depth + 2
-    /// entries instead, allocated per query; correct, merely slower.
-    pub fn needs_heap_stack(&self) -> bool {
-        self.depth as usize > OBVHS_STACK_SIZE - 2
+    /// Entries of the traversal stack this tree needs: each inner node on the
+    /// current path leaves at most three siblings on it, so a tree of depth d
+    /// needs 3(d + 1) + 1 (46 for the bunny).
+    pub fn stack_size(&self) -> usize {
+        self.bvh.stack_size()
     }
 
-    /// Closest hit forced through obvhs' fixed 32-entry stack even when the tree is
-    /// deeper — i.e. what `CwBvh::ray_traverse` would do. Only for the test that
-    /// shows why [`Accel::needs_heap_stack`] exists; never use it for rendering.
-    #[doc(hidden)]
-    pub fn intersect_with_fixed_stack(&self, ray: &Ray) -> Option<Hit> {
-        if !self.traversable(ray) {
-            return None;
-        }
-        let wr = WatertightRay::new(ray.origin, ray.dir);
-        let stack = StackStack::<UVec2, OBVHS_STACK_SIZE>::default();
-        with_axes!(wr.axes, self.closest_with(ray, &wr, stack))
-    }
-
-    /// Closest-hit traversal that counts its work: (CWBVH nodes tested, primitives
+    /// Closest-hit traversal that counts its work: (BVH4 nodes tested, primitives
     /// tested). A load-independent measure of tree quality for comparing builds on
     /// a shared machine.
     #[doc(hidden)]
@@ -418,39 +352,23 @@ impl Accel {
             return (0, 0);
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        let stack = HeapStack::new_with_capacity(self.depth as usize + 2);
-        with_axes!(wr.axes, self.closest_work(ray, &wr, stack))
+        let mut stack = vec![Entry::default(); self.bvh.stack_size()];
+        let mut work = (0, 0);
+        with_axes!(wr.axes, self.closest_with(ray, &wr, &mut stack, &mut work));
+        work
     }
 
-    fn closest_work<const KX: usize, const KY: usize, const KZ: usize>(
-        &self,
-        ray: &Ray,
-        wr: &WatertightRay,
-        stack: impl FastStack<UVec2>,
-    ) -> (u32, u32) {
-        let mut tray = TraversalRay::new(ray);
-        let mut state = self.new_state(stack, tray.ray.direction);
-        let (mut nodes, mut prims) = (1u32, 0u32);
-        let mut t_max = ray.t_max;
-        let mut node: &CwBvhNode;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            {
-                nodes += 1;
-                node.intersect_ray(&tray.ray, state.oct_inv4)
-            },
-            {
-                prims += 1;
-                let prim = &self.prims[state.primitive_id as usize];
-                if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
-                    t_max = h.t;
-                    tray.ray.tmax = TraversalRay::node_t_max(h.t, tray.back_off);
-                }
-            }
-        );
-        (nodes, prims)
+    /// Any-hit traversal that counts BVH4 node tests (see [`Accel::closest_hit_work`]).
+    #[doc(hidden)]
+    pub fn occluded_work(&self, ray: &Ray) -> u32 {
+        if !self.traversable(ray) {
+            return 0;
+        }
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        let mut stack = vec![Entry::default(); self.bvh.stack_size()];
+        let mut nodes = 0;
+        with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut nodes));
+        nodes
     }
 
     /// Reference closest hit: every primitive is tested, no BVH. For tests and
@@ -526,46 +444,39 @@ impl Accel {
     }
 
     fn traversable(&self, ray: &Ray) -> bool {
-        !self.bvh.nodes.is_empty() && ray_is_valid(ray)
+        self.bvh.root != bvh4::EMPTY && ray_is_valid(ray)
     }
 
-    fn new_state<S: FastStack<UVec2>>(&self, stack: S, dir: Vec3A) -> TraversalState<S> {
-        TraversalState {
-            stack,
-            current_group: UVec2::new(0, 0x8000_0000),
-            primitive_group: UVec2::ZERO,
-            oct_inv4: ray_octant_inv4(dir),
-            primitive_id: 0,
-            hitmask: 0,
-        }
-    }
-
+    /// Closest hit; `work` counts (node tests, primitive tests).
     #[inline(always)]
     fn closest_with<const KX: usize, const KY: usize, const KZ: usize>(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
-        stack: impl FastStack<UVec2>,
+        stack: &mut [Entry],
+        work: &mut (u32, u32),
     ) -> Option<Hit> {
-        let mut tray = TraversalRay::new(ray);
-        let mut state = self.new_state(stack, tray.ray.direction);
+        let (node_ray, back_off) = node_ray(ray);
         let mut best: Option<Hit> = None;
         let mut t_max = ray.t_max;
-        let mut node: &CwBvhNode;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node.intersect_ray(&tray.ray, state.oct_inv4),
-            {
-                let prim = &self.prims[state.primitive_id as usize];
-                if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
-                    t_max = h.t;
-                    tray.ray.tmax = TraversalRay::node_t_max(h.t, tray.back_off);
-                    best = Some(h);
+        let mut prims_tested = 0;
+        self.bvh.traverse::<true>(
+            &node_ray,
+            t_max + back_off,
+            stack,
+            &mut work.0,
+            |first, count| {
+                prims_tested += count as u32;
+                for prim in &self.prims[first..first + count] {
+                    if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
+                        t_max = h.t;
+                        best = Some(h);
+                    }
                 }
-            }
+                Some(t_max + back_off)
+            },
         );
+        work.1 += prims_tested;
         best
     }
 
@@ -574,32 +485,43 @@ impl Accel {
         &self,
         ray: &Ray,
         wr: &WatertightRay,
-        stack: impl FastStack<UVec2>,
+        stack: &mut [Entry],
+        nodes: &mut u32,
     ) -> bool {
-        let tray = TraversalRay::new(ray);
-        let mut state = self.new_state(stack, tray.ray.direction);
+        let (node_ray, back_off) = node_ray(ray);
         let mut hit = false;
-        let mut node: &CwBvhNode;
-        // The primitive block runs inside the macro's inner `while` loop: a plain
-        // `break` would only leave that loop and traversal would go on, so we leave
-        // the labelled block instead (as obvhs' `ray_traverse_miss` does).
-        'traversal: {
-            obvhs::traverse!(
-                self.bvh,
-                node,
-                state,
-                node.intersect_ray(&tray.ray, state.oct_inv4),
-                {
-                    let prim = &self.prims[state.primitive_id as usize];
-                    if prim.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some() {
-                        hit = true;
-                        break 'traversal;
-                    }
-                }
-            );
-        }
+        self.bvh.traverse::<false>(
+            &node_ray,
+            ray.t_max + back_off,
+            stack,
+            nodes,
+            |first, count| {
+                hit = self.prims[first..first + count]
+                    .iter()
+                    .any(|p| p.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some());
+                (!hit).then_some(f32::INFINITY)
+            },
+        );
         hit
     }
+}
+
+thread_local! {
+    /// Each thread's traversal stack, grown to the deepest tree it has
+    /// traversed: no per-query allocation or zeroing (a 64-entry array on the
+    /// call stack cost a 512-byte memset per query, ~5% of a query's instructions).
+    static STACK: RefCell<Vec<Entry>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` on this thread's traversal stack with at least `size` entries.
+#[inline(always)]
+fn with_stack<R>(size: usize, f: impl FnOnce(&mut [Entry]) -> R) -> R {
+    STACK.with_borrow_mut(|stack| {
+        if stack.len() < size {
+            stack.resize(size, Entry::default());
+        }
+        f(stack)
+    })
 }
 
 /// Whether a primitive's box is finite and within [`build::MAX_BUILD_MAGNITUDE`]
@@ -610,7 +532,7 @@ fn box_is_buildable(b: &Aabb) -> bool {
 }
 
 /// Rays with NaN/∞ origin or direction, a zero direction, a non-finite `t_min` or
-/// an empty/NaN interval hit nothing (instead of tripping obvhs' debug assertions).
+/// an empty/NaN interval hit nothing (NaN would defeat the slab test's comparisons).
 fn ray_is_valid(ray: &Ray) -> bool {
     ray.origin.is_finite()
         && ray.dir.is_finite()
@@ -618,34 +540,4 @@ fn ray_is_valid(ray: &Ray) -> bool {
         && ray.t_min.is_finite()
         && !ray.t_max.is_nan()
         && ray.t_min <= ray.t_max
-}
-
-/// Same encoding as obvhs' private `ray_get_octant_inv4`: one byte per child slot,
-/// bit set for a non-negative direction component.
-fn ray_octant_inv4(dir: Vec3A) -> u32 {
-    (if dir.x < 0.0 { 0 } else { 0x0404_0404 })
-        | (if dir.y < 0.0 { 0 } else { 0x0202_0202 })
-        | (if dir.z < 0.0 { 0 } else { 0x0101_0101 })
-}
-
-/// Depth of the deepest inner node (root = 0), iteratively so that even a
-/// degenerate chain cannot overflow the call stack. The inner children of node
-/// `n` are the `popcount(imask)` consecutive nodes starting at `child_base_idx`.
-fn cwbvh_depth(nodes: &[CwBvhNode]) -> u32 {
-    if nodes.is_empty() {
-        return 0;
-    }
-    let mut max_depth = 0;
-    let mut todo = vec![(0usize, 0u32)];
-    while let Some((n, d)) = todo.pop() {
-        max_depth = max_depth.max(d);
-        let node = &nodes[n];
-        let base = node.child_base_idx as usize;
-        for k in 0..node.imask.count_ones() as usize {
-            if base + k < nodes.len() {
-                todo.push((base + k, d + 1));
-            }
-        }
-    }
-    max_depth
 }

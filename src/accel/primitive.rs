@@ -167,9 +167,9 @@ impl WatertightRay {
         let t_scaled = u * az + v * bz + w * cz;
         let rcp_det = 1.0 / det;
         let t = t_scaled * rcp_det;
-        // Range test in [t_min, t_max]. This is where `t_min` is honoured: obvhs'
-        // node culling ignores the ray's tmin (it clamps to a fixed 1e-4), so every
-        // primitive callback must filter by t_min itself.
+        // Range test in [t_min, t_max]. This is where `t_min` is honoured: node
+        // culling only drops boxes that end before it, so a visited leaf can still
+        // hold primitives hit before t_min.
         if !(t >= t_min && t <= t_max) {
             return None;
         }
@@ -228,7 +228,7 @@ pub(crate) fn intersect_sphere(
     t_max: f32,
 ) -> Option<f32> {
     let (t0, t1) = sphere_roots(org, dir, center, radius)?;
-    // Filter by t_min here (obvhs node culling ignores tmin, see `intersect`).
+    // Filter by t_min here (node culling is coarser, see `intersect`).
     if t0 >= t_min && t0 <= t_max {
         Some(t0)
     } else if t1 >= t_min && t1 <= t_max {

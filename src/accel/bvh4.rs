@@ -1,0 +1,406 @@
+//! The traversal tree: obvhs' BVH2 collapsed into a 4-wide BVH with
+//! uncompressed f32 child boxes in SoA layout, tested four at a time with
+//! `wide::f32x4` slab tests and visited nearest-first.
+//!
+//! Why not obvhs' CWBVH (issue 16): its 8-wide nodes are quantised (u8 child
+//! boxes decoded on every visit), visited in octant order rather than by
+//! distance, and its entry distance is clamped to a fixed 1e-4, which forced a
+//! backed-off traversal ray. Here a node test is 6 subtractions, 6
+//! multiplications and 8 min/max on four children at once, and the box test is
+//! Ize's conservative one (2013, "Robust BVH Ray Traversal": exit distances
+//! widened by `1 + 2γ₃`, here generously `1 + 4ε`), on boxes padded by the
+//! build (`build.rs`), so no box a ray touches at an edge or vertex is culled.
+
+use obvhs::bvh2::Bvh2;
+use wide::f32x4;
+
+/// Child reference: an inner node's index, or `LEAF_BIT | (count − 1) << 28 |
+/// first` for a leaf of `count` ≤ [`MAX_LEAF`] consecutive primitives, or
+/// [`EMPTY`].
+const LEAF_BIT: u32 = 1 << 31;
+const COUNT_SHIFT: u32 = 28;
+const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+pub(super) const EMPTY: u32 = u32::MAX;
+/// Most primitives a leaf can reference (3 bits of count).
+pub(super) const MAX_LEAF: u32 = 8;
+/// Most primitives the tree can hold (28 bits of leaf offset, `EMPTY` excluded).
+pub(super) const MAX_PRIMITIVES: usize = FIRST_MASK as usize;
+
+/// Ize 2013's `1 + 2γ₃` widening of exit distances, rounded up generously.
+const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// Four child boxes: `bounds[2·axis]` the minima, `bounds[2·axis + 1]` the
+/// maxima along `axis`. Empty slots hold the inverted box (+∞, −∞), which the
+/// ordered slab test always misses.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(super) struct Node4 {
+    bounds: [f32x4; 6],
+    children: [u32; 4],
+}
+
+impl Node4 {
+    fn empty() -> Self {
+        let (inf, ninf) = (f32x4::splat(f32::INFINITY), f32x4::splat(f32::NEG_INFINITY));
+        Self {
+            bounds: [inf, ninf, inf, ninf, inf, ninf],
+            children: [EMPTY; 4],
+        }
+    }
+
+    fn set_child(&mut self, slot: usize, lo: [f32; 3], hi: [f32; 3]) {
+        for axis in 0..3 {
+            let mut min = self.bounds[2 * axis].to_array();
+            let mut max = self.bounds[2 * axis + 1].to_array();
+            min[slot] = lo[axis];
+            max[slot] = hi[axis];
+            self.bounds[2 * axis] = f32x4::new(min);
+            self.bounds[2 * axis + 1] = f32x4::new(max);
+        }
+    }
+
+    fn child_box(&self, slot: usize) -> ([f32; 3], [f32; 3]) {
+        let c = |i: usize| self.bounds[i].to_array()[slot];
+        ([c(0), c(2), c(4)], [c(1), c(3), c(5)])
+    }
+
+    /// Entry distances of the four children and the mask of those whose box
+    /// overlaps `[t_lo, hi_w]` along the ray (`hi_w` already widened).
+    #[inline(always)]
+    fn hit(&self, r: &BoxRay, hi_w: f32x4) -> (f32x4, u32) {
+        let b = &self.bounds;
+        // near[a] & 1 is the ray's sign bit on axis a: the slab's entry plane is
+        // the minimum for a positive direction, the maximum for a negative one.
+        let (nx, ny, nz) = (r.near[0] & 1, 2 + (r.near[1] & 1), 4 + (r.near[2] & 1));
+        let tnx = (b[nx] - r.org[0]) * r.inv[0];
+        let tny = (b[ny] - r.org[1]) * r.inv[1];
+        let tnz = (b[nz] - r.org[2]) * r.inv[2];
+        let tfx = (b[nx ^ 1] - r.org[0]) * r.inv[0];
+        let tfy = (b[ny ^ 1] - r.org[1]) * r.inv[1];
+        let tfz = (b[nz ^ 1] - r.org[2]) * r.inv[2];
+        let t_near = tnx.fast_max(tny).fast_max(tnz.fast_max(r.t_lo));
+        let t_far = (tfx.fast_min(tfy).fast_min(tfz) * f32x4::splat(WIDEN)).fast_min(hi_w);
+        (t_near, t_near.simd_le(t_far).to_bitmask())
+    }
+}
+
+/// The ray as the node test sees it: origin and reciprocal direction splatted,
+/// the sign of each direction component, and the lower end of the interval.
+pub(super) struct BoxRay {
+    org: [f32x4; 3],
+    inv: [f32x4; 3],
+    near: [usize; 3],
+    t_lo: f32x4,
+}
+
+impl BoxRay {
+    /// `dir` components must be nonzero (the caller clamps them away from 0, so
+    /// that the reciprocal is finite and `0 · ∞` cannot occur); `t_lo ≥ 0`.
+    #[inline(always)]
+    pub(super) fn new(org: [f32; 3], dir: [f32; 3], t_lo: f32) -> Self {
+        Self {
+            org: org.map(f32x4::splat),
+            inv: dir.map(|d| f32x4::splat(1.0 / d)),
+            near: dir.map(|d| (d < 0.0) as usize),
+            t_lo: f32x4::splat(t_lo),
+        }
+    }
+}
+
+/// A pending subtree on the traversal stack, with its entry distance.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Entry {
+    node: u32,
+    t: f32,
+}
+
+/// The 4-wide tree; leaf offsets index the primitives in `leaf_order`.
+#[derive(Debug, Default)]
+pub(super) struct Bvh4 {
+    pub(super) nodes: Vec<Node4>,
+    pub(super) root: u32,
+    /// For every leaf slot, the index of its primitive in the build's input.
+    pub(super) leaf_order: Vec<u32>,
+    /// Inner levels below the root (root alone = 0).
+    pub(super) depth: u32,
+}
+
+impl Bvh4 {
+    /// Collapses `bvh2` (boxes in a frame scaled by `1/inv_scale`, a power of
+    /// two) into a BVH4 in world space: each node takes its BVH2 node's two
+    /// children and keeps opening the largest-area child holding more than one
+    /// primitive until four slots are filled; a child with at most `max_leaf`
+    /// primitives becomes a leaf. Iterative, so degenerate chains cannot
+    /// overflow the call stack.
+    pub(super) fn from_bvh2(bvh2: &Bvh2, inv_scale: f32, max_leaf: u32) -> Self {
+        let max_leaf = max_leaf.clamp(1, MAX_LEAF);
+        let mut out = Self {
+            root: EMPTY,
+            ..Self::default()
+        };
+        if bvh2.nodes.is_empty() {
+            return out;
+        }
+        let counts = subtree_counts(bvh2);
+        let world = |n: usize| {
+            let b = bvh2.nodes[n].aabb();
+            (
+                (b.min * inv_scale).to_array(),
+                (b.max * inv_scale).to_array(),
+            )
+        };
+        // (BVH2 node, parent BVH4 node or EMPTY for the root, slot, depth)
+        let mut work = vec![(0usize, EMPTY, 0usize, 0u32)];
+        while let Some((n, parent, slot, depth)) = work.pop() {
+            let child = if counts[n] <= max_leaf || bvh2.nodes[n].prim_count > 0 {
+                let first = out.leaf_order.len() as u32;
+                collect_primitives(bvh2, n, &mut out.leaf_order);
+                let count = out.leaf_order.len() as u32 - first;
+                LEAF_BIT | (count.clamp(1, MAX_LEAF) - 1) << COUNT_SHIFT | first
+            } else {
+                let index = out.nodes.len() as u32;
+                let mut node = Node4::empty();
+                for (k, c) in open_children(bvh2, n, &counts).into_iter().enumerate() {
+                    let Some(c) = c else { break };
+                    let (lo, hi) = world(c);
+                    node.set_child(k, lo, hi);
+                    work.push((c, index, k, depth + 1));
+                }
+                out.nodes.push(node);
+                out.depth = out.depth.max(depth);
+                index
+            };
+            if parent == EMPTY {
+                out.root = child;
+            } else {
+                out.nodes[parent as usize].children[slot] = child;
+            }
+        }
+        out
+    }
+
+    /// The traversal stack's worst case: each inner node on the path leaves at
+    /// most three siblings behind.
+    pub(super) fn stack_size(&self) -> usize {
+        3 * (self.depth as usize + 1) + 1
+    }
+
+    /// Visits the leaves whose boxes the ray overlaps, nearest box first
+    /// (`SORTED`) or in any order; `leaf(first, count)` tests the primitives
+    /// `first..first + count` and returns the new upper end of the ray interval
+    /// in the node test's distances, or `None` to stop. `nodes_visited` counts
+    /// node tests. `stack` must hold [`Bvh4::stack_size`] entries.
+    #[inline(always)]
+    pub(super) fn traverse<const SORTED: bool>(
+        &self,
+        ray: &BoxRay,
+        t_hi: f32,
+        stack: &mut [Entry],
+        nodes_visited: &mut u32,
+        mut leaf: impl FnMut(usize, usize) -> Option<f32>,
+    ) {
+        let mut hi = t_hi * WIDEN;
+        let mut hi_w = f32x4::splat(hi);
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        loop {
+            while cur & LEAF_BIT == 0 {
+                *nodes_visited += 1;
+                let node = &self.nodes[cur as usize];
+                let (t_near, mask) = node.hit(ray, hi_w);
+                if mask == 0 {
+                    cur = EMPTY;
+                    break;
+                }
+                if mask & (mask - 1) == 0 {
+                    cur = node.children[mask.trailing_zeros() as usize];
+                    continue;
+                }
+                let t_near = t_near.to_array();
+                let rest = mask & (mask - 1);
+                if rest & (rest - 1) == 0 {
+                    // Two children hit (the common case): the nearer one next.
+                    let (i, j) = (
+                        mask.trailing_zeros() as usize,
+                        rest.trailing_zeros() as usize,
+                    );
+                    let (near, far) = if !SORTED || t_near[i] <= t_near[j] {
+                        (i, j)
+                    } else {
+                        (j, i)
+                    };
+                    stack[sp] = Entry {
+                        node: node.children[far],
+                        t: t_near[far],
+                    };
+                    sp += 1;
+                    cur = node.children[near];
+                    continue;
+                }
+                let (mut ids, mut ts, mut k) = ([0u32; 4], [0f32; 4], 0usize);
+                let mut m = mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    ids[k] = node.children[i];
+                    ts[k] = t_near[i];
+                    k += 1;
+                    m &= m - 1;
+                }
+                if SORTED {
+                    // Insertion sort, farthest first (stable: equal distances
+                    // keep slot order, so the traversal is deterministic).
+                    for i in 1..k {
+                        let (t, id) = (ts[i], ids[i]);
+                        let mut j = i;
+                        while j > 0 && ts[j - 1] < t {
+                            ts[j] = ts[j - 1];
+                            ids[j] = ids[j - 1];
+                            j -= 1;
+                        }
+                        ts[j] = t;
+                        ids[j] = id;
+                    }
+                }
+                for i in 0..k - 1 {
+                    stack[sp] = Entry {
+                        node: ids[i],
+                        t: ts[i],
+                    };
+                    sp += 1;
+                }
+                cur = ids[k - 1];
+            }
+            if cur != EMPTY {
+                let first = (cur & FIRST_MASK) as usize;
+                let count = ((cur >> COUNT_SHIFT) & (MAX_LEAF - 1)) as usize + 1;
+                match leaf(first, count) {
+                    None => return,
+                    Some(t) => {
+                        hi = hi.min(t * WIDEN);
+                        hi_w = f32x4::splat(hi);
+                    }
+                }
+            }
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let e = stack[sp];
+                if e.t <= hi {
+                    cur = e.node;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Surface-area-heuristic cost relative to the root's box: 1 + Σ over child
+    /// boxes of area(child)/area(root) × (1 per inner child, the primitive
+    /// count per leaf).
+    pub(super) fn sah_cost(&self) -> f32 {
+        if self.nodes.is_empty() {
+            return 0.0;
+        }
+        let half_area = |(lo, hi): ([f32; 3], [f32; 3])| {
+            let d = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]].map(|x| x.max(0.0) as f64);
+            d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+        };
+        let root = &self.nodes[0];
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for k in 0..4 {
+            if root.children[k] != EMPTY {
+                let (l, h) = root.child_box(k);
+                for a in 0..3 {
+                    lo[a] = lo[a].min(l[a]);
+                    hi[a] = hi[a].max(h[a]);
+                }
+            }
+        }
+        let root_area = half_area((lo, hi));
+        let mut cost = 1.0;
+        for node in &self.nodes {
+            for k in 0..4 {
+                let c = node.children[k];
+                if c == EMPTY {
+                    continue;
+                }
+                let weight = if c & LEAF_BIT == 0 {
+                    1.0
+                } else {
+                    (((c >> COUNT_SHIFT) & (MAX_LEAF - 1)) + 1) as f64
+                };
+                cost += weight * half_area(node.child_box(k)) / root_area;
+            }
+        }
+        cost as f32
+    }
+}
+
+/// Primitives under every BVH2 node (post-order without recursion).
+fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
+    let mut counts = vec![0u32; bvh2.nodes.len()];
+    let mut todo = vec![(0usize, false)];
+    while let Some((n, children_done)) = todo.pop() {
+        let node = &bvh2.nodes[n];
+        if node.prim_count > 0 {
+            counts[n] = node.prim_count;
+        } else if children_done {
+            let c = node.first_index as usize;
+            counts[n] = counts[c] + counts[c + 1];
+        } else {
+            todo.push((n, true));
+            todo.push((node.first_index as usize, false));
+            todo.push((node.first_index as usize + 1, false));
+        }
+    }
+    counts
+}
+
+/// Appends the primitive indices under BVH2 node `n`, left to right.
+fn collect_primitives(bvh2: &Bvh2, n: usize, out: &mut Vec<u32>) {
+    let mut todo = vec![n];
+    while let Some(n) = todo.pop() {
+        let node = &bvh2.nodes[n];
+        if node.prim_count > 0 {
+            let first = node.first_index as usize;
+            out.extend_from_slice(&bvh2.primitive_indices[first..first + node.prim_count as usize]);
+        } else {
+            todo.push(node.first_index as usize + 1);
+            todo.push(node.first_index as usize);
+        }
+    }
+}
+
+/// Up to four BVH2 nodes covering inner node `n`'s primitives: its two
+/// children, then repeatedly the largest-area one with more than one
+/// primitive replaced by its two children (the usual greedy collapse).
+fn open_children(bvh2: &Bvh2, n: usize, counts: &[u32]) -> [Option<usize>; 4] {
+    let first = bvh2.nodes[n].first_index as usize;
+    let mut kids = [Some(first), Some(first + 1), None, None];
+    let mut len = 2;
+    while len < 4 {
+        let best = (0..len)
+            .filter(|&k| {
+                let c = kids[k].unwrap_or(0);
+                bvh2.nodes[c].prim_count == 0 && counts[c] > 1
+            })
+            .max_by(|&a, &b| {
+                // Ties in area (duplicate boxes) go to the larger subtree, so
+                // that those stay balanced.
+                let key = |k: usize| {
+                    let c = kids[k].unwrap_or(0);
+                    (bvh2.nodes[c].aabb().half_area(), counts[c])
+                };
+                let (ka, kb) = (key(a), key(b));
+                ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
+            });
+        let Some(k) = best else { break };
+        let c = kids[k].unwrap_or(0);
+        let grand = bvh2.nodes[c].first_index as usize;
+        kids[k] = Some(grand);
+        kids[len] = Some(grand + 1);
+        len += 1;
+    }
+    kids
+}
