@@ -81,6 +81,12 @@ fn child_entry() {
         return; // not a child: nothing to do
     };
     let dir = PathBuf::from(dir);
+    // A parent started under `nohup` (or a shell that ignores a signal) passes the
+    // ignored disposition on; the child must die of every signal the tests send.
+    for (signal, _) in SIGNALS {
+        // SAFETY: restoring the default action of a standard signal in this process.
+        unsafe { libc::signal(signal, libc::SIG_DFL) };
+    }
     if mode.starts_with("fallback") {
         atomic::force_named_temp_files(true);
     }
