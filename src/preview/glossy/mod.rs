@@ -204,7 +204,7 @@ fn seed(vertex: u32, slot: u32) -> u32 {
 /// its computed slices at their finest level (Eq. 6).
 pub fn glossy_slice(ico: &Icosphere, vt: &VertexTransfer, wo: Vec3) -> Slice {
     if vt.glossy.is_empty() {
-        return [Lobe::default(); 3];
+        return [Lobe::default(); 4];
     }
     let loc = ico.locate(fit::clamp_view(wo), vt.level as usize);
     let corners: Vec<(&Slice, f32)> = loc
@@ -461,7 +461,7 @@ fn refine_spatially(
 
 /// Per-vertex lobes for one camera (the paper's vertex shader): Td's three and the
 /// glossy slice for the direction to the camera, in world space.
-fn vertex_lobes(t: &Transfer, camera: &Camera) -> Vec<[Lobe; 6]> {
+pub fn vertex_lobes(t: &Transfer, camera: &Camera) -> Vec<[Lobe; 8]> {
     t.mesh
         .vertices
         .par_iter()
@@ -471,14 +471,8 @@ fn vertex_lobes(t: &Transfer, camera: &Camera) -> Vec<[Lobe; 6]> {
             let mut wo = frame.to_local((camera.from - v.position).normalize_or(frame.n));
             wo.z = wo.z.abs();
             let g = glossy_slice(&t.ico, vt, wo);
-            [
-                vt.diffuse[0],
-                vt.diffuse[1],
-                vt.diffuse[2],
-                g[0],
-                g[1],
-                g[2],
-            ]
+            let d = &vt.diffuse;
+            [d[0], d[1], d[2], d[3], g[0], g[1], g[2], g[3]]
         })
         .collect()
 }
@@ -534,23 +528,48 @@ pub fn render_supersampled(
     image
 }
 
-fn shade(lobes: &[[Lobe; 6]], env: &PrefilteredEnv, ids: [u32; 3], w: [f32; 3]) -> Vec3 {
-    let mut c = Vec3::ZERO;
-    let [a, b, cc] = ids.map(|i| &lobes[i as usize]);
-    for ((la, lb), lc) in a.iter().zip(b).zip(cc) {
-        let l = slice::blend(&[(*la, w[0]), (*lb, w[1]), (*lc, w[2])]);
-        if luminance(l.alpha) > 0.0 {
-            c += l.alpha * env.lookup(l.mu, l.kappa);
+fn shade(lobes: &[[Lobe; 8]], env: &PrefilteredEnv, ids: [u32; 3], w: [f32; 3]) -> Vec3 {
+    shade_components(lobes, env, ids, w).iter().sum()
+}
+
+/// The radiance per path type at a point of a triangle — Td's direct, indirect
+/// diffuse and indirect glossy, then Tg's — from [`vertex_lobes`]: each lobe blended
+/// barycentrically (Eq. 6) and looked up at its κ.
+pub fn shade_components(
+    lobes: &[[Lobe; 8]],
+    env: &PrefilteredEnv,
+    ids: [u32; 3],
+    w: [f32; 3],
+) -> [Vec3; 6] {
+    let [a, b, c] = ids.map(|i| &lobes[i as usize]);
+    let lobe = |k: usize| {
+        if a[k].alpha == Vec3::ZERO && b[k].alpha == Vec3::ZERO && c[k].alpha == Vec3::ZERO {
+            return Vec3::ZERO;
         }
-    }
-    c
+        let l = slice::blend(&[(a[k], w[0]), (b[k], w[1]), (c[k], w[2])]);
+        if luminance(l.alpha) > 0.0 {
+            l.alpha * env.lookup(l.mu, l.kappa)
+        } else {
+            Vec3::ZERO
+        }
+    };
+    let second = slice::DIRECT_SECOND;
+    [
+        lobe(0) + lobe(second),
+        lobe(1),
+        lobe(2),
+        lobe(4) + lobe(4 + second),
+        lobe(5),
+        lobe(6),
+    ]
 }
 
 impl Transfer {
     /// Bytes of the transfer data (slices at 7 f32 per lobe, plus the mesh's vertices).
     pub fn bytes(&self) -> usize {
         let lobe = 7 * 4;
-        self.stats.slices * 3 * lobe + self.mesh.vertices.len() * std::mem::size_of::<Vertex>()
+        self.stats.slices * std::mem::size_of::<Slice>() / std::mem::size_of::<Lobe>() * lobe
+            + self.mesh.vertices.len() * std::mem::size_of::<Vertex>()
     }
 
     /// Each vertex's highest angular level (for the statistics image).
