@@ -74,6 +74,22 @@ fn main() {
         img.vec3("reference.", ["R", "G", "B"]).unwrap()
     });
     let (w, h) = (camera.width as usize, camera.height as usize);
+    if std::env::var("TIME").is_ok() {
+        for _ in 0..3 {
+            let t0 = std::time::Instant::now();
+            let l = glossy::vertex_lobes(&t, camera);
+            let t1 = t0.elapsed().as_secs_f64() * 1e3;
+            let img = glossy::render(&t, &env, &scene, &accel, camera);
+            let t2 = t0.elapsed().as_secs_f64() * 1e3;
+            println!(
+                "vertex_lobes {t1:.1} ms ({} vertices), full frame {:.1} ms ({} px)",
+                l.len(),
+                t2 - t1,
+                img.len()
+            );
+        }
+        return;
+    }
     if let Ok(px) = std::env::var("PIXEL") {
         let v: Vec<f32> = px.split(',').map(|x| x.parse().unwrap()).collect();
         let ray = camera.generate_ray(Vec2::new(v[0] + 0.5, v[1] + 0.5));

@@ -1,7 +1,9 @@
 //! Transfer slices (Sec. 5): for one surface point and view direction, paths from
 //! the point traced with the BVH until they escape to the environment, binned by
 //! path type — direct, indirect diffuse, indirect glossy (the lobe sampled at the
-//! second surface) — and each bin reduced to one weighted vMF lobe (Eq. 13–15).
+//! second surface) — and each bin reduced to one weighted vMF lobe (Eq. 13–15),
+//! the direct bin of the glossy part to the two lobes of its BRDF's mixture, both
+//! estimated as the known unoccluded lobe minus what occluders block.
 //! The diffuse part of the first reflection is view-independent (Eq. 3's Td) and
 //! gets one slice per vertex; the glossy part (Tg) one per view direction.
 
@@ -362,11 +364,8 @@ pub fn blend(lobes: &[(Lobe, f32)]) -> Lobe {
     }
 }
 
-pub fn blend_slices(slices: &[(&Slice, f32)]) -> Slice {
-    std::array::from_fn(|k| {
-        let lobes: Vec<(Lobe, f32)> = slices.iter().map(|(s, w)| (s[k], *w)).collect();
-        blend(&lobes)
-    })
+pub fn blend_slices(slices: &[(&Slice, f32); 3]) -> Slice {
+    std::array::from_fn(|k| blend(&slices.map(|(s, w)| (s[k], w))))
 }
 
 fn weighted(l: &Lobe) -> WeightedVmf {
