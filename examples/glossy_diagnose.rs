@@ -6,8 +6,11 @@
 //! the truth R those same paths carry with the environment evaluated where they
 //! escape. Also the path-traced reference from the preview's EXR, if given.
 //!
-//! cargo run --release --example glossy_diagnose -- SCENE CACHE.bin [EXR] [STRIDE] [PATHS]
-//! CACHE.bin: the transfer `gradtrace preview glossy` cached under its out dir.
+//! cargo run --release --example glossy_diagnose -- SCENE CACHE.bin [EXR|-] [STRIDE] [PATHS]
+//! CACHE.bin: the transfer `gradtrace preview glossy` cached under its out dir
+//! (default settings). Also writes /tmp/diag_{shape,spatial,angular,total}.png
+//! (signed error maps, red = too bright). `TIME=1`: times `vertex_lobes` and a
+//! frame instead; `PIXEL=x,y`: prints one pixel's lobes, known lobes and own EM fit.
 
 use gradtrace::accel::{Accel, PrimRef};
 use gradtrace::math::{luminance, Frame, Vec2, Vec3};

@@ -1,5 +1,9 @@
 //! `gradtrace preview glossy`: precompute transfer (cached) → render views → reference → preview.json.
 //!
+//! `preview.json`: `render_ms` is the wall time of one frame at the scene's
+//! resolution from the cached transfer (the fastest of several warm frames),
+//! `render_cpu_ms` its process CPU time over `render_threads` threads.
+//!
 //! The reference is the path tracer with `max_depth = 3` (camera, first surface,
 //! one bounce, then the environment): exactly the light paths the transfer holds
 //! (direct and one-bounce interreflections), under the same environment.
