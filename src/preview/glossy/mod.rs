@@ -45,7 +45,10 @@ pub struct Settings {
     /// Mean relative L2 distance (App. A, over the slices' squared norms) below
     /// which a level's slices count as predicted by the coarser ones.
     pub angular_threshold: f64,
-    /// Largest relative distance between a triangle's vertices it may keep.
+    /// Largest relative distance between a triangle's vertices it may keep. 0.02:
+    /// at 0.05 the e = 128 teapot's large front faces, whose slices differ little
+    /// in L2 but carry the sun's highlight, were never split (20.1k vertices, 5.82 %
+    /// of the image mean); at 0.02 the same 20k budget gives 5.10 %.
     pub spatial_threshold: f64,
     /// Spatial subdivision on/off (off: the initial mesh, as Green et al.).
     pub spatial: bool,
@@ -77,7 +80,7 @@ impl Default for Settings {
             fit_samples: 4096,
             max_angular_level: 3,
             angular_threshold: 0.05,
-            spatial_threshold: 0.05,
+            spatial_threshold: 0.02,
             spatial: true,
             max_spatial_level: 3,
             min_area_fraction: 1e-6,
