@@ -23,12 +23,37 @@ pub fn diffuse_lobe() -> Vmf {
     Vmf::from_mean_resultant(DVec3::Z * (2.0 / 3.0))
 }
 
+/// Lobes of the two-lobe mixture the direct glossy transfer is held in.
+pub const DIRECT_LOBES: usize = 2;
+
+/// One lobe of a path type's *unoccluded* transfer, known from the BRDF alone
+/// (local frame): the expectations a slice's Monte Carlo sums would converge to if
+/// nothing blocked the paths. Slices estimate only what occluders remove and
+/// subtract it (a control variate, see [`super::slice::TraceContext::trace`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KnownLobe {
+    /// The mixture component that assigns a path its share (EM's E step):
+    /// responsibility ∝ `share` · `assign`'s density.
+    pub assign: Vmf,
+    pub share: f64,
+    /// E[lum(w) ρ], E[w ρ] (RGB) and the mean resultant of the directions weighted
+    /// by lum(w) ρ, as length (r ∈ [0, 1)) and direction: interpolating those two
+    /// apart keeps r (hence κ, Eq. 13) from shrinking between fitted views.
+    pub weight: f64,
+    pub rgb: DVec3,
+    pub resultant: f64,
+    pub mean_dir: DVec3,
+}
+
 /// The fitted glossy lobe for one view direction (local frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlossyEntry {
     /// βg: the glossy component's directional albedo (RGB).
     pub albedo: Vec3,
+    /// One lobe for the whole component (Eq. 9): the sampling density.
     pub lobe: Vmf,
+    /// The component as a two-lobe mixture (EM), for the direct transfer.
+    pub direct: [KnownLobe; DIRECT_LOBES],
 }
 
 /// One material, split into its diffuse and glossy components and fitted.
@@ -92,16 +117,35 @@ impl MaterialFit {
         let mut albedo = Vec3::ZERO;
         let mut mu = DVec3::ZERO;
         let mut kappa = 0.0;
+        let mut direct = [KnownLobe::zero(); DIRECT_LOBES];
         for (slot, w) in loc.slots.iter().zip(loc.weights) {
             let e = &table[*slot as usize];
             albedo += e.albedo * w;
             mu += e.lobe.mu * w as f64;
             kappa += e.lobe.kappa * w as f64;
+            for (d, k) in direct.iter_mut().zip(&e.direct) {
+                d.add_scaled(k, w as f64);
+            }
         }
         Some(GlossyEntry {
             albedo,
             lobe: Vmf::new(mu, kappa),
+            direct: direct.map(|d| d.normalised()),
         })
+    }
+
+    /// Td's direct lobe unoccluded: kd cos θ/π over the hemisphere, E[w] = kd and
+    /// mean resultant 2/3 along the normal, exactly.
+    pub fn known_diffuse(&self) -> KnownLobe {
+        let kd = self.kd.as_dvec3();
+        KnownLobe {
+            assign: Vmf::new(DVec3::Z, vmf::KAPPA_MIN),
+            share: 1.0,
+            weight: luminance(self.kd) as f64,
+            rgb: kd,
+            resultant: 2.0 / 3.0,
+            mean_dir: DVec3::Z,
+        }
     }
 
     /// Draws ωi from the diffuse lobe; returns it with f_d cos θi / γd.
@@ -153,12 +197,157 @@ pub fn clamp_view(wo: Vec3) -> Vec3 {
     Vec3::new(wo.x / h * c, wo.y / h * c, min_z)
 }
 
+impl KnownLobe {
+    /// All zero, for accumulating a blend (`assign` raw: `Vmf::new` would turn a
+    /// zero μ into +z).
+    fn zero() -> Self {
+        Self {
+            assign: Vmf {
+                mu: DVec3::ZERO,
+                kappa: 0.0,
+            },
+            share: 0.0,
+            weight: 0.0,
+            rgb: DVec3::ZERO,
+            resultant: 0.0,
+            mean_dir: DVec3::ZERO,
+        }
+    }
+
+    /// Accumulates `w` × `k` for a barycentric blend (directions renormalised and
+    /// κ blended linearly by [`Self::normalised`]).
+    fn add_scaled(&mut self, k: &KnownLobe, w: f64) {
+        self.assign.mu += k.assign.mu * w;
+        self.assign.kappa += k.assign.kappa * w;
+        self.share += k.share * w;
+        self.weight += k.weight * w;
+        self.rgb += k.rgb * w;
+        self.resultant += k.resultant * w;
+        self.mean_dir += k.mean_dir * w;
+    }
+
+    fn normalised(self) -> Self {
+        Self {
+            assign: Vmf::new(self.assign.mu, self.assign.kappa),
+            mean_dir: self.mean_dir.normalize_or(DVec3::Z),
+            ..self
+        }
+    }
+
+    /// The lobe in the frame whose local +z is `frame`'s normal, in world space.
+    pub fn to_world(&self, frame: &crate::math::Frame) -> Self {
+        let w = |d: DVec3| {
+            frame
+                .to_world(d.as_vec3())
+                .as_dvec3()
+                .normalize_or(DVec3::Z)
+        };
+        Self {
+            assign: Vmf::new(w(self.assign.mu), self.assign.kappa),
+            mean_dir: w(self.mean_dir),
+            ..*self
+        }
+    }
+
+    /// E[lum(w) ρ s]: the weighted mean resultant as a vector.
+    pub fn resultant_vector(&self) -> DVec3 {
+        self.mean_dir * (self.weight * self.resultant)
+    }
+}
+
+/// Each path's share of each mixture lobe (EM's E step), by `share` · density.
+pub fn responsibilities(lobes: &[KnownLobe], s: DVec3) -> [f64; DIRECT_LOBES] {
+    let mut p = [0.0; DIRECT_LOBES];
+    for (pj, l) in p.iter_mut().zip(lobes) {
+        *pj = l.share * l.assign.pdf(s);
+    }
+    let total: f64 = p.iter().sum();
+    if total > 0.0 && total.is_finite() {
+        p.map(|x| x / total)
+    } else {
+        let mut first = [0.0; DIRECT_LOBES];
+        first[0] = 1.0;
+        first
+    }
+}
+
+/// EM iterations of the two-lobe fit (converged to < 1e-3 in κ on the teapot's
+/// exponents well before).
+const EM_ITERATIONS: usize = 24;
+
+/// The cosine-weighted glossy component at one view as a two-lobe vMF mixture:
+/// the samples split at their mean along the tangent towards the normal (so that
+/// lobe 0 is the one nearer the normal at every view and vertex, which makes
+/// slices blendable lobe by lobe), then weighted EM (μ, κ by Eq. 13–14 from each
+/// lobe's responsibility-weighted samples). One isotropic lobe cannot hold a
+/// Blinn-Phong lobe off the normal, squeezed across the plane of incidence by
+/// cos θo: on the e = 128 teapot the single lobe's own error (traced at each pixel,
+/// no interpolation) is 6.6 % of the image mean, the mixture's 2.1 %. The paper
+/// (Sec. 5.2) names the multi-lobe EM as the extension; it keeps one lobe.
+pub fn fit_mixture(samples: &[(DVec3, DVec3)], count: u64) -> [KnownLobe; DIRECT_LOBES] {
+    let lum = |w: &DVec3| luminance(w.as_vec3()) as f64;
+    let mut one = LobeAccumulator::default();
+    for (s, w) in samples {
+        one.add(*s, lum(w));
+    }
+    let mu = one.estimate(count).map_or(DVec3::Z, |e| e.lobe.mu);
+    let t = (DVec3::Z - mu * mu.z).normalize_or(mu.any_orthonormal_vector());
+    let mut lobes = [KnownLobe::zero(); DIRECT_LOBES];
+    let assign = |lobes: &mut [KnownLobe; DIRECT_LOBES],
+                  rho: &dyn Fn(DVec3) -> [f64; DIRECT_LOBES]| {
+        let mut acc = [LobeAccumulator::default(); DIRECT_LOBES];
+        let mut rgb = [DVec3::ZERO; DIRECT_LOBES];
+        for (s, w) in samples {
+            let r = rho(*s);
+            for j in 0..DIRECT_LOBES {
+                acc[j].add(*s, lum(w) * r[j]);
+                rgb[j] += *w * r[j];
+            }
+        }
+        let old = *lobes;
+        for j in 0..DIRECT_LOBES {
+            let n = acc[j].direction_sum / acc[j].weight_sum.max(1e-300);
+            let lobe = Vmf::from_mean_resultant(n);
+            lobes[j] = KnownLobe {
+                assign: old[j].assign,
+                share: old[j].share,
+                weight: acc[j].weight_sum / count as f64,
+                rgb: rgb[j] / count as f64,
+                resultant: n.length().min(1.0 - 1e-12),
+                mean_dir: lobe.mu,
+            };
+            // The next E step assigns by the lobe just estimated.
+            lobes[j].assign = lobe;
+            lobes[j].share = lobes[j].weight;
+        }
+    };
+    assign(&mut lobes, &|s| {
+        let mut r = [0.0; DIRECT_LOBES];
+        r[usize::from(s.dot(t) < 0.0)] = 1.0;
+        r
+    });
+    for _ in 0..EM_ITERATIONS {
+        let current = lobes;
+        assign(&mut lobes, &|s| responsibilities(&current, s));
+    }
+    // A final E step with the lobes kept for assigning: the expectations stored
+    // are then exactly the sums a slice forms with these responsibilities.
+    let current = lobes;
+    assign(&mut lobes, &|s| responsibilities(&current, s));
+    for (l, c) in lobes.iter_mut().zip(&current) {
+        l.assign = c.assign;
+        l.share = c.share;
+    }
+    lobes
+}
+
 /// One lobe for the glossy component at `wo`: βg is the mean of f cos/pdf over the
 /// material's own importance samples, μ and κ the single-lobe estimate of the
 /// luminance-weighted directions (Eq. 13–14). Sobol points make it deterministic.
 fn fit_glossy(g: &Material, wo: Vec3, samples: u32) -> GlossyEntry {
     let mut acc = LobeAccumulator::default();
     let mut albedo = DVec3::ZERO;
+    let mut kept = Vec::with_capacity(samples as usize);
     for i in 0..samples {
         let u = Vec2::new(
             sobol_burley::sample(i, 0, 0x5eed),
@@ -167,6 +356,9 @@ fn fit_glossy(g: &Material, wo: Vec3, samples: u32) -> GlossyEntry {
         if let Some(s) = g.sample(wo, 0.5, u) {
             acc.add(s.wi.as_dvec3(), luminance(s.weight) as f64);
             albedo += s.weight.as_dvec3();
+            if s.weight.is_finite() && luminance(s.weight) > 0.0 {
+                kept.push((s.wi.as_dvec3().normalize(), s.weight.as_dvec3()));
+            }
         }
     }
     let lobe = acc
@@ -175,5 +367,6 @@ fn fit_glossy(g: &Material, wo: Vec3, samples: u32) -> GlossyEntry {
     GlossyEntry {
         albedo: (albedo / samples.max(1) as f64).as_vec3(),
         lobe,
+        direct: fit_mixture(&kept, samples.max(1) as u64),
     }
 }

@@ -1,11 +1,13 @@
 //! Transfer slices (Sec. 5): for one surface point and view direction, paths from
 //! the point traced with the BVH until they escape to the environment, binned by
 //! path type — direct, indirect diffuse, indirect glossy (the lobe sampled at the
-//! second surface) — and each bin reduced to one weighted vMF lobe (Eq. 13–15).
+//! second surface) — and each bin reduced to one weighted vMF lobe (Eq. 13–15),
+//! the direct bin of the glossy part to the two lobes of its BRDF's mixture, both
+//! estimated as the known unoccluded lobe minus what occluders block.
 //! The diffuse part of the first reflection is view-independent (Eq. 3's Td) and
 //! gets one slice per vertex; the glossy part (Tg) one per view direction.
 
-use super::fit::MaterialFit;
+use super::fit::{responsibilities, KnownLobe, MaterialFit, DIRECT_LOBES};
 use super::icosphere::Icosphere;
 use crate::accel::{offset_ray_origin_with_error, Accel, PrimRef};
 use crate::math::vmf::{l2_distance_sq, LobeAccumulator, Vmf, WeightedVmf};
@@ -31,10 +33,22 @@ impl Default for Lobe {
     }
 }
 
-/// Direct, indirect diffuse, indirect glossy.
-pub type Slice = [Lobe; 3];
+/// Direct, indirect diffuse, indirect glossy, and the direct path's second lobe
+/// (the glossy component's two-lobe mixture, [`super::fit::KnownLobe`]; empty in Td).
+pub type Slice = [Lobe; 4];
 
-pub const PATH_TYPES: [&str; 3] = ["direct", "indirect diffuse", "indirect glossy"];
+pub const PATH_TYPES: [&str; 4] = [
+    "direct",
+    "indirect diffuse",
+    "indirect glossy",
+    "direct, second lobe",
+];
+
+/// Where the direct path's second lobe sits in a [`Slice`].
+pub const DIRECT_SECOND: usize = 3;
+
+/// `walk`'s path type for a first direction that did not escape.
+const FIRST_BLOCKED: usize = 3;
 
 /// A surface point the transfer is computed at.
 #[derive(Clone, Copy, Debug)]
@@ -58,8 +72,9 @@ fn rng(index: u32, dim: u32, seed: u32) -> f64 {
 }
 
 impl TraceContext<'_> {
-    /// Where a ray lands and how it is shaded there, or `None` if it escapes.
-    fn hit(&self, ray: &Ray) -> Option<Option<SurfaceSample>> {
+    /// Where a ray lands and how it is shaded there (shading frame facing the
+    /// ray), or `None` if it escapes.
+    pub fn hit(&self, ray: &Ray) -> Option<Option<SurfaceSample>> {
         let hit = self.accel.intersect(ray)?;
         let Some(sp) = self.accel.surface_point(ray, &hit) else {
             return Some(None);
@@ -113,6 +128,13 @@ impl TraceContext<'_> {
     /// independent estimates of `samples` paths each (variance halves with twice
     /// the paths). The subdivision criteria discount it, so that Monte Carlo noise
     /// alone does not refine.
+    ///
+    /// The direct lobes depart from the paper's plain Eq. 13–15 sums: what an
+    /// unoccluded point would receive is known from the BRDF ([`KnownLobe`]), so
+    /// the paths estimate only the part occluders remove and subtract it (a control
+    /// variate: the same expectation, no noise where nothing occludes; 32 paths
+    /// gave 6.7 % of the image mean of slice noise on the e = 128 teapot). Where
+    /// more is blocked than escapes, the escaped paths are summed directly instead.
     pub fn trace(
         &self,
         at: &SurfaceSample,
@@ -120,11 +142,86 @@ impl TraceContext<'_> {
         samples: u32,
         seed: u32,
     ) -> (Slice, f32) {
+        let known = self.known_direct(at, wo);
+        let mut halves = [[Bin::default(); 3]; 2];
+        // [half][mixture lobe][escaped, blocked]
+        let mut direct = [[[Bin::default(); 2]; DIRECT_LOBES]; 2];
+        self.walk(at, wo, samples, seed, |i, k, dir, w| {
+            let h = (i % 2) as usize;
+            if k == 0 || k == FIRST_BLOCKED {
+                let rho = responsibilities(&known, dir.as_dvec3());
+                for (j, bins) in direct[h].iter_mut().enumerate() {
+                    bins[usize::from(k != 0)].add(dir, w * rho[j] as f32);
+                }
+            } else {
+                halves[h][k].add(dir, w);
+            }
+        });
+        let slice = |bins: &[Bin; 3], direct: &[[Bin; 2]; DIRECT_LOBES], m: u32| -> Slice {
+            let d = |j: usize| direct_lobe(&direct[j], known.get(j), m);
+            [d(0), bins[1].lobe(m), bins[2].lobe(m), d(1)]
+        };
+        let even = slice(&halves[0], &direct[0], samples.div_ceil(2).max(1));
+        let odd = slice(&halves[1], &direct[1], (samples / 2).max(1));
+        let mut all = halves[0];
+        for (a, b) in all.iter_mut().zip(&halves[1]) {
+            a.merge(b);
+        }
+        let mut all_direct = direct[0];
+        for (a, b) in all_direct.iter_mut().zip(&direct[1]) {
+            a[0].merge(&b[0]);
+            a[1].merge(&b[1]);
+        }
+        let full = slice(&all, &all_direct, samples.max(1));
+        (full, (0.5 * relative_distance(&even, &odd)) as f32)
+    }
+
+    /// The unoccluded direct lobes at `at` (world space): Td's one, Tg's mixture.
+    fn known_direct(&self, at: &SurfaceSample, wo: Option<Vec3>) -> Vec<KnownLobe> {
+        let fit = &self.fits[at.material as usize];
+        match wo {
+            None if fit.diffuse.is_some() => vec![fit.known_diffuse().to_world(&at.frame)],
+            None => Vec::new(),
+            Some(wo) => fit.glossy_at(self.ico, wo).map_or(Vec::new(), |e| {
+                e.direct.iter().map(|k| k.to_world(&at.frame)).collect()
+            }),
+        }
+    }
+
+    /// The radiance the same paths carry, per path type, with the environment
+    /// evaluated where each escapes instead of binned into a lobe: the value a
+    /// slice stands for, without the lobe fit (for measuring the fit's error).
+    pub fn radiance(
+        &self,
+        at: &SurfaceSample,
+        wo: Option<Vec3>,
+        samples: u32,
+        seed: u32,
+        env: &crate::scene::environment::Environment,
+    ) -> [Vec3; 3] {
+        let mut sum = [DVec3::ZERO; 3];
+        self.walk(at, wo, samples, seed, |_, k, dir, w| {
+            if k < 3 {
+                sum[k] += (w * env.eval(dir)).as_dvec3()
+            }
+        });
+        sum.map(|s| (s / samples.max(1) as f64).as_vec3())
+    }
+
+    /// The paths of one slice: calls `visit(path, type, escape direction,
+    /// throughput)` for every path that escapes (types 0–2 as [`PATH_TYPES`]), and
+    /// with type 3 and its first direction for every path whose first ray is blocked.
+    pub fn walk(
+        &self,
+        at: &SurfaceSample,
+        wo: Option<Vec3>,
+        samples: u32,
+        seed: u32,
+        mut visit: impl FnMut(u32, usize, Vec3, Vec3),
+    ) {
         let fit = &self.fits[at.material as usize];
         let entry = wo.and_then(|wo| fit.glossy_at(self.ico, wo));
-        let mut halves = [[Bin::default(); 3]; 2];
         for i in 0..samples {
-            let bins = &mut halves[(i % 2) as usize];
             let u = |d: u32| rng(i, d, seed);
             let first = match (wo, &entry) {
                 (None, _) => fit.sample_diffuse([u(0), u(1)]),
@@ -134,22 +231,20 @@ impl TraceContext<'_> {
             let Some((wi, w1)) = first else { continue };
             let dir = at.frame.to_world(wi);
             match self.hit(&self.spawn(at, dir)) {
-                None => bins[0].add(dir, w1),
-                Some(None) => {}
+                None => visit(i, 0, dir, w1),
+                Some(None) => visit(i, FIRST_BLOCKED, dir, w1),
                 Some(Some(y)) => {
-                    self.second_bounce(&y, -dir, w1, bins, [u(3), u(4), u(5), u(6), u(7)])
+                    visit(i, FIRST_BLOCKED, dir, w1);
+                    self.second_bounce(
+                        &y,
+                        -dir,
+                        w1,
+                        &mut |k, d, w| visit(i, k, d, w),
+                        [u(3), u(4), u(5), u(6), u(7)],
+                    )
                 }
             }
         }
-        let half = samples.div_ceil(2).max(1);
-        let even = halves[0].map(|b| b.lobe(half));
-        let odd = halves[1].map(|b| b.lobe((samples / 2).max(1)));
-        let full = std::array::from_fn(|k| {
-            let mut b = halves[0][k];
-            b.merge(&halves[1][k]);
-            b.lobe(samples)
-        });
-        (full, (0.5 * relative_distance(&even, &odd)) as f32)
     }
 
     /// At the second surface y: one diffuse and one glossy sample (Sec. 5.1), each
@@ -159,7 +254,7 @@ impl TraceContext<'_> {
         y: &SurfaceSample,
         to_x: Vec3,
         w1: Vec3,
-        bins: &mut [Bin; 3],
+        visit: &mut dyn FnMut(usize, Vec3, Vec3),
         u: [f64; 5],
     ) {
         let fit = &self.fits[y.material as usize];
@@ -170,7 +265,7 @@ impl TraceContext<'_> {
         if let Some((wi, w2)) = fit.sample_diffuse([u[0], u[1]]) {
             let dir = y.frame.to_world(wi);
             if self.hit(&self.spawn(y, dir)).is_none() {
-                bins[1].add(dir, w1 * w2);
+                visit(1, dir, w1 * w2);
             }
         }
         let wo = super::fit::clamp_view(wo);
@@ -178,7 +273,7 @@ impl TraceContext<'_> {
             if let Some((wi, w2)) = fit.sample_glossy(&e, wo, u[4], [u[2], u[3]]) {
                 let dir = y.frame.to_world(wi);
                 if self.hit(&self.spawn(y, dir)).is_none() {
-                    bins[2].add(dir, w1 * w2);
+                    visit(2, dir, w1 * w2);
                 }
             }
         }
@@ -218,6 +313,32 @@ impl Bin {
     }
 }
 
+/// One direct lobe from its escaped and blocked paths (`bins`) and, when known,
+/// its unoccluded expectations: known − blocked while at most half is blocked,
+/// else the escaped paths alone (whichever sum has the smaller variance).
+fn direct_lobe(bins: &[Bin; 2], known: Option<&KnownLobe>, samples: u32) -> Lobe {
+    let [escaped, blocked] = bins;
+    let Some(k) = known.filter(|_| blocked.acc.weight_sum <= escaped.acc.weight_sum) else {
+        return escaped.lobe(samples);
+    };
+    let m = samples.max(1) as f64;
+    let weight = k.weight - blocked.acc.weight_sum / m;
+    let rgb = (k.rgb - blocked.rgb / m).max(DVec3::ZERO);
+    if weight.is_nan() || weight <= 0.0 || luminance(rgb.as_vec3()) <= 0.0 {
+        return Lobe::default();
+    }
+    let lobe =
+        Vmf::from_mean_resultant((k.resultant_vector() - blocked.acc.direction_sum / m) / weight);
+    // Cutting at most half of a lobe away sharpens what is left by well under 4×;
+    // more is noise in the difference (its r can even reach 1, κ = ∞).
+    let kappa_max = 4.0 * Vmf::from_mean_resultant(k.mean_dir * k.resultant).kappa;
+    Lobe {
+        mu: lobe.mu.as_vec3(),
+        kappa: lobe.kappa.min(kappa_max) as f32,
+        alpha: rgb.as_vec3(),
+    }
+}
+
 /// Barycentric blend of lobes (Eq. 6): α and κ interpolated, μ interpolated and
 /// renormalised. μ and κ are weighted by each lobe's luminance as well, so a corner
 /// where no path of this type arrived (α = 0, shape undefined) does not bend it.
@@ -243,11 +364,8 @@ pub fn blend(lobes: &[(Lobe, f32)]) -> Lobe {
     }
 }
 
-pub fn blend_slices(slices: &[(&Slice, f32)]) -> Slice {
-    std::array::from_fn(|k| {
-        let lobes: Vec<(Lobe, f32)> = slices.iter().map(|(s, w)| (s[k], *w)).collect();
-        blend(&lobes)
-    })
+pub fn blend_slices(slices: &[(&Slice, f32); 3]) -> Slice {
+    std::array::from_fn(|k| blend(&slices.map(|(s, w)| (s[k], w))))
 }
 
 fn weighted(l: &Lobe) -> WeightedVmf {

@@ -5,7 +5,7 @@ use super::slice::{Lobe, Slice};
 use super::{PrecomputeStats, Transfer, VertexTransfer};
 use crate::math::Vec3;
 
-const MAGIC: &[u8; 8] = b"GTGLOSS2";
+const MAGIC: &[u8; 8] = b"GTGLOSS3";
 
 pub struct Stored {
     pub split_log: Vec<u32>,
@@ -81,7 +81,7 @@ impl Reader<'_> {
         x.is_finite().then_some(x)
     }
     fn slice(&mut self) -> Option<Slice> {
-        let mut s = [Lobe::default(); 3];
+        let mut s = [Lobe::default(); 4];
         for l in &mut s {
             let v: Vec<f32> = (0..7).map(|_| self.f32()).collect::<Option<_>>()?;
             *l = Lobe {
