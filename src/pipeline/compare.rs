@@ -663,10 +663,7 @@ fn largest_surface(plan: &Plan) -> Result<Option<(u32, Vec<bool>)>> {
 }
 
 /// Every pixel rendered with `opts`, and the wall time it took.
-/// A full render at the `target` wall time: `guess` spp (scaled from the full
-/// render's time), and once more at the spp its own time implies when it missed the
-/// target by more than 10% (the machine's load can change between the two renders,
-/// and an equal-time comparison must not hand a baseline half the time).
+/// What [`equal_time_render`] kept.
 struct EqualTimeRender {
     out: RenderOutput,
     /// The kept render's wall time.
@@ -676,6 +673,10 @@ struct EqualTimeRender {
     discarded_s: f64,
 }
 
+/// A full render at the `target` wall time: `guess` spp (scaled from the full
+/// render's time), and once more at the spp its own time implies when it missed the
+/// target by more than 10% (the machine's load can change between the two renders,
+/// and an equal-time comparison must not hand a baseline half the time).
 fn equal_time_render(
     plan: &Plan,
     base: &RenderOptions,
