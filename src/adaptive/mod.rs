@@ -138,8 +138,10 @@ impl SampleValue {
     /// keep the cross term 2Δ·f under its root: √(2|Δ|X/N) ≫ |Δ|.)
     pub fn contrast_denoised(&self, other: &SampleValue) -> f32 {
         let var = |v: &SampleValue| v.radiance_variance.unwrap_or(0.0).max(0.0);
-        let sigma = (var(self) + var(other)).sqrt();
-        ((self.radiance - other.radiance).length() - sigma).max(0.0)
+        soft_threshold(
+            (self.radiance - other.radiance).length(),
+            var(self) + var(other),
+        )
     }
 
     /// [`Self::gradient_norm`] less the estimator's noise: max(|Ĵ| − σ, 0) with σ² the
@@ -147,9 +149,16 @@ impl SampleValue {
     /// the same reason: √max(|Ĵ|² − σ², 0), though unbiased for |J|², keeps a
     /// firefly's cross term 2J·f under its root and lets one outlier path draw samples.
     pub fn gradient_norm_denoised(&self) -> f32 {
-        let sigma = self.gradient_variance.unwrap_or(0.0).max(0.0).sqrt();
-        (self.gradient_norm() - sigma).max(0.0)
+        soft_threshold(
+            self.gradient_norm(),
+            self.gradient_variance.unwrap_or(0.0).max(0.0),
+        )
     }
+}
+
+/// `x` less one standard deviation of its noise, never below zero.
+fn soft_threshold(x: f32, variance: f32) -> f32 {
+    (x - variance.sqrt()).max(0.0)
 }
 
 /// Something that can evaluate the image at a continuous pixel position.

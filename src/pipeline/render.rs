@@ -402,7 +402,7 @@ fn run_adaptive(
         ..ExrHeader::default()
     };
     let mut image = image_of_reconstruction(rec);
-    let mut shown = rec.image.clone();
+    let mut denoised = None;
     let mut denoise_s = None;
     if job.options.aovs || job.denoise {
         let t0 = Instant::now();
@@ -411,12 +411,14 @@ fn run_adaptive(
             add_aovs(&mut image, &gbuffer);
         }
         if job.denoise {
-            shown = denoise_with(&rec.image, &gbuffer)?;
-            swap_in_denoised(&mut image, &shown);
+            let clean = denoise_with(&rec.image, &gbuffer)?;
+            swap_in_denoised(&mut image, &clean);
+            denoised = Some(clean);
             denoise_s = Some(t0.elapsed().as_secs_f64());
         }
     }
-    write_output_set_with_header(&image, &header, &shown, exr, png)?;
+    let shown = denoised.as_deref().unwrap_or(&rec.image);
+    write_output_set_with_header(&image, &header, shown, exr, png)?;
     Ok(RenderSummary {
         width: rec.width,
         height: rec.height,
@@ -465,7 +467,8 @@ fn add_aovs(image: &mut OutputImage, gbuffer: &RenderOutput) {
     image.channels.extend(aovs);
 }
 
-/// `beauty` denoised by OIDN, guided by the G-buffer's albedo and normal.
+/// `beauty` denoised by OIDN, guided by the albedo and normal AOVs of `gbuffer`
+/// (the render itself, or a one-ray-per-pixel pass for a reconstruction).
 pub(crate) fn denoise_with(beauty: &[Vec3], gbuffer: &RenderOutput) -> Result<Vec<Vec3>> {
     denoise::denoise(
         beauty,
@@ -538,8 +541,7 @@ fn full_image(
         return Ok((image, None, None));
     }
     let t0 = Instant::now();
-    let (albedo, normal) = (out.albedo.as_deref(), out.normal.as_deref());
-    let clean: Vec<Vec3> = denoise::denoise(&out.beauty, albedo, normal, out.width, out.height)?;
+    let clean = denoise_with(&out.beauty, out)?;
     let seconds = t0.elapsed().as_secs_f64();
     swap_in_denoised(&mut image, &clean);
     Ok((image, Some(clean), Some(seconds)))

@@ -117,16 +117,9 @@ impl<'a> PointEstimator<'a> {
         let n = self.spp as f32;
         let ng = self.gradient_spp as f32;
         let (grad_u, grad_v) = (gu / ng, gv / ng);
-        // Variance of the mean gradient from the per-sample spread (summed over
-        // components): (E|g|² − |E g|²) / (n − 1) with the unbiased n/(n − 1) factor.
-        let gradient_variance = (self.gradient_spp > 1).then(|| {
-            let mean_sq = grad_u.length_squared() + grad_v.length_squared();
-            ((sq / ng - mean_sq) / (ng - 1.0)).max(0.0)
-        });
-        let radiance_variance = (self.spp > 1).then(|| {
-            let mean = radiance / n;
-            ((radiance_sq / n - mean.length_squared()) / (n - 1.0)).max(0.0)
-        });
+        let gradient_variance =
+            variance_of_mean(sq, grad_u.length_squared() + grad_v.length_squared(), ng);
+        let radiance_variance = variance_of_mean(radiance_sq, (radiance / n).length_squared(), n);
         let surface = self.surface_at(p);
         let back_facing = surface.is_some_and(|c| {
             first
@@ -199,6 +192,13 @@ fn flat_shaded(scene: &Scene, si: &Interaction) -> bool {
         PrimRef::Triangle { mesh, .. } => scene.meshes[mesh as usize].normals.is_empty(),
         PrimRef::Sphere(_) => false,
     }
+}
+
+/// Variance of a mean of `n` samples (summed over components), from the sum of
+/// their squared lengths and the squared length of the mean: (E|x|² − |E x|²) /
+/// (n − 1), which carries the unbiased n/(n − 1) factor; `None` for one sample.
+fn variance_of_mean(sum_sq: f32, mean_sq: f32, n: f32) -> Option<f32> {
+    (n > 1.0).then(|| ((sum_sq / n - mean_sq) / (n - 1.0)).max(0.0))
 }
 
 #[cfg(test)]
