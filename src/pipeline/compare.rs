@@ -783,12 +783,12 @@ fn keep_exrs(plan: &Plan, runs: &[Run]) -> Result<()> {
 }
 
 /// The reference's cache key: SHA-256 over the scene's content hash, every render
-/// setting of the reference and the renderer's version — any change re-renders.
+/// setting of the reference and the renderer's pixel epoch — any change re-renders.
 fn reference_key(scene_hash: &str, opts: &RenderOptions) -> String {
     use sha2::{Digest, Sha256};
     let text = format!(
-        "gradtrace reference v1\nscene {scene_hash}\noptions {opts:?}\nversion {}\n",
-        super::VERSION
+        "gradtrace reference v2\nscene {scene_hash}\noptions {opts:?}\npixels {}\n",
+        super::PIXEL_EPOCH
     );
     Sha256::digest(text.as_bytes())
         .iter()

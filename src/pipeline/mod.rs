@@ -76,3 +76,22 @@ pub const VERSION: &str = concat!(
     env!("GRADTRACE_GIT_COMMIT"),
     ")"
 );
+
+/// What cached references are keyed on: the crate version and the hash of the
+/// pinned-pixel table (`build.rs`). The table must be rewritten whenever the path
+/// tracer's pixels change, so a commit that leaves them alone (docs, tests, a
+/// faster traversal) reuses its references and one that moves them re-renders.
+pub const PIXEL_EPOCH: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " ",
+    env!("GRADTRACE_PIXEL_EPOCH")
+);
+
+/// What cached precomputations (shadow fields, glossy transfer) are keyed on: the
+/// crate version and a hash of every source file. They are not pinned, so any
+/// change of the code recomputes them rather than risk a stale cache.
+pub const SOURCE_EPOCH: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " ",
+    env!("GRADTRACE_SOURCE_HASH")
+);

@@ -102,12 +102,12 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// The cache key: the scene's content, every precompute setting, the crate version.
+/// The cache key: the scene's content, every precompute setting, the source.
 fn cache_key(scene: &Scene, settings: &Settings) -> crate::Result<String> {
     let mut h = Sha256::new();
     h.update(scene.content_hash()?.as_bytes());
     h.update(format!("{settings:?}").as_bytes());
-    h.update(env!("CARGO_PKG_VERSION").as_bytes());
+    h.update(crate::pipeline::SOURCE_EPOCH.as_bytes());
     Ok(hex(&h.finalize()))
 }
 

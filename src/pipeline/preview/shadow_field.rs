@@ -3,7 +3,7 @@
 //! Writes `DIR/<scene>.exr` (`R,G,B` = preview, `reference.R/G/B`, `error.Y`),
 //! `DIR/<scene>.png` and `DIR/preview.json`; with `--frames N` one EXR/PNG per frame
 //! (`<scene>-fNNN`). Fields are cached under `DIR/cache/`, keyed by the scene's
-//! content hash, every precompute setting and the crate version.
+//! content hash, every precompute setting and a hash of the source (`pipeline::SOURCE_EPOCH`).
 
 use crate::accel::Accel;
 use crate::math::sh::ShF;
@@ -315,7 +315,7 @@ fn cached_fields(scene: &Scene, opts: &ShadowFieldOptions) -> Result<(Fields, f6
     for part in [
         scene.content_hash()?,
         settings.key(),
-        env!("CARGO_PKG_VERSION").to_string(),
+        crate::pipeline::SOURCE_EPOCH.to_string(),
     ] {
         h.update((part.len() as u64).to_le_bytes());
         h.update(part.as_bytes());
