@@ -14,9 +14,37 @@ use gradtrace::pipeline::diff::DiffOptions;
 use gradtrace::pipeline::{self, progress::ProgressMode};
 use std::process::ExitCode;
 
+/// The x86 features this binary was compiled to assume (`.cargo/config.toml`)
+/// that the CPU lacks: run on one, it would die of an illegal instruction.
+fn missing_cpu_features() -> Vec<&'static str> {
+    #[allow(unused_mut)]
+    let mut missing = Vec::new();
+    #[cfg(target_arch = "x86_64")]
+    {
+        macro_rules! need {
+            ($($f:tt),*) => {$(
+                if cfg!(target_feature = $f) && !std::arch::is_x86_feature_detected!($f) {
+                    missing.push($f);
+                }
+            )*};
+        }
+        need!("sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "avx", "avx2", "fma");
+    }
+    missing
+}
+
 fn main() -> ExitCode {
     // A bug must still end as one `error:` line and status 1, not a backtrace.
     gradtrace::error::one_line_panics();
+    let missing = missing_cpu_features();
+    if !missing.is_empty() {
+        eprintln!(
+            "error: this gradtrace was built for CPUs with {} and this one lacks them; \
+             rebuild with RUSTFLAGS=\"-C target-cpu=native\"",
+            missing.join(", ")
+        );
+        return ExitCode::FAILURE;
+    }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
