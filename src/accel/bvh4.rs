@@ -179,6 +179,28 @@ impl Bvh4 {
         out
     }
 
+    /// Rewrites every leaf reference `(first, count)` to `f(first, count)`
+    /// (both kept in the encoding's ranges: `first` ≤ [`MAX_PRIMITIVES`],
+    /// `count` in 1..=[`MAX_LEAF`]), so that the leaf callback of
+    /// [`Bvh4::traverse`] can address another layout of the primitives.
+    pub(super) fn remap_leaves(&mut self, mut f: impl FnMut(usize, usize) -> (usize, usize)) {
+        let mut remap = |c: &mut u32| {
+            if *c == EMPTY || *c & LEAF_BIT == 0 {
+                return;
+            }
+            let (first, count) = f(
+                (*c & FIRST_MASK) as usize,
+                ((*c >> COUNT_SHIFT) & (MAX_LEAF - 1)) as usize + 1,
+            );
+            debug_assert!(first <= MAX_PRIMITIVES && (1..=MAX_LEAF as usize).contains(&count));
+            *c = LEAF_BIT | (count as u32 - 1) << COUNT_SHIFT | first as u32;
+        };
+        remap(&mut self.root);
+        for node in &mut self.nodes {
+            node.children.iter_mut().for_each(&mut remap);
+        }
+    }
+
     /// The traversal stack's worst case: each inner node on the path leaves at
     /// most three siblings behind.
     pub(super) fn stack_size(&self) -> usize {

@@ -39,7 +39,7 @@ use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
 use bvh4::{BoxRay, Bvh4, Entry};
 use obvhs::aabb::Aabb;
-use primitive::{intersect_sphere, with_axes, WatertightRay};
+use primitive::{intersect_sphere, with_axes, Tri4, WatertightRay, WatertightRay4};
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
@@ -68,6 +68,13 @@ enum Prim {
 }
 
 impl Prim {
+    fn prim_ref(&self) -> PrimRef {
+        match *self {
+            Prim::Triangle { mesh, tri, .. } => PrimRef::Triangle { mesh, tri },
+            Prim::Sphere { id, .. } => PrimRef::Sphere(id),
+        }
+    }
+
     /// The exact intersection with `t` in `[t_min, t_max]`; `KX, KY, KZ` are
     /// `wr`'s axis permutation.
     #[inline(always)]
@@ -96,6 +103,86 @@ impl Prim {
             }
         }
     }
+}
+
+/// Up to four consecutive primitives of one leaf: their triangles in SoA
+/// layout for the 4-wide watertight test, and each lane's slot in `prims`
+/// ([`EMPTY_LANE`] for none, [`SPHERE_LANE`] set for a sphere, which the
+/// scalar test handles). A leaf of up to 8 primitives is one or two blocks;
+/// its BVH4 reference holds the first block and a [`LeafCode`].
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct LeafBlock {
+    tris: Tri4,
+    slots: [u32; 4],
+}
+
+const EMPTY_LANE: u32 = u32::MAX;
+const SPHERE_LANE: u32 = 1 << 30;
+
+/// A leaf's `count` field once it refers to blocks: 1 + (blocks − 1) + 2 ×
+/// (some lane is a sphere), in the 1..=8 the BVH4 encoding holds.
+struct LeafCode;
+
+impl LeafCode {
+    fn encode(blocks: usize, spheres: bool) -> usize {
+        blocks + 2 * spheres as usize
+    }
+
+    #[inline(always)]
+    fn decode(code: usize) -> (usize, bool) {
+        (1 + ((code - 1) & 1), (code - 1) & 2 != 0)
+    }
+}
+
+impl LeafBlock {
+    /// The lanes holding a sphere (only looked at in leaves that have one).
+    #[inline(always)]
+    fn sphere_lanes(&self) -> u32 {
+        let mut mask = 0;
+        for (lane, &slot) in self.slots.iter().enumerate() {
+            if slot != EMPTY_LANE && slot & SPHERE_LANE != 0 {
+                mask |= 1 << lane;
+            }
+        }
+        mask
+    }
+
+    fn primitive_count(&self) -> u32 {
+        self.slots.iter().filter(|&&s| s != EMPTY_LANE).count() as u32
+    }
+}
+
+/// Packs each leaf's primitives (`prims[first..first + count]`) into blocks
+/// and points the leaf at them.
+fn pack_leaves(bvh: &mut Bvh4, prims: &[Prim]) -> Vec<LeafBlock> {
+    let mut blocks = Vec::new();
+    bvh.remap_leaves(|first, count| {
+        let start = blocks.len();
+        let mut spheres = false;
+        for chunk in (first..first + count).collect::<Vec<_>>().chunks(4) {
+            let mut lanes = [None; 4];
+            let mut slots = [EMPTY_LANE; 4];
+            for (lane, &slot) in chunk.iter().enumerate() {
+                match prims[slot] {
+                    Prim::Triangle { v, .. } => {
+                        lanes[lane] = Some(v);
+                        slots[lane] = slot as u32;
+                    }
+                    Prim::Sphere { .. } => {
+                        spheres = true;
+                        slots[lane] = slot as u32 | SPHERE_LANE;
+                    }
+                }
+            }
+            blocks.push(LeafBlock {
+                tris: Tri4::new(lanes),
+                slots,
+            });
+        }
+        (start, LeafCode::encode(blocks.len() - start, spheres))
+    });
+    blocks
 }
 
 /// The node test's view of a ray, and the shift `back_off` between its
@@ -137,6 +224,10 @@ fn node_ray(ray: &Ray) -> (BoxRay, f32) {
 /// The acceleration structure over all shapes of a scene.
 pub struct Accel {
     bvh: Bvh4,
+    /// The leaves' primitives as the traversal tests them (see [`LeafBlock`]).
+    blocks: Vec<LeafBlock>,
+    /// SAH cost of the tree, taken before its leaves were packed into blocks.
+    sah: f32,
     /// Primitives in BVH leaf order (`prims[i]` is leaf slot `i`).
     prims: Vec<Prim>,
     /// For a primitive in input order (triangles of mesh 0, mesh 1, …, then spheres),
@@ -239,7 +330,7 @@ impl Accel {
         }
         let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
         let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
-        let bvh = build::build_bvh4(&aabbs, preset);
+        let mut bvh = build::build_bvh4(&aabbs, preset);
 
         // Reorder primitives to leaf order and build the input → slot table.
         let mut slot_of_input = vec![u32::MAX; input_count as usize];
@@ -252,9 +343,13 @@ impl Accel {
                 inputs[pi as usize].0
             })
             .collect();
+        let sah = bvh.sah_cost();
+        let blocks = pack_leaves(&mut bvh, &prims);
 
         Self {
             bvh,
+            blocks,
+            sah,
             prims,
             slot_of_input,
             mesh_first,
@@ -328,7 +423,7 @@ impl Accel {
     /// SAH cost of the tree relative to its root box (see `Bvh4::sah_cost`).
     #[doc(hidden)]
     pub fn sah_cost(&self) -> f32 {
-        self.bvh.sah_cost()
+        self.sah
     }
 
     /// Number of BVH4 inner nodes.
@@ -457,7 +552,9 @@ impl Accel {
         work: &mut (u32, u32),
     ) -> Option<Hit> {
         let (node_ray, back_off) = node_ray(ray);
-        let mut best: Option<Hit> = None;
+        let wr4 = WatertightRay4::new(wr);
+        // (slot, t, b1, b2) of the nearest hit so far.
+        let mut best: Option<(u32, f32, Vec2)> = None;
         let mut t_max = ray.t_max;
         let mut prims_tested = 0;
         self.bvh.traverse::<true>(
@@ -465,19 +562,47 @@ impl Accel {
             t_max + back_off,
             stack,
             &mut work.0,
-            |first, count| {
-                prims_tested += count as u32;
-                for prim in &self.prims[first..first + count] {
-                    if let Some(h) = prim.intersect::<KX, KY, KZ>(ray, wr, t_max) {
-                        t_max = h.t;
-                        best = Some(h);
+            |first, code| {
+                let (count, spheres) = LeafCode::decode(code);
+                for block in &self.blocks[first..first + count] {
+                    prims_tested += block.primitive_count();
+                    let h = wr4.intersect::<KX, KY, KZ, false>(&block.tris, ray.t_min, t_max);
+                    let mut lanes = h.hits | h.fallback;
+                    if spheres {
+                        lanes |= block.sphere_lanes();
+                    }
+                    if lanes == 0 {
+                        continue;
+                    }
+                    let (ts, b1, b2) = (h.t.to_array(), h.b1.to_array(), h.b2.to_array());
+                    // Lanes in slot order, a hit at the same distance replacing
+                    // the earlier one: what testing the primitives one by one did.
+                    while lanes != 0 {
+                        let lane = lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        let slot = block.slots[lane] & !SPHERE_LANE;
+                        if h.hits & (1 << lane) != 0 {
+                            if ts[lane] <= t_max {
+                                t_max = ts[lane];
+                                best = Some((slot, ts[lane], Vec2::new(b1[lane], b2[lane])));
+                            }
+                        } else if let Some(hit) =
+                            self.prims[slot as usize].intersect::<KX, KY, KZ>(ray, wr, t_max)
+                        {
+                            t_max = hit.t;
+                            best = Some((slot, hit.t, hit.bary));
+                        }
                     }
                 }
                 Some(t_max + back_off)
             },
         );
         work.1 += prims_tested;
-        best
+        best.map(|(slot, t, bary)| Hit {
+            t,
+            prim: self.prims[slot as usize].prim_ref(),
+            bary,
+        })
     }
 
     #[inline(always)]
@@ -489,17 +614,34 @@ impl Accel {
         nodes: &mut u32,
     ) -> bool {
         let (node_ray, back_off) = node_ray(ray);
+        let wr4 = WatertightRay4::new(wr);
         let mut hit = false;
         self.bvh.traverse::<false>(
             &node_ray,
             ray.t_max + back_off,
             stack,
             nodes,
-            |first, count| {
-                hit = self.prims[first..first + count]
-                    .iter()
-                    .any(|p| p.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some());
-                (!hit).then_some(f32::INFINITY)
+            |first, code| {
+                let (count, spheres) = LeafCode::decode(code);
+                for block in &self.blocks[first..first + count] {
+                    let h = wr4.intersect::<KX, KY, KZ, true>(&block.tris, ray.t_min, ray.t_max);
+                    let mut lanes = h.fallback;
+                    if spheres {
+                        lanes |= block.sphere_lanes();
+                    }
+                    hit = h.hits != 0;
+                    while !hit && lanes != 0 {
+                        let slot = block.slots[lanes.trailing_zeros() as usize] & !SPHERE_LANE;
+                        lanes &= lanes - 1;
+                        hit = self.prims[slot as usize]
+                            .intersect::<KX, KY, KZ>(ray, wr, ray.t_max)
+                            .is_some();
+                    }
+                    if hit {
+                        return None;
+                    }
+                }
+                Some(f32::INFINITY)
             },
         );
         hit

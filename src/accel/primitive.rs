@@ -11,6 +11,7 @@
 //!   divided by their sum), so they are exact and sum to one.
 
 use glam::Vec3;
+use wide::f32x4;
 
 /// Per-ray precomputation of the watertight test (Woop, Benthin & Wald 2013, §3,
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
@@ -174,6 +175,118 @@ impl WatertightRay {
             return None;
         }
         Some((t, v * rcp_det, w * rcp_det))
+    }
+}
+
+/// Up to four triangles in SoA layout (`v[k][axis]`: vertex k's coordinate
+/// along `axis`, one lane per triangle), tested at once by
+/// [`WatertightRay4::intersect`]. Lanes without a triangle hold NaN vertices,
+/// for which every edge and range comparison is false: never a hit, never a
+/// fallback.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct Tri4 {
+    pub(crate) v: [[f32x4; 3]; 3],
+}
+
+impl Tri4 {
+    pub(crate) fn new(lanes: [Option<[Vec3; 3]>; 4]) -> Self {
+        let mut v = [[[f32::NAN; 4]; 3]; 3];
+        for (lane, tri) in lanes.iter().enumerate() {
+            let Some(tri) = tri else { continue };
+            for k in 0..3 {
+                for axis in 0..3 {
+                    v[k][axis][lane] = tri[k][axis];
+                }
+            }
+        }
+        Self {
+            v: v.map(|vk| vk.map(f32x4::new)),
+        }
+    }
+}
+
+/// [`WatertightRay`] splatted for [`Tri4`]: each lane runs exactly the scalar
+/// test's operations in the same order (Rust never contracts them into FMAs),
+/// so a lane's `t` and barycentrics are bit-identical to
+/// [`WatertightRay::intersect`]'s, which keeps the brute-force agreement.
+pub(crate) struct WatertightRay4 {
+    org: [f32x4; 3],
+    sx: f32x4,
+    sy: f32x4,
+    sz: f32x4,
+}
+
+/// The four lanes' results: `hits` the lanes with a hit in range; `fallback`
+/// those with an edge function exactly zero, which the scalar test must decide
+/// (its double-precision path); `t`, `b1`, `b2` valid in `hits` lanes.
+pub(crate) struct Hits4 {
+    pub(crate) hits: u32,
+    pub(crate) fallback: u32,
+    pub(crate) t: f32x4,
+    pub(crate) b1: f32x4,
+    pub(crate) b2: f32x4,
+}
+
+impl WatertightRay4 {
+    pub(crate) fn new(wr: &WatertightRay) -> Self {
+        Self {
+            org: wr.org.to_array().map(f32x4::splat),
+            sx: f32x4::splat(wr.sx),
+            sy: f32x4::splat(wr.sy),
+            sz: f32x4::splat(wr.sz),
+        }
+    }
+
+    /// [`WatertightRay::intersect`] on four triangles; `KX, KY, KZ` the ray's
+    /// permutation. Barycentrics are only computed when some lane hits (`ANY`
+    /// false) — an any-hit query needs only the masks.
+    #[inline(always)]
+    pub(crate) fn intersect<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+        &self,
+        tri: &Tri4,
+        t_min: f32,
+        t_max: f32,
+    ) -> Hits4 {
+        let rel = |k: usize, axis: usize| tri.v[k][axis] - self.org[axis];
+        let (a, b, c) = (
+            [rel(0, KX), rel(0, KY), rel(0, KZ)],
+            [rel(1, KX), rel(1, KY), rel(1, KZ)],
+            [rel(2, KX), rel(2, KY), rel(2, KZ)],
+        );
+        // Shear and scale (paper §3, Listing 1).
+        let (ax, ay) = (a[0] - self.sx * a[2], a[1] - self.sy * a[2]);
+        let (bx, by) = (b[0] - self.sx * b[2], b[1] - self.sy * b[2]);
+        let (cx, cy) = (c[0] - self.sx * c[2], c[1] - self.sy * c[2]);
+        // Edge functions (paper eq. 3).
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = f32x4::splat(0.0);
+        let on_edge = u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero);
+        let negative = u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero);
+        let positive = u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero);
+        let det = u + v + w;
+        // Scaled hit distance (paper eq. 5).
+        let (az, bz, cz) = (self.sz * a[2], self.sz * b[2], self.sz * c[2]);
+        let t_scaled = u * az + v * bz + w * cz;
+        let rcp_det = f32x4::splat(1.0) / det;
+        let t = t_scaled * rcp_det;
+        let in_range = t.simd_ge(f32x4::splat(t_min)) & t.simd_le(f32x4::splat(t_max));
+        let inside = !(negative & positive) & det.simd_ne(zero);
+        let hits = (inside & in_range).to_bitmask() & !on_edge.to_bitmask();
+        let (b1, b2) = if ANY || hits == 0 {
+            (zero, zero)
+        } else {
+            (v * rcp_det, w * rcp_det)
+        };
+        Hits4 {
+            hits,
+            fallback: on_edge.to_bitmask(),
+            t,
+            b1,
+            b2,
+        }
     }
 }
 
