@@ -42,7 +42,7 @@ pub struct BuildPreset {
     pub sort_precision: SortPrecision,
     /// Share of the nodes reinserted per pass (obvhs' `reinsertion_batch_ratio`).
     pub reinsertion_ratio: f32,
-    /// Most primitives per BVH4 leaf (1..=8).
+    /// Most primitives per BVH4 leaf (1..=8); 4 fills one triangle4 block.
     pub max_prims_per_leaf: u32,
 }
 
@@ -54,7 +54,7 @@ impl Default for BuildPreset {
             search_depth_threshold: 3,
             sort_precision: SortPrecision::U64,
             reinsertion_ratio: 0.05,
-            max_prims_per_leaf: 3,
+            max_prims_per_leaf: 4,
         }
     }
 }
