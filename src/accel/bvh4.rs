@@ -256,6 +256,7 @@ impl Bvh4 {
                         t: t_near[far],
                     };
                     sp += 1;
+                    self.prefetch(node.children[far]);
                     cur = node.children[near];
                     continue;
                 }
@@ -289,6 +290,7 @@ impl Bvh4 {
                         t: ts[i],
                     };
                     sp += 1;
+                    self.prefetch(ids[i]);
                 }
                 cur = ids[k - 1];
             }
@@ -313,6 +315,23 @@ impl Bvh4 {
                     cur = e.node;
                     break;
                 }
+            }
+        }
+    }
+
+    /// Starts loading inner node `child` into the cache (a hint; no-op for
+    /// leaves and on other architectures).
+    #[inline(always)]
+    fn prefetch(&self, child: u32) {
+        #[cfg(target_arch = "x86_64")]
+        if child & LEAF_BIT == 0 {
+            // SAFETY: prefetching is a hint and never faults; the pointer is in
+            // bounds of `nodes` (inner references index it).
+            unsafe {
+                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                let p = self.nodes.as_ptr().add(child as usize) as *const i8;
+                _mm_prefetch::<_MM_HINT_T0>(p);
+                _mm_prefetch::<_MM_HINT_T0>(p.add(64));
             }
         }
     }
