@@ -18,7 +18,7 @@
 //!    box per distinct value, and each duplicate group becomes a balanced subtree
 //!    under its representative's leaf.
 
-use super::bvh4::Bvh4;
+use super::bvh4::{Bvh, WideNode};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -42,8 +42,10 @@ pub struct BuildPreset {
     pub sort_precision: SortPrecision,
     /// Share of the nodes reinserted per pass (obvhs' `reinsertion_batch_ratio`).
     pub reinsertion_ratio: f32,
-    /// Most primitives per BVH4 leaf (1..=8); 4 fills one triangle4 block.
+    /// Most primitives per leaf (1..=8); 4 fills one triangle4 block.
     pub max_prims_per_leaf: u32,
+    /// Children per node: 8 (taken only where the CPU has AVX2) or 4.
+    pub node_width: usize,
 }
 
 impl Default for BuildPreset {
@@ -55,15 +57,16 @@ impl Default for BuildPreset {
             sort_precision: SortPrecision::U64,
             reinsertion_ratio: 0.05,
             max_prims_per_leaf: 4,
+            node_width: if super::bvh8::supported() { 8 } else { 4 },
         }
     }
 }
 
 /// Builds the BVH4 over `boxes` (unpadded, finite, within
 /// [`MAX_BUILD_MAGNITUDE`]); `leaf_order` refers to `boxes`.
-pub(super) fn build_bvh4(boxes: &[Aabb], preset: &BuildPreset) -> Bvh4 {
+pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> Bvh<N> {
     if boxes.is_empty() {
-        return Bvh4::from_bvh2(&Bvh2::default(), 1.0, 1);
+        return Bvh::from_bvh2(&Bvh2::default(), 1.0, 1);
     }
     let mut total = Aabb::empty();
     for b in boxes {
@@ -98,7 +101,7 @@ pub(super) fn build_bvh4(boxes: &[Aabb], preset: &BuildPreset) -> Bvh4 {
     if groups.unique.len() < scaled.len() {
         groups.expand(&mut bvh2);
     }
-    Bvh4::from_bvh2(&bvh2, frame.inv_scale, preset.max_prims_per_leaf)
+    Bvh::from_bvh2(&bvh2, frame.inv_scale, preset.max_prims_per_leaf)
 }
 
 /// The power-of-two scale `2^-e` of the build frame, with `e` such that the
@@ -234,7 +237,7 @@ mod tests {
         boxes.push(Aabb::new(Vec3A::splat(3.0), Vec3A::splat(4.0)));
         let groups = DuplicateGroups::new(&boxes);
         assert_eq!(groups.unique.len(), 2);
-        let bvh = build_bvh4(&boxes, &BuildPreset::default());
+        let bvh: super::super::bvh4::Bvh4 = build_tree(&boxes, &BuildPreset::default());
         let mut seen = bvh.leaf_order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..boxes.len() as u32).collect::<Vec<_>>());

@@ -17,9 +17,9 @@ use wide::f32x4;
 /// Child reference: an inner node's index, or `LEAF_BIT | (count − 1) << 28 |
 /// first` for a leaf of `count` ≤ [`MAX_LEAF`] consecutive primitives, or
 /// [`EMPTY`].
-const LEAF_BIT: u32 = 1 << 31;
-const COUNT_SHIFT: u32 = 28;
-const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+pub(super) const LEAF_BIT: u32 = 1 << 31;
+pub(super) const COUNT_SHIFT: u32 = 28;
+pub(super) const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
 pub(super) const EMPTY: u32 = u32::MAX;
 /// Most primitives a leaf can reference (3 bits of count).
 pub(super) const MAX_LEAF: u32 = 8;
@@ -27,7 +27,7 @@ pub(super) const MAX_LEAF: u32 = 8;
 pub(super) const MAX_PRIMITIVES: usize = FIRST_MASK as usize;
 
 /// Ize 2013's `1 + 2γ₃` widening of exit distances, rounded up generously.
-const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+pub(super) const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// Four child boxes: `bounds[2·axis]` the minima, `bounds[2·axis + 1]` the
 /// maxima along `axis`. Empty slots hold the inverted box (+∞, −∞), which the
@@ -39,7 +39,19 @@ pub(super) struct Node4 {
     children: [u32; 4],
 }
 
-impl Node4 {
+/// A node of [`Bvh`]: `WIDTH` child slots with their boxes.
+pub(super) trait WideNode: Copy {
+    const WIDTH: usize;
+    fn empty() -> Self;
+    fn set_child(&mut self, slot: usize, lo: [f32; 3], hi: [f32; 3]);
+    fn child_box(&self, slot: usize) -> ([f32; 3], [f32; 3]);
+    fn children(&self) -> &[u32];
+    fn children_mut(&mut self) -> &mut [u32];
+}
+
+impl WideNode for Node4 {
+    const WIDTH: usize = 4;
+
     fn empty() -> Self {
         let (inf, ninf) = (f32x4::splat(f32::INFINITY), f32x4::splat(f32::NEG_INFINITY));
         Self {
@@ -64,6 +76,16 @@ impl Node4 {
         ([c(0), c(2), c(4)], [c(1), c(3), c(5)])
     }
 
+    fn children(&self) -> &[u32] {
+        &self.children
+    }
+
+    fn children_mut(&mut self) -> &mut [u32] {
+        &mut self.children
+    }
+}
+
+impl Node4 {
     /// Entry distances of the four children and the mask of those whose box
     /// overlaps `[t_lo, hi_w]` along the ray (`hi_w` already widened).
     #[inline(always)]
@@ -89,7 +111,7 @@ impl Node4 {
 pub(super) struct BoxRay {
     org: [f32x4; 3],
     inv: [f32x4; 3],
-    near: [usize; 3],
+    pub(super) near: [usize; 3],
     t_lo: f32x4,
 }
 
@@ -105,19 +127,38 @@ impl BoxRay {
             t_lo: f32x4::splat(t_lo),
         }
     }
+
+    pub(super) fn org_scalar(&self) -> [f32; 3] {
+        self.org.map(|o| o.as_array()[0])
+    }
+
+    pub(super) fn inv_scalar(&self) -> [f32; 3] {
+        self.inv.map(|i| i.as_array()[0])
+    }
+
+    pub(super) fn t_lo_scalar(&self) -> f32 {
+        self.t_lo.as_array()[0]
+    }
 }
 
 /// A pending subtree on the traversal stack, with its entry distance.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Entry {
-    node: u32,
-    t: f32,
+    pub(super) node: u32,
+    pub(super) t: f32,
 }
 
-/// The 4-wide tree; leaf offsets index the primitives in `leaf_order`.
-#[derive(Debug, Default)]
-pub(super) struct Bvh4 {
-    pub(super) nodes: Vec<Node4>,
+impl Entry {
+    #[inline(always)]
+    pub(super) fn new(node: u32, t: f32) -> Self {
+        Self { node, t }
+    }
+}
+
+/// The `N::WIDTH`-wide tree; leaf offsets index the primitives in `leaf_order`.
+#[derive(Debug)]
+pub(super) struct Bvh<N> {
+    pub(super) nodes: Vec<N>,
     pub(super) root: u32,
     /// For every leaf slot, the index of its primitive in the build's input.
     pub(super) leaf_order: Vec<u32>,
@@ -125,18 +166,23 @@ pub(super) struct Bvh4 {
     pub(super) depth: u32,
 }
 
-impl Bvh4 {
+/// The 4-wide tree.
+pub(super) type Bvh4 = Bvh<Node4>;
+
+impl<N: WideNode> Bvh<N> {
     /// Collapses `bvh2` (boxes in a frame scaled by `1/inv_scale`, a power of
-    /// two) into a BVH4 in world space: each node takes its BVH2 node's two
+    /// two) into a wide BVH in world space: each node takes its BVH2 node's two
     /// children and keeps opening the largest-area child holding more than one
-    /// primitive until four slots are filled; a child with at most `max_leaf`
+    /// primitive until its `WIDTH` slots are filled; a child with at most `max_leaf`
     /// primitives becomes a leaf. Iterative, so degenerate chains cannot
     /// overflow the call stack.
     pub(super) fn from_bvh2(bvh2: &Bvh2, inv_scale: f32, max_leaf: u32) -> Self {
         let max_leaf = max_leaf.clamp(1, MAX_LEAF);
         let mut out = Self {
+            nodes: Vec::new(),
             root: EMPTY,
-            ..Self::default()
+            leaf_order: Vec::new(),
+            depth: 0,
         };
         if bvh2.nodes.is_empty() {
             return out;
@@ -159,8 +205,9 @@ impl Bvh4 {
                 LEAF_BIT | (count.clamp(1, MAX_LEAF) - 1) << COUNT_SHIFT | first
             } else {
                 let index = out.nodes.len() as u32;
-                let mut node = Node4::empty();
-                for (k, c) in open_children(bvh2, n, &counts).into_iter().enumerate() {
+                let mut node = N::empty();
+                let kids = open_children(bvh2, n, &counts, N::WIDTH);
+                for (k, c) in kids.into_iter().enumerate() {
                     let Some(c) = c else { break };
                     let (lo, hi) = world(c);
                     node.set_child(k, lo, hi);
@@ -173,7 +220,7 @@ impl Bvh4 {
             if parent == EMPTY {
                 out.root = child;
             } else {
-                out.nodes[parent as usize].children[slot] = child;
+                out.nodes[parent as usize].children_mut()[slot] = child;
             }
         }
         out
@@ -197,16 +244,77 @@ impl Bvh4 {
         };
         remap(&mut self.root);
         for node in &mut self.nodes {
-            node.children.iter_mut().for_each(&mut remap);
+            node.children_mut().iter_mut().for_each(&mut remap);
         }
     }
 
     /// The traversal stack's worst case: each inner node on the path leaves at
-    /// most three siblings behind.
+    /// most `WIDTH − 1` siblings behind.
     pub(super) fn stack_size(&self) -> usize {
-        3 * (self.depth as usize + 1) + 1
+        (N::WIDTH - 1) * (self.depth as usize + 1) + 1
     }
 
+    /// Starts loading inner node `child` into the cache (a hint; no-op for
+    /// leaves and on other architectures).
+    #[inline(always)]
+    pub(super) fn prefetch(&self, child: u32) {
+        #[cfg(target_arch = "x86_64")]
+        if child & LEAF_BIT == 0 {
+            // SAFETY: prefetching is a hint and never faults; the pointer is in
+            // bounds of `nodes` (inner references index it).
+            unsafe {
+                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                let p = self.nodes.as_ptr().add(child as usize) as *const i8;
+                for line in (0..std::mem::size_of::<N>()).step_by(64) {
+                    _mm_prefetch::<_MM_HINT_T0>(p.add(line));
+                }
+            }
+        }
+    }
+
+    /// Surface-area-heuristic cost relative to the root's box: 1 + Σ over child
+    /// boxes of area(child)/area(root) × (1 per inner child, the primitive
+    /// count per leaf).
+    pub(super) fn sah_cost(&self) -> f32 {
+        if self.nodes.is_empty() {
+            return 0.0;
+        }
+        let half_area = |(lo, hi): ([f32; 3], [f32; 3])| {
+            let d = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]].map(|x| x.max(0.0) as f64);
+            d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+        };
+        let root = &self.nodes[0];
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for k in 0..N::WIDTH {
+            if root.children()[k] != EMPTY {
+                let (l, h) = root.child_box(k);
+                for a in 0..3 {
+                    lo[a] = lo[a].min(l[a]);
+                    hi[a] = hi[a].max(h[a]);
+                }
+            }
+        }
+        let root_area = half_area((lo, hi));
+        let mut cost = 1.0;
+        for node in &self.nodes {
+            for k in 0..N::WIDTH {
+                let c = node.children()[k];
+                if c == EMPTY {
+                    continue;
+                }
+                let weight = if c & LEAF_BIT == 0 {
+                    1.0
+                } else {
+                    (((c >> COUNT_SHIFT) & (MAX_LEAF - 1)) + 1) as f64
+                };
+                cost += weight * half_area(node.child_box(k)) / root_area;
+            }
+        }
+        cost as f32
+    }
+}
+
+impl Bvh4 {
     /// Visits the leaves whose boxes the ray overlaps, nearest box first
     /// (`SORTED`) or in any order; `leaf(first, count)` tests the primitives
     /// `first..first + count` and returns the new upper end of the ray interval
@@ -318,64 +426,6 @@ impl Bvh4 {
             }
         }
     }
-
-    /// Starts loading inner node `child` into the cache (a hint; no-op for
-    /// leaves and on other architectures).
-    #[inline(always)]
-    fn prefetch(&self, child: u32) {
-        #[cfg(target_arch = "x86_64")]
-        if child & LEAF_BIT == 0 {
-            // SAFETY: prefetching is a hint and never faults; the pointer is in
-            // bounds of `nodes` (inner references index it).
-            unsafe {
-                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                let p = self.nodes.as_ptr().add(child as usize) as *const i8;
-                _mm_prefetch::<_MM_HINT_T0>(p);
-                _mm_prefetch::<_MM_HINT_T0>(p.add(64));
-            }
-        }
-    }
-
-    /// Surface-area-heuristic cost relative to the root's box: 1 + Σ over child
-    /// boxes of area(child)/area(root) × (1 per inner child, the primitive
-    /// count per leaf).
-    pub(super) fn sah_cost(&self) -> f32 {
-        if self.nodes.is_empty() {
-            return 0.0;
-        }
-        let half_area = |(lo, hi): ([f32; 3], [f32; 3])| {
-            let d = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]].map(|x| x.max(0.0) as f64);
-            d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
-        };
-        let root = &self.nodes[0];
-        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for k in 0..4 {
-            if root.children[k] != EMPTY {
-                let (l, h) = root.child_box(k);
-                for a in 0..3 {
-                    lo[a] = lo[a].min(l[a]);
-                    hi[a] = hi[a].max(h[a]);
-                }
-            }
-        }
-        let root_area = half_area((lo, hi));
-        let mut cost = 1.0;
-        for node in &self.nodes {
-            for k in 0..4 {
-                let c = node.children[k];
-                if c == EMPTY {
-                    continue;
-                }
-                let weight = if c & LEAF_BIT == 0 {
-                    1.0
-                } else {
-                    (((c >> COUNT_SHIFT) & (MAX_LEAF - 1)) + 1) as f64
-                };
-                cost += weight * half_area(node.child_box(k)) / root_area;
-            }
-        }
-        cost as f32
-    }
 }
 
 /// Primitives under every BVH2 node (post-order without recursion).
@@ -413,14 +463,16 @@ fn collect_primitives(bvh2: &Bvh2, n: usize, out: &mut Vec<u32>) {
     }
 }
 
-/// Up to four BVH2 nodes covering inner node `n`'s primitives: its two
-/// children, then repeatedly the largest-area one with more than one
+/// Up to `width` (≤ 8) BVH2 nodes covering inner node `n`'s primitives: its
+/// two children, then repeatedly the largest-area one with more than one
 /// primitive replaced by its two children (the usual greedy collapse).
-fn open_children(bvh2: &Bvh2, n: usize, counts: &[u32]) -> [Option<usize>; 4] {
+fn open_children(bvh2: &Bvh2, n: usize, counts: &[u32], width: usize) -> [Option<usize>; 8] {
     let first = bvh2.nodes[n].first_index as usize;
-    let mut kids = [Some(first), Some(first + 1), None, None];
+    let mut kids = [None; 8];
+    kids[0] = Some(first);
+    kids[1] = Some(first + 1);
     let mut len = 2;
-    while len < 4 {
+    while len < width.min(8) {
         let best = (0..len)
             .filter(|&k| {
                 let c = kids[k].unwrap_or(0);

@@ -1,4 +1,4 @@
-//! Triangles + exact spheres → one BVH4 answering closest-hit and any-hit
+//! Triangles + exact spheres → one wide BVH answering closest-hit and any-hit
 //! (shadow) queries.
 //!
 //! One BVH holds every primitive of the scene: the build only sees per-primitive
@@ -7,7 +7,9 @@
 //! analytic spheres and triangles use the watertight test.
 //!
 //! obvhs builds the tree (PLOC + reinsertion, `build.rs`); we collapse it into
-//! our own uncompressed 4-wide BVH and traverse that (`bvh4.rs`). obvhs 0.4
+//! our own uncompressed wide BVH and traverse that: 8-wide with AVX2 where the
+//! CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
+//! leaves hold triangle4 blocks ([`LeafBlock`]). obvhs 0.4
 //! pitfalls and where they are handled:
 //! 1. `Triangle::compute_barycentric` is scaled wrongly, 2. its triangle test is
 //!    not watertight → neither is used; see `primitive::WatertightRay`.
@@ -28,6 +30,7 @@
 
 mod build;
 mod bvh4;
+mod bvh8;
 mod offset;
 mod primitive;
 
@@ -37,7 +40,8 @@ pub use offset::{offset_ray_origin, offset_ray_origin_with_error, SurfacePoint};
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
-use bvh4::{BoxRay, Bvh4, Entry};
+use bvh4::{BoxRay, Bvh, Bvh4, Entry, WideNode};
+use bvh8::Bvh8;
 use obvhs::aabb::Aabb;
 use primitive::{intersect_sphere, with_axes, Tri4, WatertightRay, WatertightRay4};
 use std::cell::RefCell;
@@ -155,7 +159,7 @@ impl LeafBlock {
 
 /// Packs each leaf's primitives (`prims[first..first + count]`) into blocks
 /// and points the leaf at them.
-fn pack_leaves(bvh: &mut Bvh4, prims: &[Prim]) -> Vec<LeafBlock> {
+fn pack_leaves<N: WideNode>(bvh: &mut Bvh<N>, prims: &[Prim]) -> Vec<LeafBlock> {
     let mut blocks = Vec::new();
     bvh.remap_leaves(|first, count| {
         let start = blocks.len();
@@ -183,6 +187,77 @@ fn pack_leaves(bvh: &mut Bvh4, prims: &[Prim]) -> Vec<LeafBlock> {
         (start, LeafCode::encode(blocks.len() - start, spheres))
     });
     blocks
+}
+
+/// The traversal tree: 8-wide where the CPU has AVX2 (`bvh8.rs`), else 4-wide.
+enum Tree {
+    Four(Bvh4),
+    Eight(Bvh8),
+}
+
+/// `tree.traverse::<SORTED>(args)` on either width.
+macro_rules! traverse {
+    ($tree:expr, $sorted:literal, $($arg:expr),* $(,)?) => {
+        match $tree {
+            Tree::Four(t) => t.traverse::<$sorted>($($arg),*),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: an 8-wide tree is only built when `bvh8::supported()`.
+            Tree::Eight(t) => unsafe { t.traverse::<$sorted>($($arg),*) },
+            #[cfg(not(target_arch = "x86_64"))]
+            Tree::Eight(_) => unreachable!("8-wide trees need x86_64"),
+        }
+    };
+}
+
+impl Tree {
+    fn root(&self) -> u32 {
+        match self {
+            Tree::Four(t) => t.root,
+            Tree::Eight(t) => t.root,
+        }
+    }
+
+    fn depth(&self) -> u32 {
+        match self {
+            Tree::Four(t) => t.depth,
+            Tree::Eight(t) => t.depth,
+        }
+    }
+
+    fn node_count(&self) -> usize {
+        match self {
+            Tree::Four(t) => t.nodes.len(),
+            Tree::Eight(t) => t.nodes.len(),
+        }
+    }
+
+    fn stack_size(&self) -> usize {
+        match self {
+            Tree::Four(t) => t.stack_size(),
+            Tree::Eight(t) => t.stack_size(),
+        }
+    }
+
+    fn leaf_order(&self) -> &[u32] {
+        match self {
+            Tree::Four(t) => &t.leaf_order,
+            Tree::Eight(t) => &t.leaf_order,
+        }
+    }
+
+    fn sah_cost(&self) -> f32 {
+        match self {
+            Tree::Four(t) => t.sah_cost(),
+            Tree::Eight(t) => t.sah_cost(),
+        }
+    }
+
+    fn pack_leaves(&mut self, prims: &[Prim]) -> Vec<LeafBlock> {
+        match self {
+            Tree::Four(t) => pack_leaves(t, prims),
+            Tree::Eight(t) => pack_leaves(t, prims),
+        }
+    }
 }
 
 /// The node test's view of a ray, and the shift `back_off` between its
@@ -223,7 +298,7 @@ fn node_ray(ray: &Ray) -> (BoxRay, f32) {
 
 /// The acceleration structure over all shapes of a scene.
 pub struct Accel {
-    bvh: Bvh4,
+    bvh: Tree,
     /// The leaves' primitives as the traversal tests them (see [`LeafBlock`]).
     blocks: Vec<LeafBlock>,
     /// SAH cost of the tree, taken before its leaves were packed into blocks.
@@ -330,12 +405,16 @@ impl Accel {
         }
         let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
         let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
-        let mut bvh = build::build_bvh4(&aabbs, preset);
+        let mut bvh = if preset.node_width == 8 && bvh8::supported() {
+            Tree::Eight(build::build_tree(&aabbs, preset))
+        } else {
+            Tree::Four(build::build_tree(&aabbs, preset))
+        };
 
         // Reorder primitives to leaf order and build the input → slot table.
         let mut slot_of_input = vec![u32::MAX; input_count as usize];
         let prims: Vec<Prim> = bvh
-            .leaf_order
+            .leaf_order()
             .iter()
             .enumerate()
             .map(|(slot, &pi)| {
@@ -344,7 +423,7 @@ impl Accel {
             })
             .collect();
         let sah = bvh.sah_cost();
-        let blocks = pack_leaves(&mut bvh, &prims);
+        let blocks = bvh.pack_leaves(&prims);
 
         Self {
             bvh,
@@ -417,7 +496,7 @@ impl Accel {
 
     /// Depth of the deepest inner node of the BVH4 (root = 0).
     pub fn depth(&self) -> u32 {
-        self.bvh.depth
+        self.bvh.depth()
     }
 
     /// SAH cost of the tree relative to its root box (see `Bvh4::sah_cost`).
@@ -428,7 +507,7 @@ impl Accel {
 
     /// Number of BVH4 inner nodes.
     pub fn node_count(&self) -> usize {
-        self.bvh.nodes.len()
+        self.bvh.node_count()
     }
 
     /// Entries of the traversal stack this tree needs: each inner node on the
@@ -539,7 +618,7 @@ impl Accel {
     }
 
     fn traversable(&self, ray: &Ray) -> bool {
-        self.bvh.root != bvh4::EMPTY && ray_is_valid(ray)
+        self.bvh.root() != bvh4::EMPTY && ray_is_valid(ray)
     }
 
     /// Closest hit; `work` counts (node tests, primitive tests).
@@ -557,7 +636,9 @@ impl Accel {
         let mut best: Option<(u32, f32, Vec2)> = None;
         let mut t_max = ray.t_max;
         let mut prims_tested = 0;
-        self.bvh.traverse::<true>(
+        traverse!(
+            &self.bvh,
+            true,
             &node_ray,
             t_max + back_off,
             stack,
@@ -616,7 +697,9 @@ impl Accel {
         let (node_ray, back_off) = node_ray(ray);
         let wr4 = WatertightRay4::new(wr);
         let mut hit = false;
-        self.bvh.traverse::<false>(
+        traverse!(
+            &self.bvh,
+            false,
             &node_ray,
             ray.t_max + back_off,
             stack,
@@ -682,4 +765,132 @@ fn ray_is_valid(ray: &Ray) -> bool {
         && ray.t_min.is_finite()
         && !ray.t_max.is_nan()
         && ray.t_min <= ray.t_max
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed, finely tessellated sphere (shared edges and vertices), a
+    /// heap of small overlapping quads, and analytic spheres.
+    fn scene() -> (Vec<Mesh>, Vec<Sphere>) {
+        let (rings, segments) = (40u32, 60u32);
+        let mut positions = Vec::new();
+        for i in 0..=rings {
+            let theta = std::f32::consts::PI * i as f32 / rings as f32;
+            for j in 0..segments {
+                let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+                positions.push(Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                ));
+            }
+        }
+        let mut triangles = Vec::new();
+        for i in 0..rings {
+            for j in 0..segments {
+                let (a, b) = (i * segments + j, i * segments + (j + 1) % segments);
+                let (c, d) = (a + segments, b + segments);
+                triangles.push([a, b, d]);
+                triangles.push([a, d, c]);
+            }
+        }
+        let globe = Mesh {
+            name: "globe".into(),
+            positions,
+            triangles,
+            ..Default::default()
+        };
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / 16_777_216.0
+        };
+        let mut quads = Mesh {
+            name: "quads".into(),
+            ..Default::default()
+        };
+        for _ in 0..500 {
+            let o = Vec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, next() * 4.0 - 2.0);
+            let (u, v) = (
+                Vec3::new(next(), 0.0, next()) * 0.3,
+                Vec3::new(0.0, next(), next()) * 0.3,
+            );
+            let base = quads.positions.len() as u32;
+            quads.positions.extend([o, o + u, o + u + v, o + v]);
+            quads.triangles.push([base, base + 1, base + 2]);
+            quads.triangles.push([base, base + 2, base + 3]);
+        }
+        let spheres = (0..20)
+            .map(|k| Sphere {
+                name: format!("s{k}"),
+                center: Vec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, next() * 4.0 - 2.0),
+                radius: 0.05 + 0.2 * next(),
+                material: 0,
+                emission: Vec3::ZERO,
+                bump: None,
+                object_id: 0,
+            })
+            .collect();
+        (vec![globe, quads], spheres)
+    }
+
+    /// The 8-wide and 4-wide trees (leaves of 1 to 8 primitives, so one or
+    /// two triangle4 blocks with sphere lanes) find closest hits bit-identical in
+    /// distances and barycentrics and the same occlusion as brute force.
+    #[test]
+    fn node_widths_and_leaf_sizes_agree_with_brute_force() {
+        let (meshes, spheres) = scene();
+        let mut seed = 11u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / 16_777_216.0
+        };
+        let rays: Vec<Ray> = (0..3000)
+            .map(|_| {
+                let o = Vec3::new(next(), next(), next()) * 6.0 - 3.0;
+                let d = Vec3::new(next(), next(), next()) * 2.0 - 1.0;
+                Ray::new(o, d.normalize_or(Vec3::X))
+            })
+            .collect();
+        let widths: &[usize] = if bvh8::supported() { &[4, 8] } else { &[4] };
+        let mut hits = 0;
+        for &node_width in widths {
+            for max_prims_per_leaf in [1, 4, 8] {
+                let preset = BuildPreset {
+                    node_width,
+                    max_prims_per_leaf,
+                    ..BuildPreset::default()
+                };
+                let accel = Accel::build_with_preset(&meshes, &spheres, &preset);
+                assert_eq!(matches!(accel.bvh, Tree::Eight(_)), node_width == 8);
+                for ray in &rays {
+                    let (a, b) = (accel.intersect(ray), accel.intersect_brute_force(ray));
+                    assert_eq!(
+                        a.map(|h| h.t.to_bits()),
+                        b.map(|h| h.t.to_bits()),
+                        "{ray:?}"
+                    );
+                    if let (Some(a), Some(b)) = (a, b) {
+                        // Another primitive only on an exact tie (a shared edge).
+                        if a.prim == b.prim {
+                            assert_eq!(a.bary, b.bary, "{ray:?}");
+                        }
+                        hits += 1;
+                    }
+                    assert_eq!(
+                        accel.occluded(ray),
+                        accel.occluded_brute_force(ray),
+                        "{ray:?}"
+                    );
+                }
+            }
+        }
+        assert!(hits > 1000, "{hits}");
+    }
 }

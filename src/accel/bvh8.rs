@@ -1,0 +1,195 @@
+//! The 8-wide tree for CPUs with AVX2 (chosen at run time, see
+//! `build::node_width`): the same collapse as the BVH4 (`bvh4.rs`) with eight
+//! slots, the same conservative slab test on eight children at once with
+//! 256-bit `std::arch` intrinsics. Half the levels of the BVH4, so an
+//! incoherent ray waits on fewer dependent node loads.
+
+use super::bvh4::{
+    BoxRay, Bvh, Entry, WideNode, COUNT_SHIFT, EMPTY, FIRST_MASK, LEAF_BIT, MAX_LEAF, WIDEN,
+};
+
+/// Eight child boxes: `bounds[2·axis]` the minima, `bounds[2·axis + 1]` the
+/// maxima along `axis`; empty slots hold the inverted box (+∞, −∞).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(super) struct Node8 {
+    bounds: [[f32; 8]; 6],
+    children: [u32; 8],
+}
+
+impl WideNode for Node8 {
+    const WIDTH: usize = 8;
+
+    fn empty() -> Self {
+        let (inf, ninf) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8]);
+        Self {
+            bounds: [inf, ninf, inf, ninf, inf, ninf],
+            children: [EMPTY; 8],
+        }
+    }
+
+    fn set_child(&mut self, slot: usize, lo: [f32; 3], hi: [f32; 3]) {
+        for axis in 0..3 {
+            self.bounds[2 * axis][slot] = lo[axis];
+            self.bounds[2 * axis + 1][slot] = hi[axis];
+        }
+    }
+
+    fn child_box(&self, slot: usize) -> ([f32; 3], [f32; 3]) {
+        let c = |i: usize| self.bounds[i][slot];
+        ([c(0), c(2), c(4)], [c(1), c(3), c(5)])
+    }
+
+    fn children(&self) -> &[u32] {
+        &self.children
+    }
+
+    fn children_mut(&mut self) -> &mut [u32] {
+        &mut self.children
+    }
+}
+
+/// The 8-wide tree.
+pub(super) type Bvh8 = Bvh<Node8>;
+
+/// Whether this CPU runs the 8-wide traversal.
+pub(super) fn supported() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Bvh8 {
+    /// [`super::bvh4::Bvh4::traverse`] on eight children per node.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 ([`supported`]).
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn traverse<const SORTED: bool>(
+        &self,
+        ray: &BoxRay,
+        t_hi: f32,
+        stack: &mut [Entry],
+        nodes_visited: &mut u32,
+        mut leaf: impl FnMut(usize, usize) -> Option<f32>,
+    ) {
+        use std::arch::x86_64::*;
+        let (org, inv) = (ray.org_scalar(), ray.inv_scalar());
+        let org = org.map(|o| _mm256_set1_ps(o));
+        let inv = inv.map(|i| _mm256_set1_ps(i));
+        let near = ray.near;
+        let (nx, ny, nz) = (near[0] & 1, 2 + (near[1] & 1), 4 + (near[2] & 1));
+        let t_lo = _mm256_set1_ps(ray.t_lo_scalar());
+        let widen = _mm256_set1_ps(WIDEN);
+        let mut hi = t_hi * WIDEN;
+        let mut hi_w = _mm256_set1_ps(hi);
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        loop {
+            while cur & LEAF_BIT == 0 {
+                *nodes_visited += 1;
+                let node = &self.nodes[cur as usize];
+                let b = &node.bounds;
+                // SAFETY: `Node8` is 32-byte aligned and each bounds row is
+                // 32 bytes at a multiple of 32.
+                let slab = |i: usize, a: usize| {
+                    _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b[i].as_ptr()), org[a]), inv[a])
+                };
+                let (tnx, tny, tnz) = (slab(nx, 0), slab(ny, 1), slab(nz, 2));
+                let (tfx, tfy, tfz) = (slab(nx ^ 1, 0), slab(ny ^ 1, 1), slab(nz ^ 1, 2));
+                // Same operand order as the BVH4's `fast_max`/`fast_min`.
+                let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
+                let t_far = _mm256_min_ps(
+                    _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz), widen),
+                    hi_w,
+                );
+                let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far)) as u32;
+                if mask == 0 {
+                    cur = EMPTY;
+                    break;
+                }
+                if mask & (mask - 1) == 0 {
+                    cur = node.children[mask.trailing_zeros() as usize];
+                    continue;
+                }
+                let mut t_near_arr = [0f32; 8];
+                _mm256_storeu_ps(t_near_arr.as_mut_ptr(), t_near);
+                let t_near = t_near_arr;
+                let rest = mask & (mask - 1);
+                if rest & (rest - 1) == 0 {
+                    let (i, j) = (
+                        mask.trailing_zeros() as usize,
+                        rest.trailing_zeros() as usize,
+                    );
+                    let (near, far) = if !SORTED || t_near[i] <= t_near[j] {
+                        (i, j)
+                    } else {
+                        (j, i)
+                    };
+                    stack[sp] = Entry::new(node.children[far], t_near[far]);
+                    sp += 1;
+                    self.prefetch(node.children[far]);
+                    cur = node.children[near];
+                    continue;
+                }
+                let (mut ids, mut ts, mut k) = ([0u32; 8], [0f32; 8], 0usize);
+                let mut m = mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    ids[k] = node.children[i];
+                    ts[k] = t_near[i];
+                    k += 1;
+                    m &= m - 1;
+                }
+                if SORTED {
+                    // Insertion sort, farthest first, stable.
+                    for i in 1..k {
+                        let (t, id) = (ts[i], ids[i]);
+                        let mut j = i;
+                        while j > 0 && ts[j - 1] < t {
+                            ts[j] = ts[j - 1];
+                            ids[j] = ids[j - 1];
+                            j -= 1;
+                        }
+                        ts[j] = t;
+                        ids[j] = id;
+                    }
+                }
+                for i in 0..k - 1 {
+                    stack[sp] = Entry::new(ids[i], ts[i]);
+                    sp += 1;
+                    self.prefetch(ids[i]);
+                }
+                cur = ids[k - 1];
+            }
+            if cur != EMPTY {
+                let first = (cur & FIRST_MASK) as usize;
+                let count = ((cur >> COUNT_SHIFT) & (MAX_LEAF - 1)) as usize + 1;
+                match leaf(first, count) {
+                    None => return,
+                    Some(t) => {
+                        hi = hi.min(t * WIDEN);
+                        hi_w = _mm256_set1_ps(hi);
+                    }
+                }
+            }
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let e = stack[sp];
+                if e.t <= hi {
+                    cur = e.node;
+                    break;
+                }
+            }
+        }
+    }
+}
