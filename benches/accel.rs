@@ -106,8 +106,17 @@ fn incoherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
 fn bench_accel(c: &mut Criterion) {
     let bunny = load_bunny();
     let meshes = [bunny];
+    // GRADTRACE_ACCEL_WIDTH=4 times the 4-wide tree where the CPU would get the
+    // 8-wide one (A/B on the same machine).
+    let mut preset = gradtrace::accel::BuildPreset::default();
+    if let Some(w) = std::env::var("GRADTRACE_ACCEL_WIDTH")
+        .ok()
+        .and_then(|w| w.parse().ok())
+    {
+        preset.node_width = w;
+    }
     if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
-        let accel = Accel::build(&meshes, &[]);
+        let accel = Accel::build_with_preset(&meshes, &[], &preset);
         let (lo, hi) = accel.bounds().expect("bunny is not empty");
         let sets = [
             ("coherent", coherent_rays(lo, hi)),
@@ -120,7 +129,7 @@ fn bench_accel(c: &mut Criterion) {
         std::process::exit(0);
     }
     if std::env::var_os("GRADTRACE_ACCEL_TIME").is_some() {
-        let accel = Accel::build(&meshes, &[]);
+        let accel = Accel::build_with_preset(&meshes, &[], &preset);
         let (lo, hi) = accel.bounds().expect("bunny is not empty");
         let sets = [
             ("coherent", coherent_rays(lo, hi)),
@@ -153,7 +162,7 @@ fn bench_accel(c: &mut Criterion) {
     });
     g.finish();
 
-    let accel = Accel::build(&meshes, &[]);
+    let accel = Accel::build_with_preset(&meshes, &[], &preset);
     let (lo, hi) = accel.bounds().expect("bunny is not empty");
     let sets = [
         ("coherent", coherent_rays(lo, hi)),
