@@ -91,6 +91,13 @@ pub(crate) struct PreviewArgs {
     /// glossy: also render N views on an orbit around the scene.
     #[arg(long, value_name = "N")]
     pub(crate) orbit: Option<u32>,
+    /// glossy: split every triangle 1-to-4 N times and refine no further (the
+    /// uniform mesh the adaptive one is compared against at equal error).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=6))]
+    pub(crate) uniform: Option<u8>,
+    /// glossy: vertex budget of the adaptive spatial refinement [default: 20000].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) max_vertices: Option<u32>,
     /// Samples per pixel of the path-traced reference [default: the method's].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) reference_spp: Option<u32>,

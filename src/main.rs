@@ -134,6 +134,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let mut opts = GlossyOptions::new(&a.scene);
             opts.out_dir = a.out.unwrap_or_else(|| preview_dir("glossy", &a.scene));
             (opts.orbit, opts.reference_spp, opts.quiet) = (a.orbit, a.reference_spp, a.quiet);
+            if let Some(n) = a.uniform {
+                (opts.settings.uniform_levels, opts.settings.spatial) = (n, false);
+            }
+            if let Some(n) = a.max_vertices {
+                opts.settings.max_vertices = n as usize;
+            }
             let s = run(&opts)?;
             if !a.quiet {
                 println!(

@@ -49,6 +49,30 @@ impl Grid {
     fn lookup_uv(&self, uv: crate::math::Vec2) -> Vec3 {
         bilinear(&self.texels, self.width, self.height, uv)
     }
+
+    /// [`bilinear`]'s value for (u, v) in [0, 1), the same arithmetic without its
+    /// derivatives and integer divisions: a frame makes ~4 of these per lobe.
+    #[inline]
+    fn lookup_uv_fast(&self, uv: crate::math::Vec2) -> Vec3 {
+        let (w, h) = (self.width, self.height);
+        let x = uv.x * w as f32 - 0.5;
+        let y = (uv.y * (h - 1) as f32).clamp(0.0, (h - 1) as f32);
+        let x0 = x.floor();
+        let y0 = y.floor().min((h - 2) as f32);
+        let (fx, fy) = (x - x0, y - y0);
+        // x ∈ [−½, w − ½): only x0 = −1 wraps.
+        let xi0 = if x0 < 0.0 {
+            w - 1
+        } else {
+            (x0 as usize).min(w - 1)
+        };
+        let xi1 = if xi0 + 1 == w { 0 } else { xi0 + 1 };
+        let r0 = y0 as usize * w;
+        let r1 = r0 + w;
+        let t = &self.texels;
+        (t[r0 + xi0] * (1.0 - fx) + t[r0 + xi1] * fx) * (1.0 - fy)
+            + (t[r1 + xi0] * (1.0 - fx) + t[r1 + xi1] * fx) * fy
+    }
 }
 
 pub struct PrefilteredEnv {
@@ -84,17 +108,11 @@ impl PrefilteredEnv {
         let t = x - l as f32;
         // Every level shares the lat-long parameterisation: map the direction once.
         let uv = crate::scene::environment::direction_to_latlong(mu);
-        let at = |l: usize| {
-            if l < LEVELS {
-                self.levels[l].lookup_uv(uv)
-            } else {
-                self.raw.lookup_uv(uv)
-            }
-        };
         if l >= LEVELS {
-            return self.raw.lookup_uv(uv);
+            return self.raw.lookup_uv_fast(uv);
         }
-        at(l) * (1.0 - t) + at(l + 1) * t
+        let next = self.levels.get(l + 1).unwrap_or(&self.raw);
+        self.levels[l].lookup_uv_fast(uv) * (1.0 - t) + next.lookup_uv_fast(uv) * t
     }
 
     pub fn bytes(&self) -> usize {
@@ -174,4 +192,32 @@ fn prefilter(src: &Grid, kappa: f32) -> Grid {
         })
         .collect();
     Grid { texels, ..dst }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_lookup_is_the_shared_bilinear() {
+        let (width, height) = (7, 5);
+        let texels = (0..width * height)
+            .map(|k| Vec3::new(k as f32, (k * k % 11) as f32, 1.0 / (k + 1) as f32))
+            .collect();
+        let g = Grid {
+            width,
+            height,
+            texels,
+        };
+        for k in 0..2000 {
+            let u = ((k as f32 * 0.618_034).fract()).min(1.0 - f32::EPSILON);
+            let v = ((k as f32 * 0.414_213_5).fract()).min(1.0 - f32::EPSILON);
+            let uv = crate::math::Vec2::new(u, v);
+            assert_eq!(g.lookup_uv_fast(uv), g.lookup_uv(uv), "at {uv}");
+        }
+        for uv in [[0.0, 0.0], [1.0 - f32::EPSILON, 1.0 - f32::EPSILON]] {
+            let uv = crate::math::Vec2::from(uv);
+            assert_eq!(g.lookup_uv_fast(uv), g.lookup_uv(uv), "at {uv}");
+        }
+    }
 }

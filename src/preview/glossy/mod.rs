@@ -14,6 +14,7 @@ pub mod envmap;
 pub mod fit;
 pub mod icosphere;
 pub mod mesh;
+pub mod packed;
 pub mod slice;
 mod store;
 
@@ -23,6 +24,7 @@ use crate::scene::{Camera, Scene};
 use fit::MaterialFit;
 use icosphere::Icosphere;
 use mesh::{AdaptiveMesh, Vertex};
+use packed::{pack_slice, unpack_slice, PackedSlice};
 use rayon::prelude::*;
 use slice::{blend_slices, relative_distance, Lobe, Slice, SurfaceSample, TraceContext};
 use std::time::Instant;
@@ -100,8 +102,9 @@ pub struct VertexTransfer {
     /// Mean noise of its slices (see [`slice::TraceContext::trace`]).
     pub noise: f32,
     pub diffuse: Slice,
-    /// One slice per icosphere slot of levels ≤ `level`; empty without a glossy part.
-    pub glossy: Vec<Slice>,
+    /// One slice per icosphere slot of levels ≤ `level`, packed (nearly all the
+    /// transfer's bytes); empty without a glossy part.
+    pub glossy: Vec<PackedSlice>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -215,8 +218,8 @@ pub fn glossy_slice(ico: &Icosphere, vt: &VertexTransfer, wo: Vec3) -> Slice {
         return [Lobe::default(); 4];
     }
     let loc = ico.locate(fit::clamp_view(wo), vt.level as usize);
-    let corners: [(&Slice, f32); 3] =
-        std::array::from_fn(|k| (&vt.glossy[loc.slots[k] as usize], loc.weights[k]));
+    let slices = loc.slots.map(|s| unpack_slice(&vt.glossy[s as usize]));
+    let corners: [(&Slice, f32); 3] = std::array::from_fn(|k| (&slices[k], loc.weights[k]));
     blend_slices(&corners)
 }
 
@@ -248,7 +251,7 @@ fn compute_vertex(ctx: &TraceContext, settings: &Settings, v: &Vertex, id: u32) 
         |s: &[(Slice, f32)]| s.iter().map(|x| x.1 as f64).sum::<f64>() / s.len().max(1) as f64;
     let first: Vec<(Slice, f32)> = (0..ico.slot_end[0]).map(trace).collect();
     let mut noise = mean_noise(&first);
-    vt.glossy = first.into_iter().map(|x| x.0).collect();
+    vt.glossy = first.iter().map(|x| pack_slice(&x.0)).collect();
     for level in 1..=settings.max_angular_level.min(ico.max_level()) {
         let new: Vec<(Slice, f32)> = (ico.slot_end[level - 1]..ico.slot_end[level])
             .map(trace)
@@ -267,7 +270,7 @@ fn compute_vertex(ctx: &TraceContext, settings: &Settings, v: &Vertex, id: u32) 
         let excess = err - (new_noise + noise);
         noise = (noise * vt.glossy.len() as f64 + new_noise * new.len() as f64)
             / (vt.glossy.len() + new.len()) as f64;
-        vt.glossy.extend(new.into_iter().map(|x| x.0));
+        vt.glossy.extend(new.iter().map(|x| pack_slice(&x.0)));
         vt.level = level as u8;
         if excess < settings.angular_threshold {
             break;
@@ -296,7 +299,7 @@ fn vertex_distance(t: &Transfer, ico: &Icosphere, a: u32, b: u32) -> f64 {
         ico.slot_end[level]
     };
     let slice_at = |vt: &VertexTransfer, slot: usize| match vt.glossy.get(slot) {
-        Some(s) => *s,
+        Some(s) => unpack_slice(s),
         None => glossy_slice(ico, vt, ico.slot_direction(slot as u32)),
     };
     for slot in 0..n {
@@ -473,12 +476,24 @@ fn refine_spatially(
 /// Per-vertex lobes for one camera (the paper's vertex shader): Td's three and the
 /// glossy slice for the direction to the camera, in world space.
 pub fn vertex_lobes(t: &Transfer, camera: &Camera) -> Vec<[Lobe; 8]> {
+    vertex_lobes_where(t, camera, None)
+}
+
+/// [`vertex_lobes`] for the vertices `needed` marks (all without it); the others
+/// get empty lobes. A frame needs only the corners of faces some pixel sees —
+/// about half the mesh of a closed object — and blending every other vertex's
+/// slices for the view was a fifth of the frame.
+fn vertex_lobes_where(t: &Transfer, camera: &Camera, needed: Option<&[bool]>) -> Vec<[Lobe; 8]> {
     t.mesh
         .vertices
         .par_iter()
         .zip(&t.vertices)
         .zip(&t.frames)
-        .map(|((v, vt), frame)| {
+        .enumerate()
+        .map(|(i, ((v, vt), frame))| {
+            if needed.is_some_and(|n| !n[i]) {
+                return [Lobe::default(); 8];
+            }
             let mut wo = frame.to_local((camera.from - v.position).normalize_or(frame.n));
             wo.z = wo.z.abs();
             let g = glossy_slice(&t.ico, vt, wo);
@@ -510,33 +525,69 @@ pub fn render_supersampled(
     camera: &Camera,
     n: u32,
 ) -> Vec<Vec3> {
-    let n = n.max(1);
-    let lobes = vertex_lobes(t, camera);
+    let n = n.max(1) as usize;
     let (w, h) = (camera.width as usize, camera.height as usize);
     let background = scene.environment.as_ref();
-    let mut image = vec![Vec3::ZERO; w * h];
-    image.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, px) in row.iter_mut().enumerate() {
-            let mut sum = Vec3::ZERO;
-            for k in 0..n * n {
+    // Pass 1: what each sample sees — the sky's radiance, or a point of the
+    // adaptive mesh (its leaf face's corners and weights).
+    let seen: Vec<Seen> = (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            (0..w * n * n).map(move |i| {
+                let (x, k) = (i / (n * n), i % (n * n));
                 let sub = Vec2::new((k % n) as f32 + 0.5, (k / n) as f32 + 0.5) / n as f32;
                 let ray = camera.generate_ray(Vec2::new(x as f32, y as f32) + sub);
-                let c = match accel.intersect(&ray) {
-                    None => background.map_or(Vec3::ZERO, |e| e.eval(ray.dir)),
+                match accel.intersect(&ray) {
+                    None => {
+                        Seen::Sky(background.map_or(Vec3::ZERO, |e| env.background(e, ray.dir)))
+                    }
                     Some(hit) => match hit.prim {
                         PrimRef::Triangle { mesh, tri } => t
                             .mesh
                             .locate(mesh, tri, hit.bary)
-                            .map_or(Vec3::ZERO, |(ids, wts)| shade(&lobes, env, ids, wts)),
-                        PrimRef::Sphere(_) => Vec3::ZERO,
+                            .map_or(Seen::Sky(Vec3::ZERO), |(ids, wts)| Seen::Surface(ids, wts)),
+                        PrimRef::Sphere(_) => Seen::Sky(Vec3::ZERO),
                     },
-                };
-                sum += crate::math::finite_or_zero(c);
+                }
+            })
+        })
+        .collect();
+    // Pass 2: lobes for the vertices seen only.
+    let mut needed = vec![false; t.vertices.len()];
+    for s in &seen {
+        if let Seen::Surface(ids, _) = s {
+            for &i in ids {
+                needed[i as usize] = true;
             }
-            *px = sum / (n * n) as f32;
         }
-    });
+    }
+    let lobes = vertex_lobes_where(t, camera, Some(&needed));
+    // Pass 3: shade and average each pixel's samples.
+    let mut image = vec![Vec3::ZERO; w * h];
     image
+        .par_chunks_mut(w)
+        .zip(seen.par_chunks(w * n * n))
+        .for_each(|(row, seen)| {
+            for (px, samples) in row.iter_mut().zip(seen.chunks(n * n)) {
+                let sum: Vec3 = samples
+                    .iter()
+                    .map(|s| match *s {
+                        Seen::Sky(c) => crate::math::finite_or_zero(c),
+                        Seen::Surface(ids, wts) => {
+                            crate::math::finite_or_zero(shade(&lobes, env, ids, wts))
+                        }
+                    })
+                    .sum();
+                *px = sum / (n * n) as f32;
+            }
+        });
+    image
+}
+
+/// What one camera sample of [`render_supersampled`] hit.
+enum Seen {
+    Sky(Vec3),
+    Surface([u32; 3], [f32; 3]),
 }
 
 fn shade(lobes: &[[Lobe; 8]], env: &PrefilteredEnv, ids: [u32; 3], w: [f32; 3]) -> Vec3 {
@@ -576,10 +627,12 @@ pub fn shade_components(
 }
 
 impl Transfer {
-    /// Bytes of the transfer data (slices at 7 f32 per lobe, plus the mesh's vertices).
+    /// Bytes of the transfer data: each vertex's f32 diffuse slice, its packed
+    /// glossy slices (12 bytes a lobe) and the mesh's vertex.
     pub fn bytes(&self) -> usize {
-        let lobe = 7 * 4;
-        self.stats.slices * std::mem::size_of::<Slice>() / std::mem::size_of::<Lobe>() * lobe
+        let glossy: usize = self.vertices.iter().map(|v| v.glossy.len()).sum();
+        self.vertices.len() * std::mem::size_of::<Slice>()
+            + glossy * std::mem::size_of::<PackedSlice>()
             + self.mesh.vertices.len() * std::mem::size_of::<Vertex>()
     }
 
@@ -595,6 +648,11 @@ impl Transfer {
 
     /// A transfer encoded under `key`, its mesh rebuilt from the split log; `None`
     /// if the bytes are stale (another key) or unreadable.
+    /// The key `bytes` were cached under (see [`store::stored_key`]).
+    pub fn stored_key(bytes: &[u8]) -> Option<&str> {
+        store::stored_key(bytes)
+    }
+
     pub fn decode(bytes: &[u8], key: &str, scene: &Scene, settings: &Settings) -> Option<Transfer> {
         let s = store::decode(bytes, key)?;
         let ico = Icosphere::new(settings.max_angular_level.max(fit::FIT_LEVEL));

@@ -1,11 +1,13 @@
 //! The transfer cache: a little-endian binary file holding the cache key, the
 //! mesh's split log (replayed to rebuild it) and every vertex's slices.
 
+use super::packed::{PackedLobe, PackedSlice};
 use super::slice::{Lobe, Slice};
 use super::{PrecomputeStats, Transfer, VertexTransfer};
 use crate::math::Vec3;
 
-const MAGIC: &[u8; 8] = b"GTGLOSS3";
+/// 4: glossy slices packed ([`PackedLobe`], 12 bytes a lobe).
+const MAGIC: &[u8; 8] = b"GTGLOSS4";
 
 pub struct Stored {
     pub split_log: Vec<u32>,
@@ -19,6 +21,14 @@ fn put_u32(out: &mut Vec<u8>, x: u32) {
 
 fn put_f32(out: &mut Vec<u8>, x: f32) {
     out.extend_from_slice(&x.to_le_bytes());
+}
+
+fn put_packed(out: &mut Vec<u8>, s: &PackedSlice) {
+    for l in s {
+        for x in l.oct.iter().chain(&l.kappa_alpha) {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
 }
 
 fn put_slice(out: &mut Vec<u8>, s: &Slice) {
@@ -56,7 +66,7 @@ pub fn encode(t: &Transfer, key: &str) -> Vec<u8> {
         put_u32(&mut out, v.glossy.len() as u32);
         put_slice(&mut out, &v.diffuse);
         for g in &v.glossy {
-            put_slice(&mut out, g);
+            put_packed(&mut out, g);
         }
     }
     out
@@ -67,8 +77,8 @@ struct Reader<'a> {
     at: usize,
 }
 
-impl Reader<'_> {
-    fn take(&mut self, n: usize) -> Option<&[u8]> {
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
         let s = self.bytes.get(self.at..self.at.checked_add(n)?)?;
         self.at += n;
         Some(s)
@@ -79,6 +89,25 @@ impl Reader<'_> {
     fn f32(&mut self) -> Option<f32> {
         let x = f32::from_le_bytes(self.take(4)?.try_into().ok()?);
         x.is_finite().then_some(x)
+    }
+    fn u16(&mut self) -> Option<u16> {
+        Some(u16::from_le_bytes(self.take(2)?.try_into().ok()?))
+    }
+    fn packed(&mut self) -> Option<PackedSlice> {
+        let mut s = [PackedLobe::pack(&Lobe::default()); 4];
+        for l in &mut s {
+            let v: Vec<u16> = (0..6).map(|_| self.u16()).collect::<Option<_>>()?;
+            *l = PackedLobe {
+                oct: [v[0], v[1]],
+                kappa_alpha: [v[2], v[3], v[4], v[5]],
+            };
+            // Half floats decode to ∞ or NaN from an all-ones exponent.
+            let u = l.unpack();
+            if !(u.kappa.is_finite() && u.alpha.is_finite()) {
+                return None;
+            }
+        }
+        Some(s)
     }
     fn slice(&mut self) -> Option<Slice> {
         let mut s = [Lobe::default(); 4];
@@ -92,6 +121,17 @@ impl Reader<'_> {
         }
         Some(s)
     }
+}
+
+/// The key a cache file was written under, for tools that time the renderer on
+/// a transfer cached before a source change (which changes the key).
+pub fn stored_key(bytes: &[u8]) -> Option<&str> {
+    let mut r = Reader { bytes, at: 0 };
+    if r.take(8)? != MAGIC {
+        return None;
+    }
+    let n = r.u32()? as usize;
+    std::str::from_utf8(r.take(n)?).ok()
 }
 
 pub fn decode(bytes: &[u8], key: &str) -> Option<Stored> {
@@ -120,7 +160,7 @@ pub fn decode(bytes: &[u8], key: &str) -> Option<Stored> {
         let n_glossy = r.u32()? as usize;
         let diffuse = r.slice()?;
         let glossy = (0..n_glossy)
-            .map(|_| r.slice())
+            .map(|_| r.packed())
             .collect::<Option<Vec<_>>>()?;
         vertices.push(VertexTransfer {
             level,
