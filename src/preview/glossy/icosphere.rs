@@ -17,6 +17,9 @@ pub struct Icosphere {
     /// Faces per level, counter-clockwise seen from outside; the children of face f
     /// of level ℓ are faces 4f..4f+4 of level ℓ + 1.
     faces: Vec<Vec<[u32; 3]>>,
+    /// Per face (b × c, c × a, a × b): the gnomonic barycentrics of a direction
+    /// are its dot products with them, so locating one costs no cross products.
+    edge_normals: Vec<Vec<[Vec3; 3]>>,
     /// Compact index of a vertex that the upper hemisphere needs (`u32::MAX`: none).
     slot_of: Vec<u32>,
     /// Slots of levels ≤ ℓ are `0..slot_end[ℓ]`.
@@ -81,10 +84,23 @@ impl Icosphere {
             .iter()
             .map(|&end| slot_vertex.partition_point(|&v| (v as usize) < end))
             .collect();
+        let edge_normals = faces
+            .iter()
+            .map(|level_faces| {
+                level_faces
+                    .iter()
+                    .map(|f| {
+                        let [a, b, c] = f.map(|v| vertices[v as usize]);
+                        [b.cross(c), c.cross(a), a.cross(b)]
+                    })
+                    .collect()
+            })
+            .collect();
         Self {
             vertices,
             level_end,
             faces,
+            edge_normals,
             slot_of,
             slot_end,
             slot_vertex,
@@ -106,9 +122,8 @@ impl Icosphere {
     }
 
     /// Unnormalised gnomonic barycentrics of `d` in face `f` (all ≥ 0 inside).
-    fn dets(&self, f: [u32; 3], d: Vec3) -> [f32; 3] {
-        let [a, b, c] = f.map(|v| self.vertices[v as usize]);
-        [d.dot(b.cross(c)), a.dot(d.cross(c)), a.dot(b.cross(d))]
+    fn dets(&self, level: usize, f: usize, d: Vec3) -> [f32; 3] {
+        self.edge_normals[level][f].map(|n| d.dot(n))
     }
 
     /// The face of level `level` around unit direction `d` and its barycentric
@@ -116,22 +131,22 @@ impl Icosphere {
     pub fn locate(&self, d: Vec3, level: usize) -> Located {
         let level = level.min(self.max_level());
         let min_det = |w: [f32; 3]| w[0].min(w[1]).min(w[2]);
-        let best = |candidates: std::ops::Range<usize>, faces: &[[u32; 3]]| -> usize {
+        let best = |candidates: std::ops::Range<usize>, level: usize| -> usize {
             let mut best = (candidates.start, f32::NEG_INFINITY);
             for i in candidates {
-                let m = min_det(self.dets(faces[i], d));
+                let m = min_det(self.dets(level, i, d));
                 if m > best.1 {
                     best = (i, m);
                 }
             }
             best.0
         };
-        let mut f = best(0..20, &self.faces[0]);
+        let mut f = best(0..20, 0);
         for l in 1..=level {
-            f = best(4 * f..4 * f + 4, &self.faces[l]);
+            f = best(4 * f..4 * f + 4, l);
         }
         let face = self.faces[level][f];
-        let w = self.dets(face, d).map(|x| x.max(0.0));
+        let w = self.dets(level, f, d).map(|x| x.max(0.0));
         let sum = w[0] + w[1] + w[2];
         let weights = if sum > 0.0 {
             w.map(|x| x / sum)
