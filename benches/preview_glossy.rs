@@ -26,15 +26,10 @@ fn teapot_frame(c: &mut Criterion) {
     };
     let t = match std::env::var_os("GLOSSY_CACHE") {
         Some(path) => {
-            use sha2::Digest;
             let defaults = Settings::default();
-            let mut h = sha2::Sha256::new();
-            h.update(scene.content_hash().unwrap().as_bytes());
-            h.update(format!("{defaults:?}").as_bytes());
-            h.update(env!("CARGO_PKG_VERSION").as_bytes());
-            let key: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
             let bytes = std::fs::read(path).expect("GLOSSY_CACHE reads");
-            glossy::Transfer::decode(&bytes, &key, &scene, &defaults)
+            glossy::Transfer::stored_key(&bytes)
+                .and_then(|key| glossy::Transfer::decode(&bytes, key, &scene, &defaults))
                 .expect("GLOSSY_CACHE holds this scene's transfer at default settings")
         }
         None => glossy::precompute(&scene, &accel, &settings, &|_, _, _| {}).unwrap(),

@@ -15,16 +15,7 @@
 use gradtrace::accel::{Accel, PrimRef};
 use gradtrace::math::{luminance, Frame, Vec2, Vec3};
 use gradtrace::preview::glossy::{self, fit, slice, PrefilteredEnv, Settings, Transfer};
-use sha2::{Digest, Sha256};
 use std::path::Path;
-
-fn key(scene: &gradtrace::scene::Scene, settings: &Settings) -> String {
-    let mut h = Sha256::new();
-    h.update(scene.content_hash().unwrap().as_bytes());
-    h.update(format!("{settings:?}").as_bytes());
-    h.update(env!("CARGO_PKG_VERSION").as_bytes());
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
-}
 
 #[derive(Default, Clone, Copy)]
 struct Acc {
@@ -54,8 +45,10 @@ fn main() {
     let settings = Settings::default();
     let accel = Accel::build(&scene.meshes, &scene.spheres);
     let bytes = std::fs::read(cache).expect("cache file");
-    let t = Transfer::decode(&bytes, &key(&scene, &settings), &scene, &settings)
-        .expect("cache matches the scene and default settings");
+    // The stored key: a source change since the run changes the key, not the slices.
+    let t = Transfer::stored_key(&bytes)
+        .and_then(|key| Transfer::decode(&bytes, key, &scene, &settings))
+        .expect("cache holds this scene's transfer at default settings");
     let env_src = scene.environment.as_ref().unwrap();
     let env = PrefilteredEnv::new(env_src);
     let camera = &scene.camera;
