@@ -9,8 +9,8 @@
 //! cargo run --release --example glossy_diagnose -- SCENE CACHE.bin [EXR|-] [STRIDE] [PATHS]
 //! CACHE.bin: the transfer `gradtrace preview glossy` cached under its out dir
 //! (default settings). Also writes /tmp/diag_{shape,spatial,angular,total}.png
-//! (signed error maps, red = too bright). `TIME=1`: times `vertex_lobes` and a
-//! frame instead; `PIXEL=x,y`: prints one pixel's lobes, known lobes and own EM fit.
+//! (signed error maps, red = too bright). `PIXEL=x,y`: prints one pixel's lobes,
+//! known lobes and own EM fit. Frame timing: the `glossy_frame` example.
 
 use gradtrace::accel::{Accel, PrimRef};
 use gradtrace::math::{luminance, Frame, Vec2, Vec3};
@@ -70,22 +70,6 @@ fn main() {
         img.vec3("reference.", ["R", "G", "B"]).unwrap()
     });
     let (w, h) = (camera.width as usize, camera.height as usize);
-    if std::env::var("TIME").is_ok() {
-        for _ in 0..3 {
-            let t0 = std::time::Instant::now();
-            let l = glossy::vertex_lobes(&t, camera);
-            let t1 = t0.elapsed().as_secs_f64() * 1e3;
-            let img = glossy::render(&t, &env, &scene, &accel, camera);
-            let t2 = t0.elapsed().as_secs_f64() * 1e3;
-            println!(
-                "vertex_lobes {t1:.1} ms ({} vertices), full frame {:.1} ms ({} px)",
-                l.len(),
-                t2 - t1,
-                img.len()
-            );
-        }
-        return;
-    }
     if let Ok(px) = std::env::var("PIXEL") {
         let v: Vec<f32> = px.split(',').map(|x| x.parse().unwrap()).collect();
         let ray = camera.generate_ray(Vec2::new(v[0] + 0.5, v[1] + 0.5));

@@ -313,6 +313,7 @@ fn run_end_to_end_on_a_small_scene() {
     for key in [
         "precompute_s",
         "render_ms",
+        "render_median_ms",
         "vertices_initial",
         "vertices_final",
         "bytes",

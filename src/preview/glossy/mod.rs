@@ -530,14 +530,15 @@ pub fn render_supersampled(
     let background = scene.environment.as_ref();
     // Pass 1: what each sample sees — the sky's radiance, or a point of the
     // adaptive mesh (its leaf face's corners and weights).
-    let seen: Vec<Seen> = (0..h)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            (0..w * n * n).map(move |i| {
+    let mut seen = vec![Seen::Sky(Vec3::ZERO); w * h * n * n];
+    seen.par_chunks_mut(w * n * n)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (i, s) in row.iter_mut().enumerate() {
                 let (x, k) = (i / (n * n), i % (n * n));
                 let sub = Vec2::new((k % n) as f32 + 0.5, (k / n) as f32 + 0.5) / n as f32;
                 let ray = camera.generate_ray(Vec2::new(x as f32, y as f32) + sub);
-                match accel.intersect(&ray) {
+                *s = match accel.intersect(&ray) {
                     None => {
                         Seen::Sky(background.map_or(Vec3::ZERO, |e| env.background(e, ray.dir)))
                     }
@@ -548,10 +549,9 @@ pub fn render_supersampled(
                             .map_or(Seen::Sky(Vec3::ZERO), |(ids, wts)| Seen::Surface(ids, wts)),
                         PrimRef::Sphere(_) => Seen::Sky(Vec3::ZERO),
                     },
-                }
-            })
-        })
-        .collect();
+                };
+            }
+        });
     // Pass 2: lobes for the vertices seen only.
     let mut needed = vec![false; t.vertices.len()];
     for s in &seen {
@@ -585,6 +585,7 @@ pub fn render_supersampled(
 }
 
 /// What one camera sample of [`render_supersampled`] hit.
+#[derive(Clone, Copy)]
 enum Seen {
     Sky(Vec3),
     Surface([u32; 3], [f32; 3]),
