@@ -33,6 +33,7 @@ import glob
 import json
 import math
 import os
+import re
 import platform
 import shutil
 import statistics
@@ -56,7 +57,14 @@ def find_libllvm() -> str | None:
         candidates += [line for line in listing.splitlines() if "/libLLVM" in line and ".so" in line]
     except OSError:
         pass
-    candidates += sorted(glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM*.so*"), reverse=True)
+    # Other system copies only from LLVM 19 on: with Debian 12's libLLVM-15,
+    # Dr.Jit's kernels abort the process ("LLVM ERROR: Cannot select: fminimum").
+    def major(path: str) -> int:
+        m = re.search(r"libLLVM[-.]?(?:so\.)?(\d+)", os.path.basename(path))
+        return int(m.group(1)) if m else 0
+
+    system = glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM*.so*")
+    candidates += sorted((c for c in system if major(c) >= 19), key=major, reverse=True)
     for c in candidates:
         if os.path.isfile(c):
             return c
