@@ -6,9 +6,11 @@
 //! CACHE.bin: the transfer `gradtrace preview glossy` cached under its out dir
 //! (default settings; opened under its stored key, so a source change since does
 //! not invalidate it); EXR: that run's output (its `reference.*` channels). Prints
-//! the fastest wall time and the least process CPU time of a 512² frame, and the
-//! RMSE of the 2 × 2-supersampled frame against the reference over its mean
-//! luminance (what `preview.json` reports as `rmse_over_mean`).
+//! the fastest wall time and the least process CPU time of a frame at the scene's
+//! resolution, the CPU time of blending every vertex's slices (a frame blends only
+//! the vertices it sees, about half), and the RMSE of the 2 × 2-supersampled
+//! frame against the reference over its mean luminance (what `preview.json`
+//! reports as `rmse_over_mean`).
 
 use gradtrace::accel::Accel;
 use gradtrace::math::luminance;
@@ -52,7 +54,7 @@ fn main() {
         best_lobes = best_lobes.min((cpu_s() - c0) * 1e3);
     }
     println!(
-        "frame: fastest {best:.1} ms wall, {best_cpu:.1} ms CPU (of which vertex_lobes {best_lobes:.1} ms CPU; {} threads)",
+        "frame: fastest {best:.1} ms wall, {best_cpu:.1} ms CPU (all vertices' lobes {best_lobes:.1} ms CPU; {} threads)",
         rayon::current_num_threads()
     );
     let img = gradtrace::output::read_exr(Path::new(&args[3])).expect("exr");

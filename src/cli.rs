@@ -91,8 +91,9 @@ pub(crate) struct PreviewArgs {
     /// glossy: also render N views on an orbit around the scene.
     #[arg(long, value_name = "N")]
     pub(crate) orbit: Option<u32>,
-    /// glossy: split every triangle 1-to-4 N times and refine no further (the
-    /// uniform mesh the adaptive one is compared against at equal error).
+    /// glossy: split every triangle 1-to-4 N times (4^N times the faces) and make
+    /// no adaptive spatial splits (the uniform mesh the adaptive one is compared
+    /// against at equal error; angular refinement still runs).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=6))]
     pub(crate) uniform: Option<u8>,
     /// glossy: vertex budget of the adaptive spatial refinement [default: 20000].

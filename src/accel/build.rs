@@ -62,7 +62,7 @@ impl Default for BuildPreset {
     }
 }
 
-/// Builds the BVH4 over `boxes` (unpadded, finite, within
+/// Builds the 4- or 8-wide tree over `boxes` (unpadded, finite, within
 /// [`MAX_BUILD_MAGNITUDE`]); `leaf_order` refers to `boxes`.
 pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> Bvh<N> {
     if boxes.is_empty() {

@@ -1,5 +1,5 @@
 //! The 8-wide tree for CPUs with AVX2 (chosen at run time, see
-//! `build::node_width`): the same collapse as the BVH4 (`bvh4.rs`) with eight
+//! `BuildPreset::node_width`): the same collapse as the BVH4 (`bvh4.rs`) with eight
 //! slots, the same conservative slab test on eight children at once with
 //! 256-bit `std::arch` intrinsics. Half the levels of the BVH4, so an
 //! incoherent ray waits on fewer dependent node loads.

@@ -15,7 +15,7 @@
 //!    not watertight → neither is used; see `primitive::WatertightRay`.
 //! 3. Its CWBVH traversal clamps the entry distance to a fixed 1e-4, decodes
 //!    u8-quantised boxes on every visit, visits children in octant order and has
-//!    a 32-entry stack that silently clamps in release → not used: the BVH4 is
+//!    a 32-entry stack that silently clamps in release → not used: our BVH4/BVH8 is
 //!    traversed nearest-first with a stack sized from the measured depth
 //!    ([`Accel::stack_size`]).
 //! 4. The build overflows (panics) for boxes wider than ~1e19 and is quadratic
@@ -494,7 +494,7 @@ impl Accel {
         self.bounds
     }
 
-    /// Depth of the deepest inner node of the BVH4 (root = 0).
+    /// Depth of the deepest inner node of the tree (root = 0).
     pub fn depth(&self) -> u32 {
         self.bvh.depth()
     }
@@ -505,19 +505,19 @@ impl Accel {
         self.sah
     }
 
-    /// Number of BVH4 inner nodes.
+    /// Number of inner nodes (4- or 8-wide).
     pub fn node_count(&self) -> usize {
         self.bvh.node_count()
     }
 
     /// Entries of the traversal stack this tree needs: each inner node on the
-    /// current path leaves at most three siblings on it, so a tree of depth d
-    /// needs 3(d + 1) + 1 (46 for the bunny).
+    /// current path leaves at most W − 1 siblings on it (W = 4 or 8), so a tree of
+    /// depth d needs (W − 1)(d + 1) + 1.
     pub fn stack_size(&self) -> usize {
         self.bvh.stack_size()
     }
 
-    /// Closest-hit traversal that counts its work: (BVH4 nodes tested, primitives
+    /// Closest-hit traversal that counts its work: (inner nodes tested, primitives
     /// tested). A load-independent measure of tree quality for comparing builds on
     /// a shared machine.
     #[doc(hidden)]

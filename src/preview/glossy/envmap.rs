@@ -91,11 +91,16 @@ impl PrefilteredEnv {
                 height,
                 texels,
                 scale,
-            } => Grid {
-                width: *width,
-                height: (*height).max(2),
-                texels: texels.iter().map(|t| *t * *scale).collect(),
-            },
+            } => {
+                let scaled: Vec<Vec3> = texels.iter().map(|t| *t * *scale).collect();
+                // A one-row image is constant in v: the grid needs both poles' rows.
+                let rows = (*height).max(2);
+                Grid {
+                    width: *width,
+                    height: rows,
+                    texels: scaled.iter().cycle().take(width * rows).copied().collect(),
+                }
+            }
             other => tabulate(other),
         };
         let levels = (0..LEVELS)
@@ -146,8 +151,8 @@ impl PrefilteredEnv {
 /// atan2 through Abramowitz & Stegun 4.4.47 (Hastings' minimax polynomial on
 /// [0, 1]; with its published 7-digit coefficients |error| ≤ 1.2e-5 rad) and the
 /// octant identities: libm's atan2f was a tenth of a frame (two per lobe, eight
-/// lobes per pixel). 1.2e-5 rad is 1/250 of
-/// a texel of a 2048-wide environment, so no lookup moves visibly.
+/// lobes per pixel). 1.2e-5 rad is 1/250 of a texel of a 2048-wide environment,
+/// so no lookup moves visibly.
 fn atan2_fast(y: f32, x: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
@@ -201,7 +206,7 @@ fn tabulate(env: &Environment) -> Grid {
 /// the source texels where the kernel exceeds e^{−16} of its peak; the quadrature
 /// is normalised by the kernel's own sum so that a constant is reproduced exactly.
 fn prefilter(src: &Grid, kappa: f32) -> Grid {
-    let width = ((16.0 * kappa.sqrt()).ceil() as usize).clamp(64, src.width);
+    let width = ((16.0 * kappa.sqrt()).ceil() as usize).clamp(src.width.min(64), src.width);
     let height = (width / 2).max(2);
     let kappa = kappa as f64;
     let cos_cut = (1.0 - 16.0 / kappa).max(-1.0);
@@ -288,6 +293,28 @@ mod tests {
             "worst {worst}"
         );
         assert!(worst > 1e-8, "the polynomial is not exact");
+    }
+
+    #[test]
+    fn tiny_images_prefilter_without_overrunning() {
+        for (width, height) in [(1, 1), (3, 1), (8, 4)] {
+            let env = Environment::Image {
+                width,
+                height,
+                texels: vec![Vec3::new(0.5, 1.0, 2.0); width * height],
+                scale: 2.0,
+            };
+            let p = PrefilteredEnv::new(&env);
+            // A constant environment stays constant through every level.
+            for kappa in [0.3, 10.0, 5000.0] {
+                let v = p.lookup(Vec3::new(0.6, 0.0, 0.8), kappa);
+                assert!(
+                    (v - Vec3::new(1.0, 2.0, 4.0)).abs().max_element() < 1e-3,
+                    "{v}"
+                );
+            }
+            assert_eq!(p.background(&env, Vec3::Y), Vec3::new(1.0, 2.0, 4.0));
+        }
     }
 
     #[test]

@@ -647,16 +647,25 @@ impl Transfer {
         store::encode(self, key)
     }
 
-    /// A transfer encoded under `key`, its mesh rebuilt from the split log; `None`
-    /// if the bytes are stale (another key) or unreadable.
     /// The key `bytes` were cached under (see [`store::stored_key`]).
     pub fn stored_key(bytes: &[u8]) -> Option<&str> {
         store::stored_key(bytes)
     }
 
+    /// A transfer encoded under `key`, its mesh rebuilt from the split log; `None`
+    /// if the bytes are stale (another key), unreadable or inconsistent (a vertex
+    /// whose slice count is not its angular level's, which a lookup would overrun).
     pub fn decode(bytes: &[u8], key: &str, scene: &Scene, settings: &Settings) -> Option<Transfer> {
         let s = store::decode(bytes, key)?;
         let ico = Icosphere::new(settings.max_angular_level.max(fit::FIT_LEVEL));
+        let consistent = |v: &VertexTransfer| {
+            v.glossy.is_empty()
+                || (v.level as usize <= ico.max_level()
+                    && v.glossy.len() == ico.slot_end[v.level as usize])
+        };
+        if !s.vertices.iter().all(consistent) {
+            return None;
+        }
         let interp = interp_vertex(scene);
         let mut mesh = AdaptiveMesh::new(&scene.meshes);
         for f in s.split_log {

@@ -90,22 +90,19 @@ impl<'a> Reader<'a> {
         let x = f32::from_le_bytes(self.take(4)?.try_into().ok()?);
         x.is_finite().then_some(x)
     }
-    fn u16(&mut self) -> Option<u16> {
-        Some(u16::from_le_bytes(self.take(2)?.try_into().ok()?))
-    }
     fn packed(&mut self) -> Option<PackedSlice> {
         let mut s = [PackedLobe::pack(&Lobe::default()); 4];
         for l in &mut s {
-            let v: Vec<u16> = (0..6).map(|_| self.u16()).collect::<Option<_>>()?;
+            let b = self.take(12)?;
+            let v: [u16; 6] = std::array::from_fn(|k| u16::from_le_bytes([b[2 * k], b[2 * k + 1]]));
+            // An all-ones exponent is a half-float ∞ or NaN: never written.
+            if v[2..].iter().any(|h| h & 0x7c00 == 0x7c00) {
+                return None;
+            }
             *l = PackedLobe {
                 oct: [v[0], v[1]],
                 kappa_alpha: [v[2], v[3], v[4], v[5]],
             };
-            // Half floats decode to ∞ or NaN from an all-ones exponent.
-            let u = l.unpack();
-            if !(u.kappa.is_finite() && u.alpha.is_finite()) {
-                return None;
-            }
         }
         Some(s)
     }
