@@ -235,10 +235,8 @@ impl<N: WideNode> Bvh<N> {
             if *c == EMPTY || *c & LEAF_BIT == 0 {
                 return;
             }
-            let (first, count) = f(
-                (*c & FIRST_MASK) as usize,
-                ((*c >> COUNT_SHIFT) & (MAX_LEAF - 1)) as usize + 1,
-            );
+            let (first, count) = decode_leaf(*c);
+            let (first, count) = f(first, count);
             debug_assert!(first <= MAX_PRIMITIVES && (1..=MAX_LEAF as usize).contains(&count));
             *c = LEAF_BIT | (count as u32 - 1) << COUNT_SHIFT | first as u32;
         };
@@ -305,13 +303,22 @@ impl<N: WideNode> Bvh<N> {
                 let weight = if c & LEAF_BIT == 0 {
                     1.0
                 } else {
-                    (((c >> COUNT_SHIFT) & (MAX_LEAF - 1)) + 1) as f64
+                    decode_leaf(c).1 as f64
                 };
                 cost += weight * half_area(node.child_box(k)) / root_area;
             }
         }
         cost as f32
     }
+}
+
+/// A leaf code's primitives: (first, count).
+#[inline(always)]
+pub(super) fn decode_leaf(code: u32) -> (usize, usize) {
+    (
+        (code & FIRST_MASK) as usize,
+        ((code >> COUNT_SHIFT) & (MAX_LEAF - 1)) as usize + 1,
+    )
 }
 
 impl Bvh4 {
@@ -403,8 +410,7 @@ impl Bvh4 {
                 cur = ids[k - 1];
             }
             if cur != EMPTY {
-                let first = (cur & FIRST_MASK) as usize;
-                let count = ((cur >> COUNT_SHIFT) & (MAX_LEAF - 1)) as usize + 1;
+                let (first, count) = decode_leaf(cur);
                 match leaf(first, count) {
                     None => return,
                     Some(t) => {

@@ -771,6 +771,17 @@ fn ray_is_valid(ray: &Ray) -> bool {
 mod tests {
     use super::*;
 
+    /// Uniform f32s in [0, 1) from a 64-bit LCG: test data reproducible without a
+    /// dependency.
+    fn lcg(mut seed: u64) -> impl FnMut() -> f32 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / 16_777_216.0
+        }
+    }
+
     /// A closed, finely tessellated sphere (shared edges and vertices), a
     /// heap of small overlapping quads, and analytic spheres.
     fn scene() -> (Vec<Mesh>, Vec<Sphere>) {
@@ -802,13 +813,7 @@ mod tests {
             triangles,
             ..Default::default()
         };
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / 16_777_216.0
-        };
+        let mut next = lcg(7);
         let mut quads = Mesh {
             name: "quads".into(),
             ..Default::default()
@@ -844,13 +849,7 @@ mod tests {
     #[test]
     fn node_widths_and_leaf_sizes_agree_with_brute_force() {
         let (meshes, spheres) = scene();
-        let mut seed = 11u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / 16_777_216.0
-        };
+        let mut next = lcg(11);
         let rays: Vec<Ray> = (0..3000)
             .map(|_| {
                 let o = Vec3::new(next(), next(), next()) * 6.0 - 3.0;
