@@ -96,6 +96,17 @@ pub struct BsdfSample {
 impl Material {
     /// f(wo, wi), without the cosine; zero for delta lobes.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if let Material::Lambert { albedo } = self {
+            // f does not depend on the directions, only on both being above the
+            // horizon, which normalising cannot change: skip the two f64 square
+            // roots `upper_pair` takes (same result bit for bit).
+            let upper = wo.is_finite() && wi.is_finite() && wo.z > 0.0 && wi.z > 0.0;
+            return if upper {
+                lambert::eval(*albedo)
+            } else {
+                Vec3::ZERO
+            };
+        }
         let Some((wo, wi)) = upper_pair(wo, wi) else {
             return Vec3::ZERO;
         };
