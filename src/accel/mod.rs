@@ -598,7 +598,31 @@ impl Accel {
     /// (counter-clockwise winding for triangles, outward for spheres). `None` if the
     /// hit does not refer to a primitive of this BVH.
     pub fn surface_point(&self, ray: &Ray, hit: &Hit) -> Option<SurfacePoint> {
-        let input = match hit.prim {
+        match *self.prim(hit.prim)? {
+            Prim::Triangle { v, .. } => Some(offset::triangle_point(v, hit.bary)),
+            Prim::Sphere { center, radius, .. } => {
+                Some(offset::sphere_point(center, radius, ray.at(hit.t)))
+            }
+        }
+    }
+
+    /// The hit of `ray` with the one primitive `prim`, by the exact test
+    /// [`Accel::intersect`] runs (same t and barycentrics, bit for bit): for a
+    /// caller that already knows which primitive the ray sees (the previews find
+    /// primary visibility by rasterising, `preview::raster`). `None` when the ray
+    /// misses it or `prim` is not in this BVH.
+    pub fn intersect_primitive(&self, ray: &Ray, prim: PrimRef) -> Option<Hit> {
+        if !ray_is_valid(ray) {
+            return None;
+        }
+        let p = self.prim(prim)?;
+        let wr = WatertightRay::new(ray.origin, ray.dir);
+        with_axes!(wr.axes, p.intersect(ray, &wr, ray.t_max))
+    }
+
+    /// The stored primitive of a [`PrimRef`], `None` when out of range or rejected.
+    fn prim(&self, prim: PrimRef) -> Option<&Prim> {
+        let input = match prim {
             PrimRef::Triangle { mesh, tri } => {
                 let first = *self.mesh_first.get(mesh as usize)?;
                 let end = *self.mesh_first.get(mesh as usize + 1)?;
@@ -608,13 +632,7 @@ impl Accel {
             PrimRef::Sphere(s) => self.mesh_first.last()?.checked_add(s)?,
         };
         let slot = *self.slot_of_input.get(input as usize)?;
-        let prim = self.prims.get(slot as usize)?;
-        match *prim {
-            Prim::Triangle { v, .. } => Some(offset::triangle_point(v, hit.bary)),
-            Prim::Sphere { center, radius, .. } => {
-                Some(offset::sphere_point(center, radius, ray.at(hit.t)))
-            }
-        }
+        self.prims.get(slot as usize)
     }
 
     fn traversable(&self, ray: &Ray) -> bool {

@@ -4,4 +4,5 @@
 //! each preview against the path tracer.
 
 pub mod glossy;
+pub mod raster;
 pub mod shadow_field;

@@ -93,6 +93,34 @@ impl Camera {
     }
 
     /// Projects a world point to image coordinates (pixels); `None` if behind.
+    /// `x − from` in the camera's frame (right, up, forward), in f64: the
+    /// rasteriser's input (`preview::raster`), whose depth is the forward component.
+    pub fn view_coordinates(&self, x: Vec3) -> glam::DVec3 {
+        let d = x.as_dvec3() - self.from.as_dvec3();
+        glam::DVec3::new(
+            d.dot(self.right.as_dvec3()),
+            d.dot(self.true_up.as_dvec3()),
+            d.dot(self.forward.as_dvec3()),
+        )
+    }
+
+    /// The continuous pixel position of a point given in view coordinates with a
+    /// positive depth: [`Camera::project`] in f64.
+    pub fn view_to_pixel(&self, v: glam::DVec3) -> glam::DVec2 {
+        let tan_half = self.tan_half as f64;
+        let sx = v.x / (v.z * tan_half * self.aspect() as f64);
+        let sy = v.y / (v.z * tan_half);
+        glam::DVec2::new(
+            (sx + 1.0) * 0.5 * self.width as f64,
+            (1.0 - sy) * 0.5 * self.height as f64,
+        )
+    }
+
+    /// Half-extents of the image plane at unit depth (x, y): the view frustum.
+    pub fn frustum_slopes(&self) -> Vec2 {
+        Vec2::new(self.tan_half * self.aspect(), self.tan_half)
+    }
+
     pub fn project(&self, x: Vec3) -> Option<Vec2> {
         let d = x - self.from;
         let z = d.dot(self.forward);
