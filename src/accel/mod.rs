@@ -560,16 +560,32 @@ impl Accel {
         ray: &Ray,
         wr: &WatertightRay,
     ) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        for p in &self.prims {
-            let t_max = best.map_or(ray.t_max, |h| h.t);
+        let mut best: Option<(u32, Hit)> = None;
+        for (slot, p) in self.prims.iter().enumerate() {
+            let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
             if let Some(h) = p.intersect::<KX, KY, KZ>(ray, wr, t_max) {
-                if best.is_none_or(|b| h.t < b.t) {
-                    best = Some(h);
+                if self.nearer(h.t, slot as u32, best.map(|(b, bh)| (bh.t, b))) {
+                    best = Some((slot as u32, h));
                 }
             }
         }
-        best
+        best.map(|(_, h)| h)
+    }
+
+    /// Whether a hit at distance `t` on the primitive in `slot` replaces `best`
+    /// (its distance and slot; the caller has already bounded `t` by it): nearer,
+    /// or as near and earlier in input order (triangles of mesh 0, mesh 1, …, then
+    /// spheres), so that ties do not depend on the order the tree visits leaves.
+    #[inline(always)]
+    fn nearer(&self, t: f32, slot: u32, best: Option<(f32, u32)>) -> bool {
+        let Some((best_t, best_slot)) = best else {
+            return true;
+        };
+        let key = |s: u32| match self.prims[s as usize] {
+            Prim::Triangle { mesh, tri, .. } => (0, mesh, tri),
+            Prim::Sphere { id, .. } => (1, id, 0),
+        };
+        t < best_t || (t == best_t && key(slot) < key(best_slot))
     }
 
     /// Reference any-hit: every primitive is tested, no BVH.
@@ -674,22 +690,25 @@ impl Accel {
                         continue;
                     }
                     let (ts, b1, b2) = (h.t.to_array(), h.b1.to_array(), h.b2.to_array());
-                    // Lanes in slot order, a hit at the same distance replacing
-                    // the earlier one: what testing the primitives one by one did.
+                    // A hit at the same distance as the best so far (a ray through a
+                    // shared edge) wins by input order, not by visit order, which
+                    // depends on the node width: the same image on every CPU.
                     while lanes != 0 {
                         let lane = lanes.trailing_zeros() as usize;
                         lanes &= lanes - 1;
                         let slot = block.slots[lane] & !SPHERE_LANE;
-                        if h.hits & (1 << lane) != 0 {
-                            if ts[lane] <= t_max {
-                                t_max = ts[lane];
-                                best = Some((slot, ts[lane], Vec2::new(b1[lane], b2[lane])));
+                        let found = if h.hits & (1 << lane) != 0 {
+                            (ts[lane] <= t_max).then(|| (ts[lane], Vec2::new(b1[lane], b2[lane])))
+                        } else {
+                            self.prims[slot as usize]
+                                .intersect::<KX, KY, KZ>(ray, wr, t_max)
+                                .map(|hit| (hit.t, hit.bary))
+                        };
+                        if let Some((t, bary)) = found {
+                            if self.nearer(t, slot, best.map(|(b, bt, _)| (bt, b))) {
+                                t_max = t;
+                                best = Some((slot, t, bary));
                             }
-                        } else if let Some(hit) =
-                            self.prims[slot as usize].intersect::<KX, KY, KZ>(ray, wr, t_max)
-                        {
-                            t_max = hit.t;
-                            best = Some((slot, hit.t, hit.bary));
                         }
                     }
                 }
