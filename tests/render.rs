@@ -114,7 +114,9 @@ fn light_sample_densities_are_consistent() {
     let mut inv_pdf = 0.0f64;
     for i in 0..n {
         let mut smp = PixelSampler::new(0, i, 3);
-        let ls = lights.sample(&s, p, smp.next_1d(), smp.next_2d()).unwrap();
+        let ls = lights
+            .sample(&s, p, Vec3::Y, smp.next_1d(), smp.next_2d())
+            .unwrap();
         let (q, nq) = ls.point.unwrap();
         let again = lights.pdf_emitter(&s, gradtrace::accel::PrimRef::Sphere(0), p, q, nq);
         assert!(
@@ -142,7 +144,7 @@ fn light_sample_densities_are_consistent() {
     let mut est = 0.0f64;
     for i in 0..n {
         let mut smp = PixelSampler::new(1, i, 3);
-        if let Some(ls) = lights.sample(&s2, p, smp.next_1d(), smp.next_2d()) {
+        if let Some(ls) = lights.sample(&s2, p, Vec3::Y, smp.next_1d(), smp.next_2d()) {
             let (_, nq) = ls.point.unwrap();
             est += 1.0 / ls.pdf as f64;
             assert!(nq.y < 0.0);
@@ -176,9 +178,9 @@ fn gaussian_sky_sampling_integrates_the_sky() {
         for i in 0..n {
             let mut smp = PixelSampler::new(2, i, 9);
             let ls = lights
-                .sample(&s, Vec3::ZERO, smp.next_1d(), smp.next_2d())
+                .sample(&s, Vec3::ZERO, Vec3::Y, smp.next_1d(), smp.next_2d())
                 .unwrap();
-            assert!((lights.pdf_env(&s, ls.wi) - ls.pdf).abs() < 1e-3 * ls.pdf);
+            assert!((lights.pdf_env(&s, ls.wi, Vec3::Y) - ls.pdf).abs() < 1e-3 * ls.pdf);
             est += (ls.radiance.x / ls.pdf) as f64;
         }
         let k = kappa as f64;
@@ -189,6 +191,56 @@ fn gaussian_sky_sampling_integrates_the_sky() {
             (got - exact).abs() < 0.01 * exact,
             "kappa {kappa}: {got} vs {exact}"
         );
+    }
+}
+
+/// Constant-environment sampling is cosine-weighted about the receiver's normal:
+/// every sample lies in its hemisphere, `pdf_env` reproduces the density, and
+/// E[cos θ · L / pdf] is the irradiance π·L, with zero variance (the estimator is
+/// constant), for normals in every orientation.
+#[test]
+fn constant_environment_sampling_is_cosine_weighted_about_the_normal() {
+    let mut s = empty_scene(camera(4, 4));
+    s.environment = Some(Environment::Constant {
+        radiance: Vec3::new(0.5, 1.0, 2.0),
+    });
+    let lights = LightSet::build(&s);
+    for n in [
+        Vec3::Y,
+        Vec3::NEG_Z,
+        Vec3::new(0.3, -0.8, 0.52).normalize(),
+        Vec3::new(-1.0, 1e-4, 0.0).normalize(),
+    ] {
+        let count = 20_000u32;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        for i in 0..count {
+            let mut smp = PixelSampler::new(4, i, 2);
+            let Some(ls) = lights.sample(&s, Vec3::ZERO, n, smp.next_1d(), smp.next_2d()) else {
+                continue;
+            };
+            let cos = ls.wi.dot(n);
+            assert!(cos > 0.0, "{n}: {ls:?} below the horizon");
+            let again = lights.pdf_env(&s, ls.wi, n);
+            assert!(
+                (again - ls.pdf).abs() <= 1e-6 * ls.pdf,
+                "{again} vs {}",
+                ls.pdf
+            );
+            let e = (cos * ls.radiance.y / ls.pdf) as f64;
+            sum += e;
+            sum2 += e * e;
+        }
+        let mean = sum / count as f64;
+        let var = sum2 / count as f64 - mean * mean;
+        let exact = std::f64::consts::PI;
+        assert!(
+            (mean - exact).abs() < 2e-3 * exact,
+            "{n}: {mean} vs {exact}"
+        );
+        assert!(var < 1e-6, "{n}: variance {var}");
+        // Directions below the horizon have no density (BSDF samples there get
+        // the full MIS weight).
+        assert_eq!(lights.pdf_env(&s, -n, n), 0.0);
     }
 }
 
@@ -231,9 +283,9 @@ fn image_environment_sampling_integrates_the_map() {
         let mut smp = PixelSampler::new(5, i, 1);
         let (u1, u2) = (smp.next_1d(), smp.next_2d());
         let ls = lights
-            .sample(&s, Vec3::ZERO, u1, u2)
+            .sample(&s, Vec3::ZERO, Vec3::Y, u1, u2)
             .unwrap_or_else(|| panic!("{u1} {u2}"));
-        assert!((lights.pdf_env(&s, ls.wi) - ls.pdf).abs() < 1e-3 * ls.pdf.max(1e-3));
+        assert!((lights.pdf_env(&s, ls.wi, Vec3::Y) - ls.pdf).abs() < 1e-3 * ls.pdf.max(1e-3));
         est += (ls.radiance.x / ls.pdf) as f64;
     }
     let got = est / n as f64;

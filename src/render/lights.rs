@@ -52,7 +52,11 @@ pub struct LightSample {
 /// How the environment is importance-sampled: built only for scenes that have one.
 #[derive(Clone, Debug)]
 pub enum EnvSampler {
-    /// Constant radiance: uniform sphere.
+    /// Constant radiance: cosine-weighted about the receiving point's shading
+    /// normal. A constant sky sends the same radiance from every direction, so the
+    /// direct light's integrand is cos θ times the BSDF: sampling the cosine makes it
+    /// exact for a diffuse receiver (bar visibility), where the uniform sphere (what
+    /// Mitsuba's `constant` emitter does) wastes half its samples below the horizon.
     Uniform,
     /// Lat-long image: a 2D piecewise-constant distribution over texels with
     /// weights luminance · sin θ (the Jacobian of the lat-long map).
@@ -143,15 +147,23 @@ impl LightSet {
         (tris, spheres, self.env_light.is_some())
     }
 
-    /// Picks a light with `u_pick` and samples a direction toward it from `p`.
-    pub fn sample(&self, scene: &Scene, p: Vec3, u_pick: f32, u: Vec2) -> Option<LightSample> {
+    /// Picks a light with `u_pick` and samples a direction toward it from `p`, a
+    /// point whose shading normal is `n` (the hemisphere that receives light).
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        n: Vec3,
+        u_pick: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
         let choose = self.choose.as_ref()?;
         let idx = choose.sample_discrete(u_pick);
         let pick = choose.discrete_pmf(idx);
         let mut s = match self.lights[idx] {
             Light::Triangle { mesh, tri, area } => sample_triangle(scene, mesh, tri, area, p, u)?,
             Light::Sphere(i) => sample_sphere(scene, i, p, u)?,
-            Light::Environment => self.sample_env(scene.environment.as_ref()?, u)?,
+            Light::Environment => self.sample_env(scene.environment.as_ref()?, n, u)?,
         };
         s.pdf *= pick;
         (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
@@ -222,17 +234,18 @@ impl LightSet {
         }
     }
 
-    /// Density with which [`Self::sample`] would produce the environment direction `wi`.
-    pub fn pdf_env(&self, scene: &Scene, wi: Vec3) -> f32 {
+    /// Density with which [`Self::sample`] would produce the environment direction `wi`
+    /// at a point of shading normal `n`.
+    pub fn pdf_env(&self, scene: &Scene, wi: Vec3, n: Vec3) -> f32 {
         let (Some(idx), Some(choose), Some(env)) =
             (self.env_light, &self.choose, &scene.environment)
         else {
             return 0.0;
         };
-        choose.discrete_pmf(idx as usize) * self.env_pdf(env, wi)
+        choose.discrete_pmf(idx as usize) * self.env_pdf(env, wi, n)
     }
 
-    fn sample_env(&self, env: &Environment, u: Vec2) -> Option<LightSample> {
+    fn sample_env(&self, env: &Environment, n: Vec3, u: Vec2) -> Option<LightSample> {
         let wi = match (self.env_sampler.as_ref()?, env) {
             (EnvSampler::Image(dist), _) => {
                 let (uv, _) = dist.sample(u);
@@ -254,9 +267,12 @@ impl LightSet {
                     warp::square_to_uniform_sphere(u)
                 }
             }
+            (EnvSampler::Uniform, _) => {
+                Frame::from_normal(n).to_world(warp::square_to_cosine_hemisphere(u))
+            }
             _ => warp::square_to_uniform_sphere(u),
         };
-        let pdf = self.env_pdf(env, wi);
+        let pdf = self.env_pdf(env, wi, n);
         Some(LightSample {
             wi,
             radiance: env.eval(wi),
@@ -266,7 +282,7 @@ impl LightSet {
         })
     }
 
-    fn env_pdf(&self, env: &Environment, wi: Vec3) -> f32 {
+    fn env_pdf(&self, env: &Environment, wi: Vec3, n: Vec3) -> f32 {
         match (self.env_sampler.as_ref(), env) {
             (Some(EnvSampler::Image(dist)), _) => {
                 let uv = direction_to_latlong(wi);
@@ -289,6 +305,7 @@ impl LightSet {
                 lobe_prob * warp::vmf_pdf(wi.dot(*direction), *sharpness)
                     + (1.0 - lobe_prob) * warp::UNIFORM_SPHERE_PDF
             }
+            (Some(EnvSampler::Uniform), _) => wi.dot(n).max(0.0) * std::f32::consts::FRAC_1_PI,
             (Some(_), _) => warp::UNIFORM_SPHERE_PDF,
             (None, _) => 0.0,
         }

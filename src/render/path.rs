@@ -88,6 +88,9 @@ struct PathState {
     /// camera rays and delta lobes (emitters they hit count with full weight).
     prev_pdf: f32,
     prev_p: Vec3,
+    /// The previous vertex's shading normal: the environment's light-sampling
+    /// density depends on it (`LightSet::pdf_env`).
+    prev_n: Vec3,
     /// The previous vertex sampled its direct light by lines: emitters that
     /// lines cover are not counted again when the path hits them.
     prev_line: bool,
@@ -156,6 +159,7 @@ impl PathTracer<'_> {
             beta: Vec3::ONE,
             prev_pdf: f32::INFINITY,
             prev_p: ray.origin,
+            prev_n: Vec3::ZERO,
             prev_line: false,
         };
         for depth in 1..=self.max_depth {
@@ -266,7 +270,10 @@ impl PathTracer<'_> {
         } else if st.prev_pdf.is_infinite() {
             1.0
         } else {
-            power_heuristic(st.prev_pdf, self.lights.pdf_env(self.scene, ray.dir))
+            power_heuristic(
+                st.prev_pdf,
+                self.lights.pdf_env(self.scene, ray.dir, st.prev_n),
+            )
         };
         st.beta * le * w
     }
@@ -316,7 +323,7 @@ impl PathTracer<'_> {
         if material.is_delta() {
             return (Vec3::ZERO, 0);
         }
-        let Some(ls) = self.lights.sample(scene, si.p, u_pick, u_light) else {
+        let Some(ls) = self.lights.sample(scene, si.p, si.frame.n, u_pick, u_light) else {
             return (Vec3::ZERO, 0);
         };
         let wi_local = si.frame.to_local(ls.wi);
@@ -389,6 +396,7 @@ impl PathTracer<'_> {
         st.beta *= bs.weight;
         st.prev_pdf = if bs.is_delta { f32::INFINITY } else { bs.pdf };
         st.prev_p = si.p;
+        st.prev_n = si.frame.n;
         let ray = Ray::new(offset_origin(si.p, si.ng, wi), wi);
         // Russian roulette on the throughput, once paths are long enough.
         let u_rr = sampler.next_1d();
