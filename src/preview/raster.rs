@@ -73,6 +73,7 @@ impl PrimaryVisibility {
             count = count.checked_add(u32::try_from(m.triangles.len()).ok()?)?;
         }
         mesh_first.push(count);
+        // A sample stores 1 + the triangle's input index (0: none): it must fit.
         count.checked_add(1)?;
         let near = near_distance(meshes, camera);
         let slopes = camera.frustum_slopes().as_dvec2();

@@ -57,7 +57,7 @@ pub enum EnvSampler {
     /// direct light's integrand is cos θ times the BSDF: sampling the cosine makes it
     /// exact for a diffuse receiver (bar visibility), where the uniform sphere (what
     /// Mitsuba's `constant` emitter does) wastes half its samples below the horizon.
-    Uniform,
+    CosineAboutNormal,
     /// Lat-long image: a 2D piecewise-constant distribution over texels with
     /// weights luminance · sin θ (the Jacobian of the lat-long map).
     Image(Distribution2D),
@@ -267,7 +267,7 @@ impl LightSet {
                     warp::square_to_uniform_sphere(u)
                 }
             }
-            (EnvSampler::Uniform, _) => {
+            (EnvSampler::CosineAboutNormal, _) => {
                 Frame::from_normal(n).to_world(warp::square_to_cosine_hemisphere(u))
             }
             _ => warp::square_to_uniform_sphere(u),
@@ -305,7 +305,9 @@ impl LightSet {
                 lobe_prob * warp::vmf_pdf(wi.dot(*direction), *sharpness)
                     + (1.0 - lobe_prob) * warp::UNIFORM_SPHERE_PDF
             }
-            (Some(EnvSampler::Uniform), _) => wi.dot(n).max(0.0) * std::f32::consts::FRAC_1_PI,
+            (Some(EnvSampler::CosineAboutNormal), _) => {
+                wi.dot(n).max(0.0) * std::f32::consts::FRAC_1_PI
+            }
             (Some(_), _) => warp::UNIFORM_SPHERE_PDF,
             (None, _) => 0.0,
         }
@@ -314,7 +316,7 @@ impl LightSet {
 
 fn build_env_sampler(env: &Environment) -> EnvSampler {
     match env {
-        Environment::Constant { .. } => EnvSampler::Uniform,
+        Environment::Constant { .. } => EnvSampler::CosineAboutNormal,
         Environment::Image {
             width,
             height,

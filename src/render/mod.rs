@@ -199,7 +199,9 @@ pub fn describe(scene: &Scene) -> String {
     let (tris, spheres, env) = lights.counts();
     let env_sampler = match &lights.env_sampler {
         None => "none".to_string(),
-        Some(lights::EnvSampler::Uniform) => "uniform sphere".to_string(),
+        Some(lights::EnvSampler::CosineAboutNormal) => {
+            "cosine-weighted about the shading normal".to_string()
+        }
         Some(lights::EnvSampler::Image(_)) => "2D piecewise-constant (lat-long texels)".to_string(),
         Some(lights::EnvSampler::GaussianSky { lobe_prob }) => {
             format!("vMF lobe (p = {lobe_prob:.3}) + uniform")

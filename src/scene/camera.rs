@@ -92,7 +92,6 @@ impl Camera {
         self.forward
     }
 
-    /// Projects a world point to image coordinates (pixels); `None` if behind.
     /// `x − from` in the camera's frame (right, up, forward), in f64: the
     /// rasteriser's input (`preview::raster`), whose depth is the forward component.
     pub fn view_coordinates(&self, x: Vec3) -> glam::DVec3 {
@@ -105,11 +104,11 @@ impl Camera {
     }
 
     /// The continuous pixel position of a point given in view coordinates with a
-    /// positive depth: [`Camera::project`] in f64.
+    /// positive depth.
     pub fn view_to_pixel(&self, v: glam::DVec3) -> glam::DVec2 {
-        let tan_half = self.tan_half as f64;
-        let sx = v.x / (v.z * tan_half * self.aspect() as f64);
-        let sy = v.y / (v.z * tan_half);
+        let slopes = self.frustum_slopes().as_dvec2();
+        let sx = v.x / (v.z * slopes.x);
+        let sy = v.y / (v.z * slopes.y);
         glam::DVec2::new(
             (sx + 1.0) * 0.5 * self.width as f64,
             (1.0 - sy) * 0.5 * self.height as f64,
@@ -121,18 +120,10 @@ impl Camera {
         Vec2::new(self.tan_half * self.aspect(), self.tan_half)
     }
 
+    /// Projects a world point to image coordinates (pixels); `None` if behind.
     pub fn project(&self, x: Vec3) -> Option<Vec2> {
-        let d = x - self.from;
-        let z = d.dot(self.forward);
-        if z <= 0.0 {
-            return None;
-        }
-        let sx = d.dot(self.right) / (z * self.tan_half * self.aspect());
-        let sy = d.dot(self.true_up) / (z * self.tan_half);
-        Some(Vec2::new(
-            (sx + 1.0) * 0.5 * self.width as f32,
-            (1.0 - sy) * 0.5 * self.height as f32,
-        ))
+        let v = self.view_coordinates(x);
+        (v.z > 0.0).then(|| self.view_to_pixel(v).as_vec2())
     }
 }
 
