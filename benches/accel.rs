@@ -115,6 +115,20 @@ fn bench_accel(c: &mut Criterion) {
     {
         preset.node_width = w;
     }
+    // GRADTRACE_ACCEL_LEAF / GRADTRACE_ACCEL_REINSERT: another leaf size or
+    // reinsertion ratio, for timing a preset (`GRADTRACE_ACCEL_TIME`).
+    if let Some(n) = std::env::var("GRADTRACE_ACCEL_LEAF")
+        .ok()
+        .and_then(|n| n.parse().ok())
+    {
+        preset.max_prims_per_leaf = n;
+    }
+    if let Some(r) = std::env::var("GRADTRACE_ACCEL_REINSERT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+    {
+        preset.reinsertion_ratio = r;
+    }
     if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
         let accel = Accel::build_with_preset(&meshes, &[], &preset);
         let (lo, hi) = accel.bounds().expect("bunny is not empty");
