@@ -624,3 +624,75 @@ fn back_facing_shading_normals_are_flagged_and_black() {
     println!("{flagged} flagged estimates");
     assert!(flagged > 10);
 }
+
+/// The soft-shadow scene (a sphere resting on the ground under a square light)
+/// renders the same 10⁴ units from the origin as at it: the ray offsets are the
+/// hit points' own rounding bounds (`accel::offset`), not a fraction of the
+/// coordinates — the path tracer's earlier 1e-4·|p| offset was a whole unit
+/// there, above the sphere, and lifted every shadow ray off the ground.
+/// Compared 8×8-pixel block means against the seed-to-seed noise at the origin.
+#[test]
+fn a_scene_far_from_the_origin_renders_as_it_does_at_the_origin() {
+    let build = |shift: Vec3| {
+        let cam = Camera::new(
+            Vec3::new(0.0, 1.5, 5.0) + shift,
+            Vec3::new(0.0, 0.3, 0.0) + shift,
+            Vec3::Y,
+            35.0,
+            48,
+            32,
+        )
+        .unwrap();
+        let mut s = empty_scene(cam);
+        add_sphere_under_square_light(&mut s, 0.8, 0.5, 0.5, 0.4, 12.0);
+        for m in &mut s.meshes {
+            m.positions.iter_mut().for_each(|p| *p += shift);
+            if let Some(r) = &mut m.rect {
+                r.corner += shift;
+            }
+        }
+        s.spheres.iter_mut().for_each(|sp| sp.center += shift);
+        s.settings.max_depth = 4;
+        s
+    };
+    let render_with = |s: &Scene, seed: u32| {
+        let accel = Accel::build(&s.meshes, &s.spheres);
+        let opts = RenderOptions {
+            spp: Some(64),
+            seed: Some(seed),
+            ..Default::default()
+        };
+        render(s, &accel, &opts, &|_, _| {}).unwrap()
+    };
+    let blocks = |img: &gradtrace::render::RenderOutput| -> Vec<f32> {
+        let mut out = Vec::new();
+        for by in 0..img.height / 8 {
+            for bx in 0..img.width / 8 {
+                let mut sum = 0.0;
+                for y in 0..8 {
+                    for x in 0..8 {
+                        let c = img.beauty[(by * 8 + y) * img.width + bx * 8 + x];
+                        sum += c.x + c.y + c.z;
+                    }
+                }
+                out.push(sum / 64.0);
+            }
+        }
+        out
+    };
+    let worst = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs() / x.abs().max(y.abs()).max(0.05))
+            .fold(0.0f32, f32::max)
+    };
+    let here = build(Vec3::ZERO);
+    let (a, b) = (
+        blocks(&render_with(&here, 1)),
+        blocks(&render_with(&here, 2)),
+    );
+    let far = blocks(&render_with(&build(Vec3::new(1.0e4, 0.0, -1.0e4)), 1));
+    let (noise, shift) = (worst(&a, &b), worst(&a, &far));
+    println!("worst block difference: seed to seed {noise:.4}, origin to 1e4 away {shift:.4}");
+    assert!(shift < 2.0 * noise + 0.01, "{shift} against noise {noise}");
+}

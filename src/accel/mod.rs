@@ -36,7 +36,9 @@ mod primitive;
 
 #[doc(hidden)]
 pub use build::BuildPreset;
-pub use offset::{offset_ray_origin, offset_ray_origin_with_error, SurfacePoint};
+pub use offset::{
+    offset_ray_origin, offset_ray_origin_with_error, sphere_point, triangle_point, SurfacePoint,
+};
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};

@@ -1,6 +1,12 @@
 //! Robust spawning of secondary and shadow rays (pbrt-v4, §6.8.6 "Robust Spawned
 //! Ray Origins", Pharr, Jakob & Humphreys).
 //!
+//! This is the renderer's one ray-offset mechanism: the path tracer's
+//! `Interaction` carries the same point and bound, the previews spawn from
+//! [`SurfacePoint`]s, and code that has no bound uses [`offset_ray_origin`]'s
+//! conservative default. It relies on the triangle test rejecting hits with
+//! t ≤ δt (its own rounding bound, `primitive.rs`), as pbrt-v4's does.
+//!
 //! How callers should do it: never start a continuation or shadow ray at the raw
 //! hit point with a fixed `t_min = 1e-4`. Instead recompute the point from the
 //! primitive ([`crate::accel::Accel::surface_point`]), carry a conservative
@@ -14,15 +20,7 @@
 
 use crate::math::{Ray, Vec2, Vec3};
 
-/// Unit roundoff of f32 (2^-24).
-const UNIT_ROUNDOFF: f32 = f32::EPSILON * 0.5;
-
-/// γ(n) = n·u / (1 − n·u), the bound on the relative error of n rounded operations
-/// (pbrt-v4 eq. 6.25 / Higham).
-fn gamma(n: i32) -> f32 {
-    let nu = n as f32 * UNIT_ROUNDOFF;
-    nu / (1.0 - nu)
-}
+use super::primitive::gamma;
 
 /// Relative error assumed by [`offset_ray_origin`] when the caller has no error
 /// bound: 2^-18 ≈ 64 ulps of the largest coordinate — covers a point interpolated
@@ -37,12 +35,22 @@ const DEFAULT_REL_ERROR: f32 = 1.0 / 262_144.0;
 /// prefer [`SurfacePoint::spawn_ray`] when a [`SurfacePoint`] is available, which
 /// carries an exact bound. `n_geo` need not face `dir`, nor be normalised.
 pub fn offset_ray_origin(p: Vec3, n_geo: Vec3, dir: Vec3) -> Vec3 {
-    let err = p.abs().max_element() * DEFAULT_REL_ERROR + 1.0e-30;
-    offset_ray_origin_with_error(p, Vec3::splat(err), n_geo, dir)
+    offset_ray_origin_with_error(p, default_error(p), n_geo, dir)
+}
+
+/// [`DEFAULT_REL_ERROR`] of the largest coordinate, on every axis.
+fn default_error(p: Vec3) -> Vec3 {
+    Vec3::splat(p.abs().max_element() * DEFAULT_REL_ERROR + 1.0e-30)
 }
 
 /// pbrt-v4's `OffsetRayOrigin`: `d = dot(|n|, p_error)`, move `p` by `d·n` towards
-/// the side of `dir`, then round every moved component one ulp further away.
+/// the side of `dir`, then move every moved component at least one ulp further
+/// away, so that the rounding of `p + offset` cannot pull the origin back onto
+/// the surface. pbrt steps exactly one ulp with `NextFloatUp`/`Down`; here the
+/// step is |x|·2⁻²³ (one to two ulps, at least the smallest normal float),
+/// which needs no branch per component: this runs for every ray the path
+/// tracer spawns.
+#[inline]
 pub fn offset_ray_origin_with_error(p: Vec3, p_error: Vec3, n_geo: Vec3, dir: Vec3) -> Vec3 {
     let d = n_geo.abs().dot(p_error);
     let mut offset = d * n_geo;
@@ -50,35 +58,8 @@ pub fn offset_ray_origin_with_error(p: Vec3, p_error: Vec3, n_geo: Vec3, dir: Ve
         offset = -offset;
     }
     let po = p + offset;
-    // Round away from p so that the rounding of `p + offset` cannot pull the
-    // origin back onto the surface.
-    let round = |x: f32, o: f32| {
-        if o > 0.0 {
-            next_float_up(x)
-        } else if o < 0.0 {
-            next_float_down(x)
-        } else {
-            x
-        }
-    };
-    Vec3::new(
-        round(po.x, offset.x),
-        round(po.y, offset.y),
-        round(po.z, offset.z),
-    )
-}
-
-fn next_float_up(x: f32) -> f32 {
-    if x.is_infinite() && x > 0.0 || x.is_nan() {
-        return x;
-    }
-    let x = if x == -0.0 { 0.0 } else { x };
-    let bits = x.to_bits();
-    f32::from_bits(if x >= 0.0 { bits + 1 } else { bits - 1 })
-}
-
-fn next_float_down(x: f32) -> f32 {
-    -next_float_up(-x)
+    let away = Vec3::select(offset.cmpeq(Vec3::ZERO), Vec3::ZERO, offset.signum());
+    po + away * (po.abs() * f32::EPSILON).max(Vec3::splat(f32::MIN_POSITIVE))
 }
 
 /// A hit point recomputed from its primitive, with an absolute error bound and
@@ -102,6 +83,24 @@ impl SurfacePoint {
         Ray::new(
             offset_ray_origin_with_error(self.p, self.p_error, self.n_geo, d),
             d,
+        )
+    }
+
+    /// A point with no error bound of its own (a light sample, say): the default
+    /// relative bound of [`offset_ray_origin`].
+    pub fn with_default_error(p: Vec3, n_geo: Vec3) -> Self {
+        Self {
+            p,
+            p_error: default_error(p),
+            n_geo,
+        }
+    }
+
+    /// [`Self::spawn_ray`] for a direction that is already unit length.
+    pub fn spawn_ray_unit(&self, dir: Vec3) -> Ray {
+        Ray::new(
+            offset_ray_origin_with_error(self.p, self.p_error, self.n_geo, dir),
+            dir,
         )
     }
 
@@ -140,7 +139,7 @@ impl SurfacePoint {
 
 /// pbrt-v4 triangle hit point: `p = b0 p0 + b1 p1 + b2 p2` with error bound
 /// γ₇ · Σ|bᵢ pᵢ| (pbrt-v4 eq. 6.31).
-pub(crate) fn triangle_point(v: [Vec3; 3], bary: Vec2) -> SurfacePoint {
+pub fn triangle_point(v: [Vec3; 3], bary: Vec2) -> SurfacePoint {
     let b0 = 1.0 - bary.x - bary.y;
     let (t0, t1, t2) = (v[0] * b0, v[1] * bary.x, v[2] * bary.y);
     let p = t0 + t1 + t2;
@@ -155,7 +154,14 @@ pub(crate) fn triangle_point(v: [Vec3; 3], bary: Vec2) -> SurfacePoint {
 
 /// pbrt-v4 sphere hit point: re-project onto the surface, error γ₅·|p − c|
 /// (pbrt-v4 eq. 6.32), plus the rounding of adding the centre back.
-pub(crate) fn sphere_point(center: Vec3, radius: f32, p_hit: Vec3) -> SurfacePoint {
+///
+/// The bound is widened by γ₈·|p − c| for the sphere test itself: pbrt's test
+/// carries interval bounds on t, ours (`primitive::sphere_roots`) decides the
+/// side of the surface by the sign of |f| − r, where |f| = |o − c| has a
+/// relative error of up to γ₆ (a subtraction, three products, two sums, a
+/// square root). An origin offset by this bound is therefore seen on its own
+/// side, and a ray leaving the surface cannot re-hit it.
+pub fn sphere_point(center: Vec3, radius: f32, p_hit: Vec3) -> SurfacePoint {
     let local = p_hit - center;
     let len = local.length();
     let n = if len > 0.0 { local / len } else { Vec3::Z };
@@ -163,7 +169,7 @@ pub(crate) fn sphere_point(center: Vec3, radius: f32, p_hit: Vec3) -> SurfacePoi
     let p = center + local;
     SurfacePoint {
         p,
-        p_error: gamma(5) * local.abs() + gamma(1) * (center.abs() + local.abs()),
+        p_error: (gamma(5) + gamma(8)) * local.abs() + gamma(1) * (center.abs() + local.abs()),
         n_geo: n,
     }
 }
@@ -180,7 +186,11 @@ mod tests {
         let down = offset_ray_origin(p, n, Vec3::new(0.3, 0.0, -0.5));
         assert!(up.z > p.z && down.z < p.z);
         assert_eq!((up.x, up.y), (p.x, p.y));
-        assert!(next_float_up(1.0) > 1.0 && next_float_down(1.0) < 1.0);
-        assert!(next_float_up(-0.0) > 0.0);
+        // At least one ulp beyond p + offset, also from zero.
+        let e = Vec3::splat(1.0e-30);
+        let z = offset_ray_origin_with_error(Vec3::new(0.0, 0.0, -0.0), e, n, -n);
+        assert!(z.z < 0.0 && z.x == 0.0, "{z}");
+        let q = offset_ray_origin_with_error(Vec3::new(1.0, -1.0, 1.0), e, n, n);
+        assert!(q.z > 1.0 && q.x == 1.0 && q.y == -1.0, "{q}");
     }
 }

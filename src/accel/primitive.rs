@@ -13,6 +13,34 @@
 use glam::Vec3;
 use wide::f32x4;
 
+/// γ(n) = n·u / (1 − n·u) with u = 2⁻²⁴, the relative error bound of n rounded
+/// f32 operations (pbrt-v4 eq. 6.25; Higham).
+pub(crate) const fn gamma(n: i32) -> f32 {
+    let nu = n as f32 * (f32::EPSILON * 0.5);
+    nu / (1.0 - nu)
+}
+
+/// pbrt-v4's bound on the rounding error of the watertight test's `t`
+/// (Pharr, Jakob & Humphreys, §6.8.4, "Triangle t error bounds"), from the
+/// sheared vertices' largest |x|, |y|, |z|, the largest |edge function| and
+/// 1/det. A hit with `t ≤ δt` may be behind the origin: it is rejected, which
+/// is what lets a ray spawned with [`crate::accel::SurfacePoint`]'s tight origin
+/// offset start at `t_min = 0` without re-hitting the triangle it leaves, even
+/// at grazing angles where 1/det is large. Generic so that the scalar test and
+/// each lane of the 4-wide one compute the same bits (no FMA contraction).
+#[inline(always)]
+fn t_error_bound<F>(max_x: F, max_y: F, max_z: F, max_e: F, abs_rcp_det: F) -> F
+where
+    F: Copy + std::ops::Add<Output = F> + std::ops::Mul<Output = F> + From<f32>,
+{
+    let g = |n: i32| F::from(gamma(n));
+    let delta_z = g(3) * max_z;
+    let delta_x = g(5) * (max_x + max_z);
+    let delta_y = g(5) * (max_y + max_z);
+    let delta_e = F::from(2.0) * (g(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    F::from(3.0) * (g(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * abs_rcp_det
+}
+
 /// Per-ray precomputation of the watertight test (Woop, Benthin & Wald 2013, §3,
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
 /// axis, and the shear constants that map the ray to the +z axis of a unit space.
@@ -174,6 +202,21 @@ impl WatertightRay {
         if !(t >= t_min && t <= t_max) {
             return None;
         }
+        // A ray that may only go forward (t_min ≥ 0) must be conservatively in
+        // front: t > δt (pbrt-v4 §6.8.4).
+        if t_min >= 0.0 {
+            let max3 = |p: f32, q: f32, r: f32| p.abs().max(q.abs()).max(r.abs());
+            let bound = t_error_bound(
+                max3(ax, bx, cx),
+                max3(ay, by, cy),
+                max3(az, bz, cz),
+                max3(u, v, w),
+                rcp_det.abs(),
+            );
+            if t <= bound {
+                return None;
+            }
+        }
         Some((t, v * rcp_det, w * rcp_det))
     }
 }
@@ -274,7 +317,19 @@ impl WatertightRay4 {
         let t = t_scaled * rcp_det;
         let in_range = t.simd_ge(f32x4::splat(t_min)) & t.simd_le(f32x4::splat(t_max));
         let inside = !(negative & positive) & det.simd_ne(zero);
-        let hits = (inside & in_range).to_bitmask() & !on_edge.to_bitmask();
+        let mut hits = (inside & in_range).to_bitmask() & !on_edge.to_bitmask();
+        // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
+        if hits != 0 && t_min >= 0.0 {
+            let max3 = |p: f32x4, q: f32x4, r: f32x4| p.abs().max(q.abs()).max(r.abs());
+            let bound = t_error_bound(
+                max3(ax, bx, cx),
+                max3(ay, by, cy),
+                max3(az, bz, cz),
+                max3(u, v, w),
+                rcp_det.abs(),
+            );
+            hits &= !t.simd_le(bound).to_bitmask();
+        }
         let (b1, b2) = if ANY || hits == 0 {
             (zero, zero)
         } else {

@@ -2,7 +2,7 @@
 //! (u, v) and its tangents, material, emission. Bump maps perturb the shading normal
 //! here, and only on shapes that have one.
 
-use crate::accel::{Hit, PrimRef};
+use crate::accel::{sphere_point, triangle_point, Hit, PrimRef, SurfacePoint};
 use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::{PI, TAU};
@@ -13,6 +13,9 @@ use std::f32::consts::{PI, TAU};
 #[derive(Clone, Copy, Debug)]
 pub struct Interaction {
     pub p: Vec3,
+    /// Absolute error bound of `p` per axis (pbrt-v4 §6.8): how far rays leaving
+    /// the surface are offset ([`Interaction::spawn_ray`]).
+    pub p_error: Vec3,
     pub t: f32,
     /// Geometric normal, flipped to face the incoming ray.
     pub ng: Vec3,
@@ -43,11 +46,12 @@ fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32
     let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
     let (b1, b2) = (hit.bary.x, hit.bary.y);
     let b0 = 1.0 - b1 - b2;
-    // Interpolating the vertices is more accurate than o + t·d far from the origin.
-    let p = b0 * p0 + b1 * p1 + b2 * p2;
+    // Interpolating the vertices is more accurate than o + t·d far from the
+    // origin; the accel's routine also bounds its error.
+    let sp = triangle_point([p0, p1, p2], hit.bary);
     let e1 = p1 - p0;
     let e2 = p2 - p0;
-    let ng_orig = e1.cross(e2).normalize_or_zero();
+    let ng_orig = sp.n_geo;
     let ns_orig = if m.normals.is_empty() {
         ng_orig
     } else {
@@ -83,8 +87,7 @@ fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32
         scene,
         ray,
         hit.t,
-        p,
-        ng_orig,
+        &sp,
         ns_orig,
         uv,
         dpdu,
@@ -99,11 +102,9 @@ fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32
 
 fn sphere_interaction(scene: &Scene, ray: &Ray, hit: &Hit, i: u32) -> Interaction {
     let s = &scene.spheres[i as usize];
-    let hit_point = ray.at(hit.t);
-    let n = (hit_point - s.center).normalize_or_zero();
-    let n = if n == Vec3::ZERO { Vec3::Y } else { n };
-    // Re-project onto the surface: removes the error of o + t·d.
-    let p = s.center + s.radius * n;
+    // Re-projected onto the surface: removes the error of o + t·d.
+    let surface = sphere_point(s.center, s.radius, ray.at(hit.t));
+    let n = surface.n_geo;
     // (u, v) = (φ / 2π, θ / π), θ from +y, φ = atan2(z, x).
     let theta = n.y.clamp(-1.0, 1.0).acos();
     let mut phi = n.z.atan2(n.x);
@@ -119,8 +120,7 @@ fn sphere_interaction(scene: &Scene, ray: &Ray, hit: &Hit, i: u32) -> Interactio
         scene,
         ray,
         hit.t,
-        p,
-        n,
+        &surface,
         n,
         uv,
         TAU * dpdphi,
@@ -139,8 +139,7 @@ fn finish(
     scene: &Scene,
     ray: &Ray,
     t: f32,
-    p: Vec3,
-    ng_orig: Vec3,
+    sp: &SurfacePoint,
     ns_orig: Vec3,
     uv: Vec2,
     dpdu: Vec3,
@@ -155,9 +154,9 @@ fn finish(
     if let Some(b) = bump {
         ns = bumped_normal(&scene.bumps[b as usize], uv, ns, dpdu, dpdv);
     }
-    let front_face = ray.dir.dot(ng_orig) < 0.0;
+    let front_face = ray.dir.dot(sp.n_geo) < 0.0;
     let sign = if front_face { 1.0 } else { -1.0 };
-    let ng = ng_orig * sign;
+    let ng = sp.n_geo * sign;
     let mut ns = ns * sign;
     // A shading normal on the far side of the geometric one would let light leak;
     // fold it back to the visible hemisphere.
@@ -166,7 +165,8 @@ fn finish(
     }
     let frame = Frame::from_normal_tangent(ns, dpdu);
     Interaction {
-        p,
+        p: sp.p,
+        p_error: sp.p_error,
         t,
         ng,
         frame,
@@ -200,24 +200,32 @@ pub fn bumped_normal(bump: &crate::scene::Bump, uv: Vec2, n: Vec3, dpdu: Vec3, d
     }
 }
 
-/// Origin for a ray leaving `p` on the side of `ng` that `dir` points to, offset far
-/// enough that the ray cannot re-hit the surface it leaves: the offset scales with
-/// the magnitude of the coordinates because f32 rounding error does.
-pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
-    let scale = 1e-4 * p.abs().max_element().max(1.0);
-    let n = if dir.dot(ng) < 0.0 { -ng } else { ng };
-    p + n * scale
-}
+impl Interaction {
+    /// The hit as the accel's robust spawning point (`accel::offset`, pbrt-v4
+    /// §6.8.6): the one ray-offset mechanism of the renderer.
+    pub fn surface(&self) -> SurfacePoint {
+        SurfacePoint {
+            p: self.p,
+            p_error: self.p_error,
+            n_geo: self.ng,
+        }
+    }
 
-/// A ray from `p` toward the point `target`, stopping short of it on both ends.
-pub fn segment_between(p: Vec3, ng: Vec3, target: Vec3, target_n: Option<Vec3>) -> Ray {
-    let d = target - p;
-    let o = offset_origin(p, ng, d);
-    let end = match target_n {
-        Some(n) => offset_origin(target, n, -d),
-        None => target,
-    };
-    let dd = end - o;
-    let dist = dd.length();
-    Ray::segment(o, dd / dist.max(1e-30), dist * (1.0 - 1e-4))
+    /// A ray leaving the surface along the unit direction `dir`, its origin
+    /// moved off the surface by `p`'s error bound (t_min = 0, no self-hit).
+    pub fn spawn_ray(&self, dir: Vec3) -> Ray {
+        self.surface().spawn_ray_unit(dir)
+    }
+
+    /// A shadow ray to `target` on another surface (normal `target_n`), both
+    /// ends offset, stopping short of the target; to a point off any surface
+    /// when `target_n` is `None`.
+    pub fn spawn_ray_to(&self, target: Vec3, target_n: Option<Vec3>) -> Ray {
+        match target_n {
+            Some(n) => self
+                .surface()
+                .spawn_ray_to(&SurfacePoint::with_default_error(target, n)),
+            None => self.surface().spawn_ray_to_point(target),
+        }
+    }
 }

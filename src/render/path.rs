@@ -7,7 +7,7 @@ use super::gradients::shading::{self, LightPoint};
 use super::gradients::sphere_light::{self, ConeLaw};
 use super::gradients::visibility::{trace_line_and_ring, Domain, LinePoint};
 use super::gradients::{GradientSample, SV};
-use super::interaction::{interaction, offset_origin, segment_between, Interaction};
+use super::interaction::{interaction, Interaction};
 use super::lights::{LightSet, LineLight};
 use crate::accel::Accel;
 use crate::brdf::Material;
@@ -397,7 +397,7 @@ impl PathTracer<'_> {
         st.prev_pdf = if bs.is_delta { f32::INFINITY } else { bs.pdf };
         st.prev_p = si.p;
         st.prev_n = si.frame.n;
-        let ray = Ray::new(offset_origin(si.p, si.ng, wi), wi);
+        let ray = si.spawn_ray(wi);
         // Russian roulette on the throughput, once paths are long enough.
         let u_rr = sampler.next_1d();
         if depth >= self.rr_depth {
@@ -500,8 +500,8 @@ impl PathTracer<'_> {
 
     fn unoccluded(&self, si: &Interaction, wi: Vec3, point: Option<(Vec3, Vec3)>) -> bool {
         let ray = match point {
-            Some((q, nq)) => segment_between(si.p, si.ng, q, Some(nq)),
-            None => Ray::new(offset_origin(si.p, si.ng, wi), wi),
+            Some((q, nq)) => si.spawn_ray_to(q, Some(nq)),
+            None => si.spawn_ray(wi),
         };
         !self.accel.occluded(&ray)
     }

@@ -28,7 +28,6 @@ use super::sphere_light::{cone_flow, ConeLaw};
 use crate::accel::{Accel, PrimRef};
 use crate::math::quadrature::GaussLegendre;
 use crate::math::{Frame, Ray, Vec3};
-use crate::render::interaction::offset_origin;
 use crate::scene::Scene;
 use std::f32::consts::TAU;
 
@@ -271,7 +270,7 @@ impl<'a> Marcher<'a> {
         }
         // The segment must end short of the light as seen from the offset origin,
         // not from x: the offset moves the origin toward the light.
-        let o = offset_origin(self.x, self.ng, w);
+        let o = crate::accel::offset_ray_origin(self.x, self.ng, w);
         let t_o = light_extent(self.domain, o, w).0;
         Some((Ray::segment(o, w, t_o * (1.0 - 1e-4)), lp))
     }
