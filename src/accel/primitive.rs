@@ -27,12 +27,13 @@ pub(crate) const fn gamma(n: i32) -> f32 {
 /// is what lets a ray spawned with [`crate::accel::SurfacePoint`]'s tight origin
 /// offset start at `t_min = 0` without re-hitting the triangle it leaves, even
 /// at grazing angles where 1/det is large. Generic so that the scalar test and
-/// each lane of the 4-wide one compute the same bits (no FMA contraction).
+/// each lane of the 4-wide one compute the same bits (no FMA contraction):
+/// `x`, `y`, `z` are the three sheared (and, for z, scaled) vertices' coordinates,
+/// `e` the edge functions.
 #[inline(always)]
-fn t_error_bound<F>(max_x: F, max_y: F, max_z: F, max_e: F, abs_rcp_det: F) -> F
-where
-    F: Copy + std::ops::Add<Output = F> + std::ops::Mul<Output = F> + From<f32>,
-{
+fn t_error_bound<F: Lanes>(x: [F; 3], y: [F; 3], z: [F; 3], e: [F; 3], abs_rcp_det: F) -> F {
+    let max3 = |p: [F; 3]| p[0].abs().max(p[1].abs()).max(p[2].abs());
+    let (max_x, max_y, max_z, max_e) = (max3(x), max3(y), max3(z), max3(e));
     let g = |n: i32| F::from(gamma(n));
     let delta_z = g(3) * max_z;
     let delta_x = g(5) * (max_x + max_z);
@@ -40,6 +41,29 @@ where
     let delta_e = F::from(2.0) * (g(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     F::from(3.0) * (g(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * abs_rcp_det
 }
+
+/// One f32 or four: the arithmetic [`t_error_bound`] needs.
+trait Lanes: Copy + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> + From<f32> {
+    fn abs(self) -> Self;
+    fn max(self, other: Self) -> Self;
+}
+
+/// `Lanes` from the type's own `abs` and `max`.
+macro_rules! lanes {
+    ($($t:ty),*) => {$(
+        impl Lanes for $t {
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn max(self, other: Self) -> Self {
+                <$t>::max(self, other)
+            }
+        }
+    )*};
+}
+lanes!(f32, f32x4);
 
 /// Per-ray precomputation of the watertight test (Woop, Benthin & Wald 2013, §3,
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
@@ -205,12 +229,11 @@ impl WatertightRay {
         // A ray that may only go forward (t_min ≥ 0) must be conservatively in
         // front: t > δt (pbrt-v4 §6.8.4).
         if t_min >= 0.0 {
-            let max3 = |p: f32, q: f32, r: f32| p.abs().max(q.abs()).max(r.abs());
             let bound = t_error_bound(
-                max3(ax, bx, cx),
-                max3(ay, by, cy),
-                max3(az, bz, cz),
-                max3(u, v, w),
+                [ax, bx, cx],
+                [ay, by, cy],
+                [az, bz, cz],
+                [u, v, w],
                 rcp_det.abs(),
             );
             if t <= bound {
@@ -320,12 +343,11 @@ impl WatertightRay4 {
         let mut hits = (inside & in_range).to_bitmask() & !on_edge.to_bitmask();
         // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
         if hits != 0 && t_min >= 0.0 {
-            let max3 = |p: f32x4, q: f32x4, r: f32x4| p.abs().max(q.abs()).max(r.abs());
             let bound = t_error_bound(
-                max3(ax, bx, cx),
-                max3(ay, by, cy),
-                max3(az, bz, cz),
-                max3(u, v, w),
+                [ax, bx, cx],
+                [ay, by, cy],
+                [az, bz, cz],
+                [u, v, w],
                 rcp_det.abs(),
             );
             hits &= !t.simd_le(bound).to_bitmask();
