@@ -218,14 +218,9 @@ impl Interaction {
     }
 
     /// A shadow ray to `target` on another surface (normal `target_n`), both
-    /// ends offset, stopping short of the target; to a point off any surface
-    /// when `target_n` is `None`.
-    pub fn spawn_ray_to(&self, target: Vec3, target_n: Option<Vec3>) -> Ray {
-        match target_n {
-            Some(n) => self
-                .surface()
-                .spawn_ray_to(&SurfacePoint::with_default_error(target, n)),
-            None => self.surface().spawn_ray_to_point(target),
-        }
+    /// ends offset, stopping short of the target.
+    pub fn spawn_ray_to(&self, target: Vec3, target_n: Vec3) -> Ray {
+        self.surface()
+            .spawn_ray_to(&SurfacePoint::with_default_error(target, target_n))
     }
 }

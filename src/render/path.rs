@@ -500,7 +500,7 @@ impl PathTracer<'_> {
 
     fn unoccluded(&self, si: &Interaction, wi: Vec3, point: Option<(Vec3, Vec3)>) -> bool {
         let ray = match point {
-            Some((q, nq)) => si.spawn_ray_to(q, Some(nq)),
+            Some((q, nq)) => si.spawn_ray_to(q, nq),
             None => si.spawn_ray(wi),
         };
         !self.accel.occluded(&ray)
