@@ -9,7 +9,8 @@
 //! obvhs builds the tree (PLOC + reinsertion, `build.rs`); we collapse it into
 //! our own uncompressed wide BVH and traverse that: 8-wide with AVX2 where the
 //! CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
-//! leaves hold triangle4 blocks ([`LeafBlock`]). obvhs 0.4
+//! leaves hold triangle4 blocks ([`LeafBlock`]), and the 8-wide tree tests a
+//! leaf of two blocks as one eight-lane AVX block (`primitive::avx`). obvhs 0.4
 //! pitfalls and where they are handled:
 //! 1. `Triangle::compute_barycentric` is scaled wrongly, 2. its triangle test is
 //!    not watertight → neither is used; see `primitive::WatertightRay`.
@@ -204,7 +205,12 @@ macro_rules! traverse {
             Tree::Four(t) => t.traverse::<$sorted>($($arg),*),
             #[cfg(target_arch = "x86_64")]
             // SAFETY: an 8-wide tree is only built when `bvh8::supported()`.
-            Tree::Eight(t) => unsafe { t.traverse::<$sorted>($($arg),*) },
+            // (The leaf callback's own `unsafe` blocks are needed in the 4-wide
+            // arm, and redundant here.)
+            Tree::Eight(t) => {
+                #[allow(unused_unsafe)]
+                unsafe { t.traverse::<$sorted>($($arg),*) }
+            }
             #[cfg(not(target_arch = "x86_64"))]
             Tree::Eight(_) => unreachable!("8-wide trees need x86_64"),
         }
@@ -252,6 +258,13 @@ impl Tree {
             Tree::Four(t) => t.sah_cost(),
             Tree::Eight(t) => t.sah_cost(),
         }
+    }
+
+    /// Whether leaves of two blocks are tested as one eight-lane block
+    /// (`primitive::avx`): in the 8-wide tree, which is only built with AVX2.
+    #[inline(always)]
+    fn eight_lane_leaves(&self) -> bool {
+        matches!(self, Tree::Eight(_))
     }
 
     fn pack_leaves(&mut self, prims: &[Prim]) -> Vec<LeafBlock> {
@@ -668,10 +681,42 @@ impl Accel {
     ) -> Option<Hit> {
         let (node_ray, back_off) = node_ray(ray);
         let wr4 = WatertightRay4::new(wr);
+        let eight_lanes = self.bvh.eight_lane_leaves();
         // (slot, t, b1, b2) of the nearest hit so far.
         let mut best: Option<(u32, f32, Vec2)> = None;
         let mut t_max = ray.t_max;
         let mut prims_tested = 0;
+        // Takes the `lanes` of a leaf test (`hits` decided, the rest for the
+        // scalar test) whose slot is `slot(lane)`. A hit at the same distance as
+        // the best so far (a ray through a shared edge) wins by input order, not
+        // by visit order, which depends on the node width: the same image on
+        // every CPU.
+        let mut take = |mut lanes: u32,
+                        hits: u32,
+                        ts: &[f32],
+                        b1: &[f32],
+                        b2: &[f32],
+                        slot: &dyn Fn(usize) -> u32,
+                        t_max: &mut f32| {
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let slot = slot(lane) & !SPHERE_LANE;
+                let found = if hits & (1 << lane) != 0 {
+                    (ts[lane] <= *t_max).then(|| (ts[lane], Vec2::new(b1[lane], b2[lane])))
+                } else {
+                    self.prims[slot as usize]
+                        .intersect::<KX, KY, KZ>(ray, wr, *t_max)
+                        .map(|hit| (hit.t, hit.bary))
+                };
+                if let Some((t, bary)) = found {
+                    if self.nearer(t, slot, best.map(|(b, bt, _)| (bt, b))) {
+                        *t_max = t;
+                        best = Some((slot, t, bary));
+                    }
+                }
+            }
+        };
         traverse!(
             &self.bvh,
             true,
@@ -681,7 +726,29 @@ impl Accel {
             &mut work.0,
             |first, code| {
                 let (count, spheres) = LeafCode::decode(code);
-                for block in &self.blocks[first..first + count] {
+                let blocks = &self.blocks[first..first + count];
+                #[cfg(target_arch = "x86_64")]
+                if eight_lanes && count == 2 {
+                    prims_tested += blocks[0].primitive_count() + blocks[1].primitive_count();
+                    // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
+                    let h = unsafe {
+                        primitive::avx::intersect8::<KX, KY, KZ, false>(
+                            wr,
+                            &blocks[0].tris,
+                            &blocks[1].tris,
+                            ray.t_min,
+                            t_max,
+                        )
+                    };
+                    let mut lanes = h.hits | h.fallback;
+                    if spheres {
+                        lanes |= blocks[0].sphere_lanes() | blocks[1].sphere_lanes() << 4;
+                    }
+                    let slot = |lane: usize| blocks[lane >> 2].slots[lane & 3];
+                    take(lanes, h.hits, &h.t, &h.b1, &h.b2, &slot, &mut t_max);
+                    return Some(t_max + back_off);
+                }
+                for block in blocks {
                     prims_tested += block.primitive_count();
                     let h = wr4.intersect::<KX, KY, KZ, false>(&block.tris, ray.t_min, t_max);
                     let mut lanes = h.hits | h.fallback;
@@ -692,27 +759,8 @@ impl Accel {
                         continue;
                     }
                     let (ts, b1, b2) = (h.t.to_array(), h.b1.to_array(), h.b2.to_array());
-                    // A hit at the same distance as the best so far (a ray through a
-                    // shared edge) wins by input order, not by visit order, which
-                    // depends on the node width: the same image on every CPU.
-                    while lanes != 0 {
-                        let lane = lanes.trailing_zeros() as usize;
-                        lanes &= lanes - 1;
-                        let slot = block.slots[lane] & !SPHERE_LANE;
-                        let found = if h.hits & (1 << lane) != 0 {
-                            (ts[lane] <= t_max).then(|| (ts[lane], Vec2::new(b1[lane], b2[lane])))
-                        } else {
-                            self.prims[slot as usize]
-                                .intersect::<KX, KY, KZ>(ray, wr, t_max)
-                                .map(|hit| (hit.t, hit.bary))
-                        };
-                        if let Some((t, bary)) = found {
-                            if self.nearer(t, slot, best.map(|(b, bt, _)| (bt, b))) {
-                                t_max = t;
-                                best = Some((slot, t, bary));
-                            }
-                        }
-                    }
+                    let slot = |lane: usize| block.slots[lane];
+                    take(lanes, h.hits, &ts, &b1, &b2, &slot, &mut t_max);
                 }
                 Some(t_max + back_off)
             },
@@ -735,6 +783,21 @@ impl Accel {
     ) -> bool {
         let (node_ray, back_off) = node_ray(ray);
         let wr4 = WatertightRay4::new(wr);
+        let eight_lanes = self.bvh.eight_lane_leaves();
+        // Whether one of the `lanes` left to the scalar test is hit.
+        let scalar_hit = |mut lanes: u32, slot: &dyn Fn(usize) -> u32| {
+            while lanes != 0 {
+                let slot = slot(lanes.trailing_zeros() as usize) & !SPHERE_LANE;
+                lanes &= lanes - 1;
+                if self.prims[slot as usize]
+                    .intersect::<KX, KY, KZ>(ray, wr, ray.t_max)
+                    .is_some()
+                {
+                    return true;
+                }
+            }
+            false
+        };
         let mut hit = false;
         traverse!(
             &self.bvh,
@@ -745,20 +808,34 @@ impl Accel {
             nodes,
             |first, code| {
                 let (count, spheres) = LeafCode::decode(code);
-                for block in &self.blocks[first..first + count] {
+                let blocks = &self.blocks[first..first + count];
+                #[cfg(target_arch = "x86_64")]
+                if eight_lanes && count == 2 {
+                    // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
+                    let h = unsafe {
+                        primitive::avx::intersect8::<KX, KY, KZ, true>(
+                            wr,
+                            &blocks[0].tris,
+                            &blocks[1].tris,
+                            ray.t_min,
+                            ray.t_max,
+                        )
+                    };
+                    let mut lanes = h.fallback;
+                    if spheres {
+                        lanes |= blocks[0].sphere_lanes() | blocks[1].sphere_lanes() << 4;
+                    }
+                    let slot = |lane: usize| blocks[lane >> 2].slots[lane & 3];
+                    hit = h.hits != 0 || scalar_hit(lanes, &slot);
+                    return (!hit).then_some(f32::INFINITY);
+                }
+                for block in blocks {
                     let h = wr4.intersect::<KX, KY, KZ, true>(&block.tris, ray.t_min, ray.t_max);
                     let mut lanes = h.fallback;
                     if spheres {
                         lanes |= block.sphere_lanes();
                     }
-                    hit = h.hits != 0;
-                    while !hit && lanes != 0 {
-                        let slot = block.slots[lanes.trailing_zeros() as usize] & !SPHERE_LANE;
-                        lanes &= lanes - 1;
-                        hit = self.prims[slot as usize]
-                            .intersect::<KX, KY, KZ>(ray, wr, ray.t_max)
-                            .is_some();
-                    }
+                    hit = h.hits != 0 || scalar_hit(lanes, &|lane| block.slots[lane]);
                     if hit {
                         return None;
                     }
