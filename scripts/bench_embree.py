@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Ray throughput of gradtrace's BVH against Embree 4 on the same rays.
 
-    python3 scripts/bench_embree.py [--rounds 3] [--runs 15] [--measurement-time 2] [--no-cargo]
+    python3 scripts/bench_embree.py [--rounds 5] [--runs 15] [--measurement-time 2] [--no-cargo]
 
 Runs `cargo bench --bench accel` (closest_hit/*, shadow/*, obvhs_baseline_*) with
 GRADTRACE_ACCEL_RAYS set, so that the bench writes the Stanford bunny and its
@@ -13,10 +13,17 @@ number of hits, and prints the ratios. Writes out/bench/bench_embree.json and th
 table between the markers in benches/README.md.
 
 gradtrace: criterion's median time per pass over the ray set. Embree: median of
---runs passes (`EmbreeScene.run` over all rays; the first pass, which commits
-the scene, i.e. builds Embree's BVH, is timed separately). One thread each. On a
-shared machine the load drifts between the two, so the script alternates them
-for --rounds rounds and reports the medians over rounds (and each round's ratio).
+the passes (`EmbreeScene.run` over all rays) in the same windows as criterion's,
+1 s of warm-up then --measurement-time seconds (at least --runs passes); the
+first pass, which commits the scene, i.e. builds Embree's BVH, is timed
+separately. One thread each. On a
+shared machine the load drifts (seen here: the same binary 25 % slower from one
+minute to the next), so after one full `cargo bench` (which builds, dumps the
+rays and times obvhs' own traversal) each bench is timed in --rounds rounds,
+gradtrace (the bench executable on that one id) and Embree on the same query
+back to back, in alternating order; a row's ratio is the median of its
+per-round ratios (each shown in brackets), its throughputs the medians over
+rounds.
 """
 
 from __future__ import annotations
@@ -80,6 +87,7 @@ def read_dump(path: Path) -> tuple[np.ndarray, np.ndarray, list[dict]]:
 
 
 def run_ours(measurement_time: float) -> None:
+    """The full bench once: builds it, dumps the rays, times obvhs' traversal."""
     OUT.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, GRADTRACE_ACCEL_RAYS=str(RAYS))
     cmd = ["cargo", "bench", "--bench", "accel", "--", "--warm-up-time", "1", "--measurement-time", str(measurement_time), "closest_hit|shadow"]
@@ -87,62 +95,100 @@ def run_ours(measurement_time: float) -> None:
     subprocess.run(cmd, cwd=ms.REPO, env=env, check=True)
 
 
+def bench_executable() -> str:
+    cmd = ["cargo", "bench", "--bench", "accel", "--no-run", "--message-format=json"]
+    out = subprocess.run(cmd, cwd=ms.REPO, capture_output=True, text=True, check=True).stdout
+    for line in out.splitlines():
+        msg = json.loads(line)
+        if msg.get("reason") == "compiler-artifact" and msg.get("executable") and msg["target"]["name"] == "accel":
+            return msg["executable"]
+    raise SystemExit("cargo bench --bench accel --no-run: no executable")
+
+
+def time_ours(exe: str, bench: str, measurement_time: float) -> float:
+    """Criterion's median seconds per pass of one bench id."""
+    cmd = [exe, "--bench", "--warm-up-time", "1", "--measurement-time", str(measurement_time), f"^{bench}$"]
+    subprocess.run(cmd, cwd=ms.REPO, check=True, stdout=subprocess.DEVNULL)
+    group, name = bench.split("/")
+    return criterion_median_s(group, name)
+
+
 def criterion_median_s(group: str, bench: str) -> float:
     est = json.loads((CRITERION / group / bench / "new" / "estimates.json").read_text())
     return est["median"]["point_estimate"] * 1e-9
 
 
-def run_embree(verts: np.ndarray, tris: np.ndarray, sets: list[dict], runs: int) -> dict:
-    scene = rtcs.EmbreeScene()
-    TriangleMesh(scene, verts.astype(np.float32), tris.astype(np.int32))
-    results = {}
-    for s in sets:
-        o, d = np.ascontiguousarray(s["origins"]), np.ascontiguousarray(s["dirs"])
-        for group, query in QUERIES:
-            t0 = time.perf_counter()
-            first = scene.run(o, d, query=query)
-            first_s = time.perf_counter() - t0
-            times = []
-            for _ in range(runs):
-                t0 = time.perf_counter()
-                res = scene.run(o, d, query=query)
-                times.append(time.perf_counter() - t0)
-            assert np.array_equal(first, res)
-            hits = int(np.count_nonzero(res != -1))  # prim id, or 0 when occluded; -1: miss
-            results[(group, s["name"])] = {"median_s": statistics.median(times), "first_s": first_s, "hits": hits}
-    return results
+def time_embree(scene, s: dict, query: str, runs: int, measurement_time: float) -> dict:
+    """Median seconds per pass, over the same windows as criterion's: 1 s of
+    warm-up, then passes for `measurement_time` seconds (at least `runs`)."""
+    o, d = np.ascontiguousarray(s["origins"]), np.ascontiguousarray(s["dirs"])
+    t0 = time.perf_counter()
+    first = scene.run(o, d, query=query)
+    first_s = time.perf_counter() - t0
+    start = time.perf_counter()
+    while time.perf_counter() - start < 1.0:
+        scene.run(o, d, query=query)
+    times = []
+    start = time.perf_counter()
+    while len(times) < runs or time.perf_counter() - start < measurement_time:
+        t0 = time.perf_counter()
+        res = scene.run(o, d, query=query)
+        times.append(time.perf_counter() - t0)
+    assert np.array_equal(first, res)
+    hits = int(np.count_nonzero(res != -1))  # prim id, or 0 when occluded; -1: miss
+    return {"median_s": statistics.median(times), "first_s": first_s, "hits": hits}
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rounds", type=int, default=3, help="alternations of the cargo bench and Embree")
-    ap.add_argument("--runs", type=int, default=15, help="Embree passes per ray set and round")
+    ap.add_argument("--rounds", type=int, default=5, help="rounds of back-to-back timings per bench")
+    ap.add_argument("--runs", type=int, default=15, help="at least this many Embree passes per bench and round")
     ap.add_argument("--measurement-time", type=float, default=2.0, help="criterion seconds per bench")
-    ap.add_argument("--no-cargo", action="store_true", help="one round, reusing the last cargo bench run's figures and ray dump")
+    ap.add_argument("--no-cargo", action="store_true", help="skip the full cargo bench run, reusing its ray dump and obvhs figures")
     args = ap.parse_args()
-    rounds = []
-    for k in range(1 if args.no_cargo else args.rounds):
-        if not args.no_cargo:
-            run_ours(args.measurement_time)
-        verts, tris, sets = read_dump(RAYS)
-        embree = run_embree(verts, tris, sets, args.runs)
-        rounds.append(round_rows(sets, embree))
-        print(f"round {k + 1}: " + ", ".join(f"{r['bench']} {r['ratio']:.2f}x" for r in rounds[-1]), flush=True)
+    if not args.no_cargo:
+        run_ours(args.measurement_time)
+    exe = bench_executable()
+    verts, tris, sets = read_dump(RAYS)
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, verts.astype(np.float32), tris.astype(np.int32))
     rows = []
-    for i, r in enumerate(rounds[0]):
-        per_round = [rr[i] for rr in rounds]
-        med = lambda key: statistics.median(x[key] for x in per_round)  # noqa: E731
-        row = dict(r)
-        for key in ("gradtrace_mrays_s", "embree_mrays_s", "ratio"):
-            row[key] = med(key)
-        row["ratios_per_round"] = [x["ratio"] for x in per_round]
-        if "obvhs_baseline_mrays_s" in r:
-            row["obvhs_baseline_mrays_s"] = med("obvhs_baseline_mrays_s")
-        rows.append(row)
+    for group, query in QUERIES:
+        for s in sets:
+            bench, n = f"{group}/{s['name']}", len(s["origins"])
+            per_round = []
+            for k in range(args.rounds):
+                if k % 2 == 0:
+                    ours_s = time_ours(exe, bench, args.measurement_time)
+                    e = time_embree(scene, s, query, args.runs, args.measurement_time)
+                else:
+                    e = time_embree(scene, s, query, args.runs, args.measurement_time)
+                    ours_s = time_ours(exe, bench, args.measurement_time)
+                per_round.append((ours_s, e))
+                print(f"{bench} round {k + 1}: {e['median_s'] / ours_s:.2f}x", flush=True)
+            ratios = [e["median_s"] / ours for ours, e in per_round]
+            row = {
+                "bench": bench,
+                "rays": n,
+                "gradtrace_mrays_s": statistics.median(n / ours * 1e-6 for ours, _ in per_round),
+                "embree_mrays_s": statistics.median(n / e["median_s"] * 1e-6 for _, e in per_round),
+                "ratio": statistics.median(ratios),
+                "ratios_per_round": ratios,
+                "hits_gradtrace": s["closest_hits"] if query == "INTERSECT" else s["any_hits"],
+                "hits_embree": per_round[0][1]["hits"],
+                "embree_first_pass_s": per_round[0][1]["first_s"],
+            }
+            if group == "closest_hit":
+                try:
+                    row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
+                except FileNotFoundError:
+                    pass
+            rows.append(row)
     meta = {
         "triangles": len(tris),
-        "rounds": len(rounds),
+        "rounds": args.rounds,
         "runs": args.runs,
+        "measurement_time": args.measurement_time,
         "cpu": ms_cpu(),
         "load_avg": os.getloadavg()[0],
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
@@ -155,32 +201,6 @@ def main() -> int:
     if mismatch:
         print(f"note: hit counts differ for {mismatch} (see the table)", file=sys.stderr)
     return 0
-
-
-def round_rows(sets: list[dict], embree: dict) -> list[dict]:
-    rows = []
-    for group, query in QUERIES:
-        for s in sets:
-            n = len(s["origins"])
-            ours_s = criterion_median_s(group, s["name"])
-            e = embree[(group, s["name"])]
-            row = {
-                "bench": f"{group}/{s['name']}",
-                "rays": n,
-                "gradtrace_mrays_s": n / ours_s * 1e-6,
-                "embree_mrays_s": n / e["median_s"] * 1e-6,
-                "ratio": e["median_s"] / ours_s,
-                "hits_gradtrace": s["closest_hits"] if query == "INTERSECT" else s["any_hits"],
-                "hits_embree": e["hits"],
-                "embree_first_pass_s": e["first_s"],
-            }
-            if group == "closest_hit":
-                try:
-                    row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
-                except FileNotFoundError:
-                    pass
-            rows.append(row)
-    return rows
 
 
 def ms_cpu() -> str:
@@ -196,8 +216,8 @@ def ms_cpu() -> str:
 def markdown(rows: list[dict], meta: dict) -> str:
     lines = [
         f"Stanford bunny ({meta['triangles']:,} triangles), the `accel` bench's rays (65,536 per set), one thread; "
-        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray): median of {meta['runs']} passes; "
-        f"the two alternate for {meta['rounds']} rounds, medians over rounds (per-round ratios in brackets). "
+        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray): median of the passes in {meta['measurement_time']:g} s after 1 s of warm-up, as criterion's; "
+        f"{meta['rounds']} rounds, each timing the two back to back on one bench; ratio = median of the per-round ratios (in brackets), throughputs = medians over rounds. "
         f"{meta['cpu']}, measured {meta['date']}, load average {meta['load_avg']:.1f} (shared machine, loaded: compare within a row).",
         "",
         "| bench | gradtrace (Mrays/s) | Embree (Mrays/s) | gradtrace / Embree | hits (ours / Embree) | obvhs' own traversal (Mrays/s) |",
