@@ -270,6 +270,20 @@ impl<N: WideNode> Bvh<N> {
         }
     }
 
+    /// Starts loading a child pushed for later: an inner node itself, a leaf
+    /// through `leaf_prefetch(first, count)` (the leaves' primitives live
+    /// with the caller). Prefetching pushed leaves too: +6–10 % incoherent
+    /// rays/s on the bunny (best and median of 7 interleaved runs).
+    #[inline(always)]
+    pub(super) fn prefetch_child(&self, child: u32, leaf_prefetch: &impl Fn(usize, usize)) {
+        if child & LEAF_BIT == 0 {
+            self.prefetch(child);
+        } else if child != EMPTY {
+            let (first, count) = decode_leaf(child);
+            leaf_prefetch(first, count);
+        }
+    }
+
     /// Surface-area-heuristic cost relative to the root's box: 1 + Σ over child
     /// boxes of area(child)/area(root) × (1 per inner child, the primitive
     /// count per leaf).
@@ -325,7 +339,8 @@ impl Bvh4 {
     /// Visits the leaves whose boxes the ray overlaps, nearest box first
     /// (`SORTED`) or in any order; `leaf(first, count)` tests the primitives
     /// `first..first + count` and returns the new upper end of the ray interval
-    /// in the node test's distances, or `None` to stop. `nodes_visited` counts
+    /// in the node test's distances, or `None` to stop; `leaf_prefetch(first,
+    /// count)` starts loading a leaf's primitives. `nodes_visited` counts
     /// node tests. `stack` must hold [`Bvh4::stack_size`] entries.
     #[inline(always)]
     pub(super) fn traverse<const SORTED: bool>(
@@ -335,7 +350,9 @@ impl Bvh4 {
         stack: &mut [Entry],
         nodes_visited: &mut u32,
         mut leaf: impl FnMut(usize, usize) -> Option<f32>,
+        leaf_prefetch: impl Fn(usize, usize),
     ) {
+        let prefetch = |c: u32| self.prefetch_child(c, &leaf_prefetch);
         let mut hi = t_hi * WIDEN;
         let mut hi_w = f32x4::splat(hi);
         let mut sp = 0usize;
@@ -371,7 +388,7 @@ impl Bvh4 {
                         t: t_near[far],
                     };
                     sp += 1;
-                    self.prefetch(node.children[far]);
+                    prefetch(node.children[far]);
                     cur = node.children[near];
                     continue;
                 }
@@ -405,7 +422,7 @@ impl Bvh4 {
                         t: ts[i],
                     };
                     sp += 1;
-                    self.prefetch(ids[i]);
+                    prefetch(ids[i]);
                 }
                 cur = ids[k - 1];
             }

@@ -76,8 +76,10 @@ impl Bvh8 {
         stack: &mut [Entry],
         nodes_visited: &mut u32,
         mut leaf: impl FnMut(usize, usize) -> Option<f32>,
+        leaf_prefetch: impl Fn(usize, usize),
     ) {
         use std::arch::x86_64::*;
+        let prefetch = |c: u32| self.prefetch_child(c, &leaf_prefetch);
         let (org, inv) = (ray.org_scalar(), ray.inv_scalar());
         let org = org.map(|o| _mm256_set1_ps(o));
         let inv = inv.map(|i| _mm256_set1_ps(i));
@@ -135,7 +137,7 @@ impl Bvh8 {
                     };
                     stack[sp] = Entry::new(node.children[far], t_near[far]);
                     sp += 1;
-                    self.prefetch(node.children[far]);
+                    prefetch(node.children[far]);
                     cur = node.children[near];
                     continue;
                 }
@@ -165,7 +167,7 @@ impl Bvh8 {
                 for i in 0..k - 1 {
                     stack[sp] = Entry::new(ids[i], ts[i]);
                     sp += 1;
-                    self.prefetch(ids[i]);
+                    prefetch(ids[i]);
                 }
                 cur = ids[k - 1];
             }

@@ -474,7 +474,10 @@ impl Accel {
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
         with_stack(self.bvh.stack_size(), |stack| {
-            with_axes!(wr.axes, self.closest_with(ray, &wr, stack, &mut (0, 0)))
+            with_axes!(
+                wr.axes,
+                self.closest_with(ray, &wr, stack, &mut (0, 0), false)
+            )
         })
     }
 
@@ -555,7 +558,10 @@ impl Accel {
         let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut stack = vec![Entry::default(); self.bvh.stack_size()];
         let mut work = (0, 0);
-        with_axes!(wr.axes, self.closest_with(ray, &wr, &mut stack, &mut work));
+        with_axes!(
+            wr.axes,
+            self.closest_with(ray, &wr, &mut stack, &mut work, true)
+        );
         work
     }
 
@@ -598,6 +604,22 @@ impl Accel {
             }
         }
         best.map(|(_, h)| h)
+    }
+
+    /// Starts loading the blocks of the leaf `(first, code)` (a hint).
+    #[inline(always)]
+    fn prefetch_leaf(&self, first: usize, code: usize) {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the leaf's blocks are `blocks[first..first + count]`, so every
+        // line start is inside the allocation; a prefetch never faults.
+        unsafe {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let (count, _) = LeafCode::decode(code);
+            let p = self.blocks.as_ptr().add(first) as *const i8;
+            for line in (0..count * std::mem::size_of::<LeafBlock>()).step_by(64) {
+                _mm_prefetch::<_MM_HINT_T0>(p.add(line));
+            }
+        }
     }
 
     /// The input index of a primitive: triangles of mesh 0, mesh 1, …, then
@@ -697,7 +719,9 @@ impl Accel {
         self.bvh.root() != bvh4::EMPTY && ray_is_valid(ray)
     }
 
-    /// Closest hit; `work` counts (node tests, primitive tests).
+    /// Closest hit; `work` counts (node tests, primitive tests), the latter
+    /// only with `count_prims` (counting reads each block's ids, a cache line
+    /// a query without a hit need not load).
     #[inline(always)]
     fn closest_with<const KX: usize, const KY: usize, const KZ: usize>(
         &self,
@@ -705,6 +729,7 @@ impl Accel {
         wr: &WatertightRay,
         stack: &mut [Entry],
         work: &mut (u32, u32),
+        count_prims: bool,
     ) -> Option<Hit> {
         let (node_ray, back_off) = node_ray(ray);
         let wr4 = WatertightRay4::new(wr);
@@ -756,7 +781,9 @@ impl Accel {
                 let blocks = &self.blocks[first..first + count];
                 #[cfg(target_arch = "x86_64")]
                 if eight_lanes && count == 2 {
-                    prims_tested += blocks[0].primitive_count() + blocks[1].primitive_count();
+                    if count_prims {
+                        prims_tested += blocks[0].primitive_count() + blocks[1].primitive_count();
+                    }
                     // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
                     let h = unsafe {
                         primitive::avx::intersect8::<KX, KY, KZ, false>(
@@ -777,7 +804,9 @@ impl Accel {
                     return Some(t_max + back_off);
                 }
                 for block in blocks {
-                    prims_tested += block.primitive_count();
+                    if count_prims {
+                        prims_tested += block.primitive_count();
+                    }
                     let h = wr4.intersect::<KX, KY, KZ, false>(&block.tris, ray.t_min, t_max);
                     let mut lanes = h.hits | h.fallback;
                     if spheres {
@@ -792,6 +821,7 @@ impl Accel {
                 }
                 Some(t_max + back_off)
             },
+            |first, code| self.prefetch_leaf(first, code),
         );
         work.1 += prims_tested;
         best.map(|(id, t, bary)| Hit {
@@ -872,6 +902,7 @@ impl Accel {
                 }
                 Some(f32::INFINITY)
             },
+            |first, code| self.prefetch_leaf(first, code),
         );
         hit
     }
