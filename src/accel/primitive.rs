@@ -43,7 +43,14 @@ fn t_error_bound<F: Lanes>(x: [F; 3], y: [F; 3], z: [F; 3], e: [F; 3], abs_rcp_d
 }
 
 /// One f32 or four: the arithmetic [`t_error_bound`] needs.
-trait Lanes: Copy + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> + From<f32> {
+trait Lanes:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + From<f32>
+{
     fn abs(self) -> Self;
     fn max(self, other: Self) -> Self;
 }
@@ -64,6 +71,59 @@ macro_rules! lanes {
     )*};
 }
 lanes!(f32, f32x4);
+
+/// The watertight test's arithmetic on SIMD lanes, one triangle per lane:
+/// the sheared vertices, the edge functions, the hit distance and 1/det.
+struct LaneTest<F> {
+    x: [F; 3],
+    y: [F; 3],
+    z: [F; 3],
+    /// U, V, W (paper eq. 3).
+    e: [F; 3],
+    det: F,
+    rcp_det: F,
+    t: F,
+}
+
+/// [`WatertightRay::intersect`]'s operations in its order, on lanes: the one
+/// sequence the 4- and 8-lane tests share, so that each lane's bits are the
+/// scalar test's. `rel(k, i)` is vertex k relative to the ray origin along
+/// the permuted axis i (kx, ky, kz); `s` the shear constants (Sx, Sy, Sz).
+#[inline(always)]
+fn lane_test<F: Lanes>(rel: impl Fn(usize, usize) -> F, [sx, sy, sz]: [F; 3]) -> LaneTest<F> {
+    let vertex = |k: usize| [rel(k, 0), rel(k, 1), rel(k, 2)];
+    let (a, b, c) = (vertex(0), vertex(1), vertex(2));
+    // Shear and scale (paper §3, Listing 1).
+    let (ax, ay) = (a[0] - sx * a[2], a[1] - sy * a[2]);
+    let (bx, by) = (b[0] - sx * b[2], b[1] - sy * b[2]);
+    let (cx, cy) = (c[0] - sx * c[2], c[1] - sy * c[2]);
+    // Edge functions (paper eq. 3).
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let det = u + v + w;
+    // Scaled hit distance (paper eq. 5).
+    let (az, bz, cz) = (sz * a[2], sz * b[2], sz * c[2]);
+    let t_scaled = u * az + v * bz + w * cz;
+    let rcp_det = F::from(1.0) / det;
+    LaneTest {
+        x: [ax, bx, cx],
+        y: [ay, by, cy],
+        z: [az, bz, cz],
+        e: [u, v, w],
+        det,
+        rcp_det,
+        t: t_scaled * rcp_det,
+    }
+}
+
+impl<F: Lanes> LaneTest<F> {
+    /// pbrt-v4's δt for these lanes ([`t_error_bound`]).
+    #[inline(always)]
+    fn t_error_bound(&self) -> F {
+        t_error_bound(self.x, self.y, self.z, self.e, self.rcp_det.abs())
+    }
+}
 
 /// Per-ray precomputation of the watertight test (Woop, Benthin & Wald 2013, §3,
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
@@ -314,48 +374,28 @@ impl WatertightRay4 {
         t_min: f32,
         t_max: f32,
     ) -> Hits4 {
-        let rel = |k: usize, axis: usize| tri.v[k][axis] - self.org[axis];
-        let (a, b, c) = (
-            [rel(0, KX), rel(0, KY), rel(0, KZ)],
-            [rel(1, KX), rel(1, KY), rel(1, KZ)],
-            [rel(2, KX), rel(2, KY), rel(2, KZ)],
+        let axes = [KX, KY, KZ];
+        let lt = lane_test(
+            |k, i| tri.v[k][axes[i]] - self.org[axes[i]],
+            [self.sx, self.sy, self.sz],
         );
-        // Shear and scale (paper §3, Listing 1).
-        let (ax, ay) = (a[0] - self.sx * a[2], a[1] - self.sy * a[2]);
-        let (bx, by) = (b[0] - self.sx * b[2], b[1] - self.sy * b[2]);
-        let (cx, cy) = (c[0] - self.sx * c[2], c[1] - self.sy * c[2]);
-        // Edge functions (paper eq. 3).
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
+        let [u, v, w] = lt.e;
         let zero = f32x4::splat(0.0);
         let on_edge = u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero);
         let negative = u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero);
         let positive = u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero);
-        let det = u + v + w;
-        // Scaled hit distance (paper eq. 5).
-        let (az, bz, cz) = (self.sz * a[2], self.sz * b[2], self.sz * c[2]);
-        let t_scaled = u * az + v * bz + w * cz;
-        let rcp_det = f32x4::splat(1.0) / det;
-        let t = t_scaled * rcp_det;
+        let t = lt.t;
         let in_range = t.simd_ge(f32x4::splat(t_min)) & t.simd_le(f32x4::splat(t_max));
-        let inside = !(negative & positive) & det.simd_ne(zero);
+        let inside = !(negative & positive) & lt.det.simd_ne(zero);
         let mut hits = (inside & in_range).to_bitmask() & !on_edge.to_bitmask();
         // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
         if hits != 0 && t_min >= 0.0 {
-            let bound = t_error_bound(
-                [ax, bx, cx],
-                [ay, by, cy],
-                [az, bz, cz],
-                [u, v, w],
-                rcp_det.abs(),
-            );
-            hits &= !t.simd_le(bound).to_bitmask();
+            hits &= !t.simd_le(lt.t_error_bound()).to_bitmask();
         }
         let (b1, b2) = if ANY || hits == 0 {
             (zero, zero)
         } else {
-            (v * rcp_det, w * rcp_det)
+            (v * lt.rcp_det, w * lt.rcp_det)
         };
         Hits4 {
             hits,
@@ -375,7 +415,7 @@ impl WatertightRay4 {
 /// the blocks that fill both.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx {
-    use super::{t_error_bound, Lanes, Tri4, WatertightRay};
+    use super::{lane_test, Lanes, Tri4, WatertightRay};
     use std::arch::x86_64::*;
 
     /// Eight f32 lanes; its operators must only run inside an AVX function
@@ -406,6 +446,14 @@ pub(crate) mod avx {
         #[inline(always)]
         fn mul(self, o: Self) -> Self {
             Self(unsafe { _mm256_mul_ps(self.0, o.0) })
+        }
+    }
+
+    impl std::ops::Div for F8 {
+        type Output = Self;
+        #[inline(always)]
+        fn div(self, o: Self) -> Self {
+            Self(unsafe { _mm256_div_ps(self.0, o.0) })
         }
     }
 
@@ -474,52 +522,34 @@ pub(crate) mod avx {
         t_max: f32,
     ) -> Hits8 {
         let org = wr.org.to_array().map(F8::from);
-        let (sx, sy, sz) = (F8::from(wr.sx), F8::from(wr.sy), F8::from(wr.sz));
         // SAFETY: a `wide::f32x4` is four f32 in 16 aligned bytes.
         let load = |k: usize, axis: usize| {
             let p = |t: &Tri4| &t.v[k][axis] as *const _ as *const f32;
             F8(_mm256_loadu2_m128(p(hi), p(lo)))
         };
-        let rel = |k: usize, axis: usize| load(k, axis) - org[axis];
-        let (a, b, c) = (
-            [rel(0, KX), rel(0, KY), rel(0, KZ)],
-            [rel(1, KX), rel(1, KY), rel(1, KZ)],
-            [rel(2, KX), rel(2, KY), rel(2, KZ)],
+        let axes = [KX, KY, KZ];
+        let lt = lane_test(
+            |k, i| load(k, axes[i]) - org[axes[i]],
+            [wr.sx, wr.sy, wr.sz].map(F8::from),
         );
-        let (ax, ay) = (a[0] - sx * a[2], a[1] - sy * a[2]);
-        let (bx, by) = (b[0] - sx * b[2], b[1] - sy * b[2]);
-        let (cx, cy) = (c[0] - sx * c[2], c[1] - sy * c[2]);
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
+        let [u, v, w] = lt.e;
         let zero = F8::from(0.0);
         let any3 = |op: fn(F8, F8) -> u32| op(u, zero) | op(v, zero) | op(w, zero);
         let on_edge = any3(F8::cmp::<_CMP_EQ_OQ>);
         let negative = any3(F8::cmp::<_CMP_LT_OQ>);
         let positive = any3(F8::cmp::<_CMP_GT_OQ>);
-        let det = u + v + w;
-        let (az, bz, cz) = (sz * a[2], sz * b[2], sz * c[2]);
-        let t_scaled = u * az + v * bz + w * cz;
-        let rcp_det = F8(_mm256_div_ps(_mm256_set1_ps(1.0), det.0));
-        let t = t_scaled * rcp_det;
+        let t = lt.t;
         let in_range = t.cmp::<_CMP_GE_OQ>(F8::from(t_min)) & t.cmp::<_CMP_LE_OQ>(F8::from(t_max));
         // `simd_ne` is true for NaN, as in the 4-wide test.
-        let inside = !(negative & positive) & det.cmp::<_CMP_NEQ_UQ>(zero);
+        let inside = !(negative & positive) & lt.det.cmp::<_CMP_NEQ_UQ>(zero);
         let mut hits = inside & in_range & !on_edge & 0xff;
         if hits != 0 && t_min >= 0.0 {
-            let bound = t_error_bound(
-                [ax, bx, cx],
-                [ay, by, cy],
-                [az, bz, cz],
-                [u, v, w],
-                rcp_det.abs(),
-            );
-            hits &= !t.cmp::<_CMP_LE_OQ>(bound);
+            hits &= !t.cmp::<_CMP_LE_OQ>(lt.t_error_bound());
         }
         let (b1, b2) = if ANY || hits == 0 {
             ([0.0; 8], [0.0; 8])
         } else {
-            ((v * rcp_det).to_array(), (w * rcp_det).to_array())
+            ((v * lt.rcp_det).to_array(), (w * lt.rcp_det).to_array())
         };
         Hits8 {
             hits,
