@@ -13,11 +13,15 @@ use std::f32::consts::PI;
 /// One light source.
 #[derive(Clone, Copy, Debug)]
 enum Light {
-    /// Emitting triangle `tri` of mesh `mesh` (quads are two of these).
+    /// An emitting triangle of mesh `mesh` (quads are two of these), with its
+    /// vertices and unit normal copied here: light sampling runs at every
+    /// path vertex and need not go through the mesh's index buffer or
+    /// renormalise the cross product each time.
     Triangle {
         mesh: u32,
-        tri: u32,
         area: f32,
+        v: [Vec3; 3],
+        n: Vec3,
     },
     Sphere(u32),
     Environment,
@@ -87,13 +91,14 @@ impl LightSet {
                 continue;
             }
             mesh_first_light[mi] = lights.len() as u32;
-            for (ti, t) in m.triangles.iter().enumerate() {
+            for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
                 let area = 0.5 * (b - a).cross(c - a).length();
                 lights.push(Light::Triangle {
                     mesh: mi as u32,
-                    tri: ti as u32,
                     area,
+                    v: [a, b, c],
+                    n: (b - a).cross(c - a).normalize_or_zero(),
                 });
                 power.push(luminance(m.emission) * area * PI);
             }
@@ -161,7 +166,9 @@ impl LightSet {
         let idx = choose.sample_discrete(u_pick);
         let pick = choose.discrete_pmf(idx);
         let mut s = match self.lights[idx] {
-            Light::Triangle { mesh, tri, area } => sample_triangle(scene, mesh, tri, area, p, u)?,
+            Light::Triangle {
+                mesh, area, v, n, ..
+            } => sample_triangle(v, n, area, scene.meshes[mesh as usize].emission, p, u)?,
             Light::Sphere(i) => sample_sphere(scene, i, p, u)?,
             Light::Environment => self.sample_env(scene.environment.as_ref()?, n, u)?,
         };
@@ -382,19 +389,18 @@ fn scene_radius(scene: &Scene) -> f32 {
     (0.5 * (hi - lo).length()).max(1.0)
 }
 
+/// A point uniform in area on the triangle `[a, b, c]` (unit normal `n`) seen
+/// from `p`, its density in solid angle; `None` from behind.
 fn sample_triangle(
-    scene: &Scene,
-    mesh: u32,
-    tri: u32,
+    [a, b, c]: [Vec3; 3],
+    n: Vec3,
     area: f32,
+    emission: Vec3,
     p: Vec3,
     u: Vec2,
 ) -> Option<LightSample> {
-    let m = &scene.meshes[mesh as usize];
-    let [a, b, c] = m.triangles[tri as usize].map(|i| m.positions[i as usize]);
     let bary = warp::square_to_uniform_triangle(u);
     let q = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
-    let n = (b - a).cross(c - a).normalize_or_zero();
     let d = q - p;
     let dist2 = d.length_squared();
     if dist2 <= 0.0 || area <= 0.0 {
@@ -408,7 +414,7 @@ fn sample_triangle(
     }
     Some(LightSample {
         wi,
-        radiance: m.emission,
+        radiance: emission,
         pdf: dist2 / (area * cos_l),
         point: Some((q, n)),
         cone: None,
