@@ -423,39 +423,21 @@ pub(crate) mod avx {
     #[derive(Clone, Copy)]
     pub(crate) struct F8(__m256);
 
-    // SAFETY (all operators below): only used by `intersect8`, which requires
-    // AVX2; `#[inline(always)]` places each intrinsic in its body.
-    impl std::ops::Add for F8 {
-        type Output = Self;
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Self(unsafe { _mm256_add_ps(self.0, o.0) })
-        }
+    /// `impl $op for F8` by the intrinsic `$f`.
+    macro_rules! binary_ops {
+        ($($op:ident $method:ident $f:ident),*) => {$(
+            impl std::ops::$op for F8 {
+                type Output = Self;
+                #[inline(always)]
+                fn $method(self, o: Self) -> Self {
+                    // SAFETY: only used by `intersect8`, which requires AVX2;
+                    // `#[inline(always)]` places the intrinsic in its body.
+                    Self(unsafe { $f(self.0, o.0) })
+                }
+            }
+        )*};
     }
-
-    impl std::ops::Sub for F8 {
-        type Output = Self;
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Self(unsafe { _mm256_sub_ps(self.0, o.0) })
-        }
-    }
-
-    impl std::ops::Mul for F8 {
-        type Output = Self;
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Self(unsafe { _mm256_mul_ps(self.0, o.0) })
-        }
-    }
-
-    impl std::ops::Div for F8 {
-        type Output = Self;
-        #[inline(always)]
-        fn div(self, o: Self) -> Self {
-            Self(unsafe { _mm256_div_ps(self.0, o.0) })
-        }
-    }
+    binary_ops!(Add add _mm256_add_ps, Sub sub _mm256_sub_ps, Mul mul _mm256_mul_ps, Div div _mm256_div_ps);
 
     impl From<f32> for F8 {
         #[inline(always)]
