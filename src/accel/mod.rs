@@ -272,6 +272,7 @@ impl Tree {
 
     /// Whether leaves of two blocks are tested as one eight-lane block
     /// (`primitive::avx`): in the 8-wide tree, which is only built with AVX2.
+    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn eight_lane_leaves(&self) -> bool {
         matches!(self, Tree::Eight(_))
@@ -747,6 +748,7 @@ impl Accel {
     ) -> Option<Hit> {
         let (node_ray, back_off) = node_ray(ray);
         let wr4 = WatertightRay4::new(wr);
+        #[cfg(target_arch = "x86_64")]
         let eight_lanes = self.bvh.eight_lane_leaves();
         // (input index, t, b1, b2) of the nearest hit so far.
         let mut best: Option<(u32, f32, Vec2)> = None;
@@ -878,6 +880,7 @@ impl Accel {
     ) -> bool {
         let (node_ray, back_off) = node_ray(ray);
         let wr4 = WatertightRay4::new(wr);
+        #[cfg(target_arch = "x86_64")]
         let eight_lanes = self.bvh.eight_lane_leaves();
         // Whether one of the `lanes` left to the scalar test is hit.
         let scalar_hit = |mut lanes: u32, id: &dyn Fn(usize) -> u32| {
