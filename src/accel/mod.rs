@@ -770,27 +770,15 @@ impl Accel {
                         prims_tested += blocks[0].primitive_count() + blocks[1].primitive_count();
                     }
                     // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
-                    let h = unsafe {
-                        primitive::avx::intersect8::<KX, KY, KZ, false>(
-                            wr,
-                            &blocks[0].tris,
-                            &blocks[1].tris,
-                            ray.t_min,
-                            t_max,
-                        )
+                    let (h, scalar) = unsafe {
+                        self.leaf8::<KX, KY, KZ, false>(wr, blocks, spheres, ray.t_min, t_max)
                     };
-                    let mut lanes = h.hits | h.fallback;
-                    if spheres {
-                        lanes |= blocks[0].sphere_lanes(self.first_sphere)
-                            | blocks[1].sphere_lanes(self.first_sphere) << 4;
-                    }
-                    let id = |lane: usize| blocks[lane >> 2].ids[lane & 3];
                     self.take_lanes::<KX, KY, KZ>(
                         ray,
                         wr,
-                        (lanes, h.hits),
+                        (h.hits | scalar, h.hits),
                         (&h.t, &h.b1, &h.b2),
-                        id,
+                        |lane| blocks[lane >> 2].ids[lane & 3],
                         &mut t_max,
                         &mut best,
                     );
@@ -870,6 +858,60 @@ impl Accel {
         }
     }
 
+    /// A leaf of two blocks through the eight-lane test: its result, and the
+    /// lanes the scalar test must decide (edge fallbacks and spheres).
+    ///
+    /// # Safety
+    /// As [`primitive::avx::intersect8`]: only from the 8-wide (AVX2) traversal.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn leaf8<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+        &self,
+        wr: &WatertightRay,
+        blocks: &[LeafBlock],
+        spheres: bool,
+        t_min: f32,
+        t_max: f32,
+    ) -> (primitive::avx::Hits8, u32) {
+        let h = primitive::avx::intersect8::<KX, KY, KZ, ANY>(
+            wr,
+            &blocks[0].tris,
+            &blocks[1].tris,
+            t_min,
+            t_max,
+        );
+        let mut scalar = h.fallback;
+        if spheres {
+            scalar |= blocks[0].sphere_lanes(self.first_sphere)
+                | blocks[1].sphere_lanes(self.first_sphere) << 4;
+        }
+        (h, scalar)
+    }
+
+    /// Whether one of the `lanes` left to the scalar test (primitive: input
+    /// index `id(lane)`) is hit.
+    #[inline(always)]
+    fn scalar_hit<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        mut lanes: u32,
+        id: impl Fn(usize) -> u32,
+    ) -> bool {
+        while lanes != 0 {
+            let id = id(lanes.trailing_zeros() as usize);
+            lanes &= lanes - 1;
+            if self
+                .prim_of_input(id)
+                .intersect::<KX, KY, KZ>(ray, wr, ray.t_max)
+                .is_some()
+            {
+                return true;
+            }
+        }
+        false
+    }
+
     #[inline(always)]
     fn any_with<const KX: usize, const KY: usize, const KZ: usize>(
         &self,
@@ -882,21 +924,6 @@ impl Accel {
         let wr4 = WatertightRay4::new(wr);
         #[cfg(target_arch = "x86_64")]
         let eight_lanes = self.bvh.eight_lane_leaves();
-        // Whether one of the `lanes` left to the scalar test is hit.
-        let scalar_hit = |mut lanes: u32, id: &dyn Fn(usize) -> u32| {
-            while lanes != 0 {
-                let id = id(lanes.trailing_zeros() as usize);
-                lanes &= lanes - 1;
-                if self
-                    .prim_of_input(id)
-                    .intersect::<KX, KY, KZ>(ray, wr, ray.t_max)
-                    .is_some()
-                {
-                    return true;
-                }
-            }
-            false
-        };
         let mut hit = false;
         traverse!(
             &self.bvh,
@@ -911,22 +938,13 @@ impl Accel {
                 #[cfg(target_arch = "x86_64")]
                 if eight_lanes && count == 2 {
                     // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
-                    let h = unsafe {
-                        primitive::avx::intersect8::<KX, KY, KZ, true>(
-                            wr,
-                            &blocks[0].tris,
-                            &blocks[1].tris,
-                            ray.t_min,
-                            ray.t_max,
-                        )
+                    let (h, scalar) = unsafe {
+                        self.leaf8::<KX, KY, KZ, true>(wr, blocks, spheres, ray.t_min, ray.t_max)
                     };
-                    let mut lanes = h.fallback;
-                    if spheres {
-                        lanes |= blocks[0].sphere_lanes(self.first_sphere)
-                            | blocks[1].sphere_lanes(self.first_sphere) << 4;
-                    }
-                    let id = |lane: usize| blocks[lane >> 2].ids[lane & 3];
-                    hit = h.hits != 0 || scalar_hit(lanes, &id);
+                    hit = h.hits != 0
+                        || self.scalar_hit::<KX, KY, KZ>(ray, wr, scalar, |lane| {
+                            blocks[lane >> 2].ids[lane & 3]
+                        });
                     return (!hit).then_some(f32::INFINITY);
                 }
                 for block in blocks {
@@ -935,7 +953,8 @@ impl Accel {
                     if spheres {
                         lanes |= block.sphere_lanes(self.first_sphere);
                     }
-                    hit = h.hits != 0 || scalar_hit(lanes, &|lane| block.ids[lane]);
+                    hit = h.hits != 0
+                        || self.scalar_hit::<KX, KY, KZ>(ray, wr, lanes, |lane| block.ids[lane]);
                     if hit {
                         return None;
                     }

@@ -93,12 +93,13 @@ impl LightSet {
             mesh_first_light[mi] = lights.len() as u32;
             for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                let area = 0.5 * (b - a).cross(c - a).length();
+                let cross = (b - a).cross(c - a);
+                let area = 0.5 * cross.length();
                 lights.push(Light::Triangle {
                     mesh: mi as u32,
                     area,
                     v: [a, b, c],
-                    n: (b - a).cross(c - a).normalize_or_zero(),
+                    n: cross.normalize_or_zero(),
                 });
                 power.push(luminance(m.emission) * area * PI);
             }
