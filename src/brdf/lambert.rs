@@ -1,7 +1,7 @@
 //! Lambertian reflection: f = albedo/π with cosine-weighted sampling, for which
 //! `f · cos θi / pdf = albedo` exactly (no division is performed).
 
-use super::{sanitize, unit, BsdfSample};
+use super::{sanitize, unit_z, BsdfSample};
 use crate::math::{warp, Vec2, Vec3};
 use glam::DVec3;
 use std::f32::consts::FRAC_1_PI;
@@ -13,7 +13,12 @@ pub(super) fn eval(albedo: Vec3) -> Vec3 {
 
 /// Cosine-weighted density cos θi / π (the caller has checked wi.z > 0).
 pub(super) fn pdf(wi: DVec3) -> f64 {
-    wi.z * std::f64::consts::FRAC_1_PI
+    pdf_of_cos(wi.z)
+}
+
+/// cos θi / π from the normalised cos θi.
+pub(super) fn pdf_of_cos(cos: f64) -> f64 {
+    cos * std::f64::consts::FRAC_1_PI
 }
 
 /// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the
@@ -21,11 +26,11 @@ pub(super) fn pdf(wi: DVec3) -> f64 {
 /// has zero density and is rejected.
 pub(super) fn sample(albedo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let wi = warp::square_to_cosine_hemisphere(u);
-    let wi64 = unit(wi)?;
-    if wi64.z <= 0.0 {
+    let z = unit_z(wi)?;
+    if z <= 0.0 {
         return None;
     }
-    let pdf = pdf(wi64) as f32;
+    let pdf = pdf_of_cos(z) as f32;
     if pdf <= 0.0 {
         return None;
     }

@@ -143,6 +143,14 @@ impl Material {
 
     /// Solid-angle density of sampling `wi` given `wo`; zero for delta lobes.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if let Material::Lambert { .. } = self {
+            // cos θi / π needs only wi's normalised z, and wo only its side: the
+            // same bits as normalising both at f64, without five of the divisions.
+            return match (upper(wo), unit_z(wi)) {
+                (true, Some(z)) if z > 0.0 => finite_nonneg(lambert::pdf_of_cos(z) as f32),
+                _ => 0.0,
+            };
+        }
         let Some((wo, wi)) = upper_pair(wo, wi) else {
             return 0.0;
         };
@@ -160,6 +168,10 @@ impl Material {
     /// `None` when `wo` is below the horizon, the material is black, or the sampled
     /// direction is unusable (below the horizon or of zero density).
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        if let Material::Lambert { albedo } = self {
+            // Only wo's side matters to a Lambertian sample: no f64 normalisation.
+            return upper(wo).then(|| lambert::sample(*albedo, u)).flatten();
+        }
         let wo64 = unit(wo)?;
         if wo64.z <= 0.0 {
             return None;
@@ -291,6 +303,21 @@ fn unit(v: Vec3) -> Option<DVec3> {
     Some(d / len2.sqrt())
 }
 
+/// z of `v` normalised at f64 (the bits [`unit`] gives it), or `None` where
+/// `unit` has none: one division instead of three.
+fn unit_z(v: Vec3) -> Option<f64> {
+    let d = v.as_dvec3();
+    let len2 = d.length_squared();
+    (len2 > 0.0 && len2.is_finite()).then(|| d.z / len2.sqrt())
+}
+
+/// Whether `v` normalised (by [`unit`]) is strictly above the horizon: only the
+/// sign of its z matters, so no square root.
+fn upper(v: Vec3) -> bool {
+    let len2 = v.as_dvec3().length_squared();
+    len2 > 0.0 && len2.is_finite() && v.z > 0.0
+}
+
 /// Both directions normalised and strictly above the horizon, or `None`.
 fn upper_pair(wo: Vec3, wi: Vec3) -> Option<(DVec3, DVec3)> {
     let (wo, wi) = (unit(wo)?, unit(wi)?);
@@ -299,8 +326,10 @@ fn upper_pair(wo: Vec3, wi: Vec3) -> Option<(DVec3, DVec3)> {
 
 /// A colour parameter made usable: NaN, infinite and negative components become 0.
 fn sanitize(c: Vec3) -> Vec3 {
-    let f = |x: f32| if x > 0.0 && x.is_finite() { x } else { 0.0 };
-    Vec3::new(f(c.x), f(c.y), f(c.z))
+    // Lane-wise compares (NaN fails both): no branch per channel; this runs on
+    // every Lambertian sample and evaluation.
+    let keep = c.cmpgt(Vec3::ZERO) & c.cmplt(Vec3::INFINITY);
+    Vec3::select(keep, c, Vec3::ZERO)
 }
 
 fn finite_nonneg(x: f32) -> f32 {
@@ -337,5 +366,61 @@ mod tests {
             albedo: Vec3::new(0.7, 0.5, 0.3),
         };
         assert_eq!(m.to_string(), "lambert albedo=[0.7, 0.5, 0.3]");
+    }
+
+    #[test]
+    fn lambert_shortcuts_give_the_bits_of_the_f64_normalisation() {
+        // pdf and sample skip normalising at f64 what only needs its sign or z;
+        // the reference below is the general path they replace.
+        let reference_pdf = |wo: Vec3, wi: Vec3| {
+            upper_pair(wo, wi).map_or(0.0, |(_, wi)| finite_nonneg(lambert::pdf(wi) as f32))
+        };
+        let m = Material::Lambert {
+            albedo: Vec3::new(0.7, f32::NAN, f32::INFINITY),
+        };
+        assert_eq!(
+            m.eval(Vec3::Z, Vec3::Z),
+            Vec3::new(0.7 * std::f32::consts::FRAC_1_PI, 0.0, 0.0)
+        );
+        let mut state = 0x2545_f491_u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        let scales = [1e-30f32, 1e-3, 1.0, 7.3, 1e18];
+        let specials = [
+            0.0f32,
+            -0.0,
+            f32::MIN_POSITIVE * 0.5,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for i in 0..20_000 {
+            let mut v = || {
+                let s = scales[(next() * 5.0) as usize % 5];
+                Vec3::new(next() - 0.5, next() - 0.5, next() - 0.3) * s
+            };
+            let (mut wo, wi) = (v(), v());
+            if i % 50 == 0 {
+                wo.z = specials[(i / 50) % 5];
+            }
+            assert_eq!(
+                m.pdf(wo, wi).to_bits(),
+                reference_pdf(wo, wi).to_bits(),
+                "{wo} {wi}"
+            );
+            let u = Vec2::new(next(), next());
+            let got = m.sample(wo, 0.5, u);
+            let want = unit(wo)
+                .filter(|w| w.z > 0.0)
+                .and_then(|_| lambert::sample(Vec3::ONE, u));
+            assert_eq!(got.is_some(), want.is_some(), "{wo}");
+            if let (Some(g), Some(w)) = (got, want) {
+                assert_eq!((g.wi, g.pdf), (w.wi, w.pdf));
+                assert_eq!(g.pdf.to_bits(), reference_pdf(Vec3::Z, g.wi).to_bits());
+            }
+        }
     }
 }
