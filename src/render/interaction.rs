@@ -134,7 +134,10 @@ fn sphere_interaction(scene: &Scene, ray: &Ray, hit: &Hit, i: u32) -> Interactio
 }
 
 /// Shared tail: applies the bump map, orients normals toward the ray, builds the frame.
+/// Inlined into both shapes' set-up: called, its dozen arguments and 144-byte
+/// result went through the stack on every hit.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn finish(
     scene: &Scene,
     ray: &Ray,
