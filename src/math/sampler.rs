@@ -153,21 +153,18 @@ const SOBOL_SETS: usize = (SOBOL_DIMS_USED as usize).div_ceil(4);
 /// `sobol_burley`'s (bit-reversed) direction vectors of the first [`SOBOL_SETS`]
 /// dimension sets, 16 per dimension (indices below 2^16). The crate keeps its table
 /// private, so they are read back through its public `sobol_rev`: an index with the
-/// single bit 31 - i set selects vector i.
-fn direction_vectors() -> &'static [[[u32; 4]; 16]; SOBOL_SETS] {
-    static TABLE: std::sync::OnceLock<[[[u32; 4]; 16]; SOBOL_SETS]> = std::sync::OnceLock::new();
-    TABLE.get_or_init(|| {
-        let mut t = [[[0; 4]; 16]; SOBOL_SETS];
-        for (set, vecs) in t.iter_mut().enumerate() {
-            for (i, v) in vecs.iter_mut().enumerate() {
-                for (k, lane) in v.iter_mut().enumerate() {
-                    let dim = (set * 4 + k) as u32;
-                    *lane = sobol_burley::parts::sobol_rev(1 << (31 - i), dim);
-                }
+/// single bit 31 - i set selects vector i. Read once, into [`nibble_tables`].
+fn direction_vectors() -> [[[u32; 4]; 16]; SOBOL_SETS] {
+    let mut t = [[[0; 4]; 16]; SOBOL_SETS];
+    for (set, vecs) in t.iter_mut().enumerate() {
+        for (i, v) in vecs.iter_mut().enumerate() {
+            for (k, lane) in v.iter_mut().enumerate() {
+                let dim = (set * 4 + k) as u32;
+                *lane = sobol_burley::parts::sobol_rev(1 << (31 - i), dim);
             }
         }
-        t
-    })
+    }
+    t
 }
 
 /// A 32-bit integer hash (the "lowbias32" finaliser by C. Wellons) of two words.
