@@ -14,6 +14,8 @@ depth 5. Box filter. Timed at equal spp:
     its `independent`, `multijitter` and `ldsampler` samplers: `mi.render` wall
     time, median of --runs; scene loading (`mi.load_dict`) and, for LLVM, the
     first render that JIT-compiles the kernels are reported separately.
+  The renderers take turns, round by round (each renders once per round), so that
+  a change in the machine's load during the run reaches every row alike.
 Error: RMSE (all pixels and channels) against a converged reference (Mitsuba
 `scalar_rgb` at --ref-spp; its own noise is subtracted), cached in out/bench/.
 Efficiency ratio = (t·RMSE²)_gradtrace / (t·RMSE²)_Mitsuba: the ratio of the times
@@ -202,40 +204,49 @@ def reference(b: Bench, ref_spp: int) -> Reference:
     return Reference(mean, var, ref_spp)
 
 
-def bench_mitsuba(b: Bench, variant: str, sampler: str, runs: int, ref: Reference) -> dict:
-    mi.set_variant(variant)
-    jit = variant.startswith(("llvm", "cuda"))
-    t = time.perf_counter()
-    scene = mi.load_dict(b.mitsuba_dict(b.spp, sampler))
-    load_s = time.perf_counter() - t
+class MitsubaRenderer:
+    """One Mitsuba variant and sampler on one scene: loaded (and, for LLVM, its
+    kernels JIT-compiled by a first render) once, then timed round by round."""
 
-    def render(seed: int) -> tuple[float, np.ndarray]:
+    def __init__(self, b: Bench, variant: str, sampler: str):
+        self.b, self.variant, self.sampler = b, variant, sampler
+        self.jit = variant.startswith(("llvm", "cuda"))
+        mi.set_variant(variant)
+        t = time.perf_counter()
+        self.scene = mi.load_dict(b.mitsuba_dict(b.spp, sampler))
+        self.load_s = time.perf_counter() - t
+        self.warm_s = self.render(0)[0] if self.jit else None
+        self.times: list[float] = []
+        self.errs: list[float] = []
+
+    def render(self, seed: int) -> tuple[float, np.ndarray]:
+        mi.set_variant(self.variant)
         t0 = time.perf_counter()
-        img = mi.render(scene, spp=b.spp, seed=seed)
-        if jit:
+        img = mi.render(self.scene, spp=self.b.spp, seed=seed)
+        if self.jit:
             dr.eval(img)
             dr.sync_thread()
         arr = np.array(img)
         return time.perf_counter() - t0, arr
 
-    warm_s, _ = render(0) if jit else (None, None)
-    times, errs = [], []
-    for i in range(runs):
-        s, img = render(100 + i)
-        times.append(s)
-        errs.append(ref.rmse(img))
-    return {
-        "name": f"Mitsuba 3 {variant}, {sampler}",
-        "variant": variant,
-        "sampler": sampler,
-        "spp": b.spp,
-        "render_s": statistics.median(times),
-        "times_s": times,
-        "load_s": load_s,
-        "warmup_s": warm_s,
-        "rmse": statistics.median(errs),
-        "rmses": errs,
-    }
+    def run(self, i: int, ref: Reference) -> None:
+        s, img = self.render(100 + i)
+        self.times.append(s)
+        self.errs.append(ref.rmse(img))
+
+    def row(self) -> dict:
+        return {
+            "name": f"Mitsuba 3 {self.variant}, {self.sampler}",
+            "variant": self.variant,
+            "sampler": self.sampler,
+            "spp": self.b.spp,
+            "render_s": statistics.median(self.times),
+            "times_s": self.times,
+            "load_s": self.load_s,
+            "warmup_s": self.warm_s,
+            "rmse": statistics.median(self.errs),
+            "rmses": self.errs,
+        }
 
 
 def gradtrace_binary(binary: str | None) -> str:
@@ -245,35 +256,44 @@ def gradtrace_binary(binary: str | None) -> str:
     return binary
 
 
-def bench_gradtrace(b: Bench, binary: str, runs: int, ref: Reference) -> dict:
-    times, errs = [], []
-    for i in range(runs):
+class GradtraceRenderer:
+    """The `gradtrace render` process, timed whole, round by round."""
+
+    def __init__(self, b: Bench, binary: str):
+        self.b, self.binary = b, binary
+        self.times: list[float] = []
+        self.errs: list[float] = []
+
+    def run(self, i: int, ref: Reference) -> None:
+        b = self.b
         out = OUT / f"gradtrace_{b.key}_{i}.exr"
         t0 = time.perf_counter()
         subprocess.run(
-            [binary, "render", str(b.path), "--out", str(out), "--spp", str(b.spp), "--seed", str(100 + i), "--no-aovs", "--quiet"],
+            [self.binary, "render", str(b.path), "--out", str(out), "--spp", str(b.spp), "--seed", str(100 + i), "--no-aovs", "--quiet"],
             cwd=ms.REPO,
             check=True,
         )
-        times.append(time.perf_counter() - t0)
+        self.times.append(time.perf_counter() - t0)
         bmp = mi.Bitmap(str(out))
         names = [bmp.struct_()[k].name for k in range(bmp.channel_count())]
         arr = np.array(bmp, dtype=np.float64)
         img = np.stack([arr[..., names.index(c)] for c in "RGB"], -1)
-        errs.append(ref.rmse(img))
-    return {
-        "name": "gradtrace (Owen-scrambled Sobol)",
-        "variant": "gradtrace",
-        "sampler": "sobol",
-        "spp": b.spp,
-        "render_s": statistics.median(times),
-        "times_s": times,
-        "load_s": None,
-        "warmup_s": None,
-        "rmse": statistics.median(errs),
-        "rmses": errs,
-        "note": "whole process: load + BVH + render + EXR",
-    }
+        self.errs.append(ref.rmse(img))
+
+    def row(self) -> dict:
+        return {
+            "name": "gradtrace (Owen-scrambled Sobol)",
+            "variant": "gradtrace",
+            "sampler": "sobol",
+            "spp": self.b.spp,
+            "render_s": statistics.median(self.times),
+            "times_s": self.times,
+            "load_s": None,
+            "warmup_s": None,
+            "rmse": statistics.median(self.errs),
+            "rmses": self.errs,
+            "note": "whole process: load + BVH + render + EXR",
+        }
 
 
 def add_ratios(rows: list[dict]) -> None:
@@ -285,10 +305,21 @@ def add_ratios(rows: list[dict]) -> None:
         r["speed_vs_scalar"] = scalar["render_s"] / r["render_s"] if scalar else None
         cost = r["render_s"] * r["rmse"] ** 2
         r["efficiency_ratio"] = ours["render_s"] * ours["rmse"] ** 2 / cost if ours and cost > 0 else None
+        # The same ratio within each round (the rows of a round ran back to back):
+        # its spread shows how far the machine's noise moves the figure.
+        r["efficiency_ratio_rounds"] = [
+            t0 * e0**2 / (t * e**2) if t * e > 0 else None
+            for t0, e0, t, e in zip(ours["times_s"], ours["rmses"], r["times_s"], r["rmses"])
+        ] if ours else []
 
 
 def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
     f = lambda x, d=2: "—" if x is None else f"{x:.{d}f}"  # noqa: E731
+
+    def rounds(r: dict) -> str:
+        vals = r.get("efficiency_ratio_rounds") or []
+        return "—" if r["variant"] == "gradtrace" or not vals else "[" + ", ".join(f(v) for v in vals) + "]"
+
     lines = [
         f"Median of {meta['runs']} runs on {meta['cpus']} CPU threads ({meta['cpu']}); RMSE against Mitsuba "
         f"`scalar_rgb` at {meta['ref_spp']} spp (its own noise subtracted). Efficiency ratio = "
@@ -301,13 +332,13 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
             "",
             f"**{b.label}**, {b.w}x{b.h}, {b.spp} spp, max depth {b.depth}, box filter.",
             "",
-            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | scene load (s) | JIT warm-up (s) |",
-            "|---|---:|---:|---:|---:|---:|---:|",
+            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | per round | scene load (s) | JIT warm-up (s) |",
+            "|---|---:|---:|---:|---:|---|---:|---:|",
         ]
         for r in rows:
             lines.append(
                 f"| {r['name']} | {r['render_s']:.2f} | {f(r['speed_vs_scalar'])}× | {r['rmse']:.4f} | "
-                f"{f(r['efficiency_ratio'])}× | {f(r['load_s'])} | {f(r['warmup_s'])} |"
+                f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['load_s'])} | {f(r['warmup_s'])} |"
             )
     for note in meta["notes"]:
         lines.append(f"\n{note}")
@@ -337,7 +368,8 @@ def main() -> int:
     args = ap.parse_args()
     notes = [
         "gradtrace's time is the whole `gradtrace render --no-aovs` process (load, BVH, render, EXR+PNG); "
-        "Mitsuba's is `mi.render` alone, with `mi.load_dict` and the first (JIT-compiling) LLVM render listed separately."
+        "Mitsuba's is `mi.render` alone, with `mi.load_dict` and the first (JIT-compiling) LLVM render listed separately. "
+        "The renderers take turns: each round runs every row once."
     ]
     if not args.no_gradtrace and args.gradtrace is None and shutil.which("cargo") is None:
         ap.error("cargo not found; pass --gradtrace BINARY or --no-gradtrace")
@@ -347,16 +379,17 @@ def main() -> int:
     scene_rows = []
     for b in benches(args.scenes.split(",")):
         ref = reference(b, args.ref_spp)
-        rows = []
-        if binary is not None:
-            rows.append(bench_gradtrace(b, binary, args.runs, ref))
-            print(b.key, rows[-1], flush=True)
-        rows.append(bench_mitsuba(b, "scalar_rgb", "independent", args.runs, ref))
-        print(b.key, rows[-1], flush=True)
+        renderers: list = [] if binary is None else [GradtraceRenderer(b, binary)]
+        renderers.append(MitsubaRenderer(b, "scalar_rgb", "independent"))
         if not args.no_llvm and LIBLLVM is not None:
-            for sampler in LLVM_SAMPLERS:
-                rows.append(bench_mitsuba(b, "llvm_ad_rgb", sampler, args.runs, ref))
-                print(b.key, rows[-1], flush=True)
+            renderers += [MitsubaRenderer(b, "llvm_ad_rgb", s) for s in LLVM_SAMPLERS]
+        # Round by round, every renderer once per round: a change in the machine's
+        # load then reaches all rows alike instead of whichever ran at the time.
+        for i in range(args.runs):
+            for r in renderers:
+                r.run(i, ref)
+            print(f"{b.key} round {i + 1}: " + ", ".join(f"{r.row()['name']} {r.times[-1]:.2f} s" for r in renderers), flush=True)
+        rows = [r.row() for r in renderers]
         add_ratios(rows)
         scene_rows.append((b, rows))
     meta = {
