@@ -72,6 +72,49 @@ macro_rules! lanes {
 }
 lanes!(f32, f32x4);
 
+/// Lanes that compare: each comparison gives a lane mask (all ones where it
+/// holds, ordered: false for NaN, but `ne` true), and `bits` its sign bits.
+trait MaskLanes: Lanes + std::ops::BitAnd<Output = Self> + std::ops::BitOr<Output = Self> {
+    fn eq(self, o: Self) -> Self;
+    fn ne(self, o: Self) -> Self;
+    fn lt(self, o: Self) -> Self;
+    fn gt(self, o: Self) -> Self;
+    fn le(self, o: Self) -> Self;
+    fn ge(self, o: Self) -> Self;
+    fn bits(self) -> u32;
+}
+
+impl MaskLanes for f32x4 {
+    #[inline(always)]
+    fn eq(self, o: Self) -> Self {
+        self.simd_eq(o)
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> Self {
+        self.simd_ne(o)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> Self {
+        self.simd_lt(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Self {
+        self.simd_gt(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> Self {
+        self.simd_le(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> Self {
+        self.simd_ge(o)
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        self.to_bitmask()
+    }
+}
+
 /// The watertight test's arithmetic on SIMD lanes, one triangle per lane:
 /// the sheared vertices, the edge functions, the hit distance and 1/det.
 struct LaneTest<F> {
@@ -118,10 +161,40 @@ fn lane_test<F: Lanes>(rel: impl Fn(usize, usize) -> F, [sx, sy, sz]: [F; 3]) ->
 }
 
 impl<F: Lanes> LaneTest<F> {
+    /// The barycentrics (b1, b2) = (V, W) / det, as the scalar test returns them.
+    #[inline(always)]
+    fn barycentrics(&self) -> (F, F) {
+        (self.e[1] * self.rcp_det, self.e[2] * self.rcp_det)
+    }
+
     /// pbrt-v4's δt for these lanes ([`t_error_bound`]).
     #[inline(always)]
     fn t_error_bound(&self) -> F {
         t_error_bound(self.x, self.y, self.z, self.e, self.rcp_det.abs())
+    }
+}
+
+impl<F: MaskLanes> LaneTest<F> {
+    /// The scalar test's decisions on every lane, as bit masks: `(hits,
+    /// on_edge)`, the lanes hit with t in [t_min, t_max] (and t > δt on
+    /// forward rays), and those with an edge function exactly zero, which the
+    /// scalar test must decide (its double-precision path).
+    #[inline(always)]
+    fn decide(&self, t_min: f32, t_max: f32) -> (u32, u32) {
+        let [u, v, w] = self.e;
+        let zero = F::from(0.0);
+        let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
+        let negative = u.lt(zero) | v.lt(zero) | w.lt(zero);
+        let positive = u.gt(zero) | v.gt(zero) | w.gt(zero);
+        let in_range = self.t.ge(F::from(t_min)) & self.t.le(F::from(t_max));
+        // `ne` is true for a NaN det, as the scalar test's `det == 0` is false.
+        let mut hits =
+            (in_range & self.det.ne(zero)).bits() & !(negative & positive).bits() & !on_edge;
+        // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
+        if hits != 0 && t_min >= 0.0 {
+            hits &= !self.t.le(self.t_error_bound()).bits();
+        }
+        (hits, on_edge)
     }
 }
 
@@ -379,28 +452,17 @@ impl WatertightRay4 {
             |k, i| tri.v[k][axes[i]] - self.org[axes[i]],
             [self.sx, self.sy, self.sz],
         );
-        let [u, v, w] = lt.e;
+        let (hits, on_edge) = lt.decide(t_min, t_max);
         let zero = f32x4::splat(0.0);
-        let on_edge = u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero);
-        let negative = u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero);
-        let positive = u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero);
-        let t = lt.t;
-        let in_range = t.simd_ge(f32x4::splat(t_min)) & t.simd_le(f32x4::splat(t_max));
-        let inside = !(negative & positive) & lt.det.simd_ne(zero);
-        let mut hits = (inside & in_range).to_bitmask() & !on_edge.to_bitmask();
-        // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
-        if hits != 0 && t_min >= 0.0 {
-            hits &= !t.simd_le(lt.t_error_bound()).to_bitmask();
-        }
         let (b1, b2) = if ANY || hits == 0 {
             (zero, zero)
         } else {
-            (v * lt.rcp_det, w * lt.rcp_det)
+            lt.barycentrics()
         };
         Hits4 {
             hits,
-            fallback: on_edge.to_bitmask(),
-            t,
+            fallback: on_edge,
+            t: lt.t,
             b1,
             b2,
         }
@@ -415,7 +477,7 @@ impl WatertightRay4 {
 /// the blocks that fill both.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx {
-    use super::{lane_test, Lanes, Tri4, WatertightRay};
+    use super::{lane_test, Lanes, MaskLanes, Tri4, WatertightRay};
     use std::arch::x86_64::*;
 
     /// Eight f32 lanes; its operators must only run inside an AVX function
@@ -437,7 +499,10 @@ pub(crate) mod avx {
             }
         )*};
     }
-    binary_ops!(Add add _mm256_add_ps, Sub sub _mm256_sub_ps, Mul mul _mm256_mul_ps, Div div _mm256_div_ps);
+    binary_ops!(
+        Add add _mm256_add_ps, Sub sub _mm256_sub_ps, Mul mul _mm256_mul_ps, Div div _mm256_div_ps,
+        BitAnd bitand _mm256_and_ps, BitOr bitor _mm256_or_ps
+    );
 
     impl From<f32> for F8 {
         #[inline(always)]
@@ -461,8 +526,8 @@ pub(crate) mod avx {
 
     impl F8 {
         #[inline(always)]
-        fn cmp<const OP: i32>(self, o: Self) -> u32 {
-            unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<OP>(self.0, o.0)) as u32 }
+        fn cmp<const OP: i32>(self, o: Self) -> Self {
+            Self(unsafe { _mm256_cmp_ps::<OP>(self.0, o.0) })
         }
 
         #[inline(always)]
@@ -470,6 +535,39 @@ pub(crate) mod avx {
             let mut out = [0.0; 8];
             unsafe { _mm256_storeu_ps(out.as_mut_ptr(), self.0) };
             out
+        }
+    }
+
+    /// The ordered predicates (false for NaN), `ne` unordered (true for NaN),
+    /// as `wide`'s `simd_*` on the 4-wide test.
+    impl MaskLanes for F8 {
+        #[inline(always)]
+        fn eq(self, o: Self) -> Self {
+            self.cmp::<_CMP_EQ_OQ>(o)
+        }
+        #[inline(always)]
+        fn ne(self, o: Self) -> Self {
+            self.cmp::<_CMP_NEQ_UQ>(o)
+        }
+        #[inline(always)]
+        fn lt(self, o: Self) -> Self {
+            self.cmp::<_CMP_LT_OQ>(o)
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> Self {
+            self.cmp::<_CMP_GT_OQ>(o)
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> Self {
+            self.cmp::<_CMP_LE_OQ>(o)
+        }
+        #[inline(always)]
+        fn ge(self, o: Self) -> Self {
+            self.cmp::<_CMP_GE_OQ>(o)
+        }
+        #[inline(always)]
+        fn bits(self) -> u32 {
+            unsafe { _mm256_movemask_ps(self.0) as u32 }
         }
     }
 
@@ -514,29 +612,17 @@ pub(crate) mod avx {
             |k, i| load(k, axes[i]) - org[axes[i]],
             [wr.sx, wr.sy, wr.sz].map(F8::from),
         );
-        let [u, v, w] = lt.e;
-        let zero = F8::from(0.0);
-        let any3 = |op: fn(F8, F8) -> u32| op(u, zero) | op(v, zero) | op(w, zero);
-        let on_edge = any3(F8::cmp::<_CMP_EQ_OQ>);
-        let negative = any3(F8::cmp::<_CMP_LT_OQ>);
-        let positive = any3(F8::cmp::<_CMP_GT_OQ>);
-        let t = lt.t;
-        let in_range = t.cmp::<_CMP_GE_OQ>(F8::from(t_min)) & t.cmp::<_CMP_LE_OQ>(F8::from(t_max));
-        // `simd_ne` is true for NaN, as in the 4-wide test.
-        let inside = !(negative & positive) & lt.det.cmp::<_CMP_NEQ_UQ>(zero);
-        let mut hits = inside & in_range & !on_edge & 0xff;
-        if hits != 0 && t_min >= 0.0 {
-            hits &= !t.cmp::<_CMP_LE_OQ>(lt.t_error_bound());
-        }
+        let (hits, on_edge) = lt.decide(t_min, t_max);
         let (b1, b2) = if ANY || hits == 0 {
             ([0.0; 8], [0.0; 8])
         } else {
-            ((v * lt.rcp_det).to_array(), (w * lt.rcp_det).to_array())
+            let (b1, b2) = lt.barycentrics();
+            (b1.to_array(), b2.to_array())
         };
         Hits8 {
             hits,
             fallback: on_edge,
-            t: t.to_array(),
+            t: lt.t.to_array(),
             b1,
             b2,
         }
