@@ -167,9 +167,9 @@ impl LightSet {
         let idx = choose.sample_discrete(u_pick);
         let pick = choose.discrete_pmf(idx);
         let mut s = match self.lights[idx] {
-            Light::Triangle {
-                mesh, area, v, n, ..
-            } => sample_triangle(v, n, area, scene.meshes[mesh as usize].emission, p, u)?,
+            Light::Triangle { mesh, area, v, n } => {
+                sample_triangle(v, n, area, scene.meshes[mesh as usize].emission, p, u)?
+            }
             Light::Sphere(i) => sample_sphere(scene, i, p, u)?,
             Light::Environment => self.sample_env(scene.environment.as_ref()?, n, u)?,
         };
