@@ -3,7 +3,6 @@
 
 use super::{sanitize, unit_z, BsdfSample};
 use crate::math::{warp, Vec2, Vec3};
-use glam::DVec3;
 use std::f32::consts::FRAC_1_PI;
 
 /// f = albedo/π (the caller has checked both directions are above the horizon).
@@ -11,13 +10,9 @@ pub(super) fn eval(albedo: Vec3) -> Vec3 {
     sanitize(albedo) * FRAC_1_PI
 }
 
-/// Cosine-weighted density cos θi / π (the caller has checked wi.z > 0).
-pub(super) fn pdf(wi: DVec3) -> f64 {
-    pdf_of_cos(wi.z)
-}
-
-/// cos θi / π from the normalised cos θi.
-pub(super) fn pdf_of_cos(cos: f64) -> f64 {
+/// Cosine-weighted density cos θi / π, from the normalised cos θi (the caller
+/// has checked it is positive).
+pub(super) fn pdf(cos: f64) -> f64 {
     cos * std::f64::consts::FRAC_1_PI
 }
 
@@ -30,7 +25,7 @@ pub(super) fn sample(albedo: Vec3, u: Vec2) -> Option<BsdfSample> {
     if z <= 0.0 {
         return None;
     }
-    let pdf = pdf_of_cos(z) as f32;
+    let pdf = pdf(z) as f32;
     if pdf <= 0.0 {
         return None;
     }

@@ -143,22 +143,15 @@ impl Material {
 
     /// Solid-angle density of sampling `wi` given `wo`; zero for delta lobes.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if let Material::Lambert { .. } = self {
+        let p = match self {
             // cos θi / π needs only wi's normalised z, and wo only its side: the
             // same bits as normalising both at f64, without five of the divisions.
-            return match (upper(wo), unit_z(wi)) {
-                (true, Some(z)) if z > 0.0 => finite_nonneg(lambert::pdf_of_cos(z) as f32),
+            Material::Lambert { .. } => match (upper(wo), unit_z(wi)) {
+                (true, Some(z)) if z > 0.0 => lambert::pdf(z),
                 _ => 0.0,
-            };
-        }
-        let Some((wo, wi)) = upper_pair(wo, wi) else {
-            return 0.0;
-        };
-        let p = match self {
-            Material::Lambert { .. } => lambert::pdf(wi),
-            Material::BlinnPhong { .. } | Material::CookTorrance { .. } => {
-                self.glossy().map_or(0.0, |g| g.pdf(wo, wi))
-            }
+            },
+            Material::BlinnPhong { .. } | Material::CookTorrance { .. } => upper_pair(wo, wi)
+                .map_or(0.0, |(wo, wi)| self.glossy().map_or(0.0, |g| g.pdf(wo, wi))),
             Material::Mirror { .. } => 0.0,
         };
         finite_nonneg(p as f32)
@@ -168,17 +161,18 @@ impl Material {
     /// `None` when `wo` is below the horizon, the material is black, or the sampled
     /// direction is unusable (below the horizon or of zero density).
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        if let Material::Lambert { albedo } = self {
-            // Only wo's side matters to a Lambertian sample: no f64 normalisation.
-            return upper(wo).then(|| lambert::sample(*albedo, u)).flatten();
-        }
-        let wo64 = unit(wo)?;
-        if wo64.z <= 0.0 {
-            return None;
-        }
         match self {
-            Material::Lambert { albedo } => lambert::sample(*albedo, u),
+            // Only wo's side matters to a Lambertian or mirror sample: no f64
+            // normalisation.
+            Material::Lambert { albedo } => upper(wo).then(|| lambert::sample(*albedo, u))?,
+            Material::Mirror { reflectance } => {
+                upper(wo).then(|| mirror::sample(*reflectance, wo))?
+            }
             Material::BlinnPhong { .. } | Material::CookTorrance { .. } => {
+                let wo64 = unit(wo)?;
+                if wo64.z <= 0.0 {
+                    return None;
+                }
                 let g = self.glossy()?;
                 let wi = g.sample_direction(wo64, u_lobe, u)?;
                 // Evaluate f and pdf through exactly the path `eval`/`pdf` take, from
@@ -200,7 +194,6 @@ impl Material {
                     is_delta: false,
                 })
             }
-            Material::Mirror { reflectance } => mirror::sample(*reflectance, wo),
         }
     }
 
@@ -373,7 +366,7 @@ mod tests {
         // pdf and sample skip normalising at f64 what only needs its sign or z;
         // the reference below is the general path they replace.
         let reference_pdf = |wo: Vec3, wi: Vec3| {
-            upper_pair(wo, wi).map_or(0.0, |(_, wi)| finite_nonneg(lambert::pdf(wi) as f32))
+            upper_pair(wo, wi).map_or(0.0, |(_, wi)| finite_nonneg(lambert::pdf(wi.z) as f32))
         };
         let m = Material::Lambert {
             albedo: Vec3::new(0.7, f32::NAN, f32::INFINITY),
