@@ -97,6 +97,8 @@ impl SurfacePoint {
     }
 
     /// [`Self::spawn_ray`] for a direction that is already unit length.
+    /// Inlined: the path tracer spawns every bounce's ray through it.
+    #[inline]
     pub fn spawn_ray_unit(&self, dir: Vec3) -> Ray {
         Ray::new(
             offset_ray_origin_with_error(self.p, self.p_error, self.n_geo, dir),
