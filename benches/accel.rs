@@ -213,9 +213,9 @@ fn bench_accel(c: &mut Criterion) {
         .triangles
         .iter()
         .map(|t| obvhs::triangle::Triangle {
-            v0: meshes[0].positions[t[0] as usize].into(),
-            v1: meshes[0].positions[t[1] as usize].into(),
-            v2: meshes[0].positions[t[2] as usize].into(),
+            v0: meshes[0].positions[t[0] as usize],
+            v1: meshes[0].positions[t[1] as usize],
+            v2: meshes[0].positions[t[2] as usize],
         })
         .collect();
     let mut core_build_time = std::time::Duration::ZERO;
@@ -228,7 +228,7 @@ fn bench_accel(c: &mut Criterion) {
     for (name, rays) in &sets {
         let orays: Vec<obvhs::ray::Ray> = rays
             .iter()
-            .map(|r| obvhs::ray::Ray::new_inf(r.origin.into(), r.dir.into()))
+            .map(|r| obvhs::ray::Ray::new_inf(r.origin, r.dir))
             .collect();
         g.throughput(Throughput::Elements(rays.len() as u64));
         g.bench_function(*name, |b| {

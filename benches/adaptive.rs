@@ -4,8 +4,8 @@
 //! then the reconstruction of a rendered sample set (spheres_table at 17%).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use glam::{Vec2, Vec3};
 use gradtrace::adaptive::{refine, SampleValue, Settings, Strategy};
+use gradtrace::math::{Vec2, Vec3};
 use gradtrace::reconstruct::{reconstruct, Interpolation};
 
 /// A Gaussian bump on a ramp, and a disc that is another object (so that the forced

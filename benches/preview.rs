@@ -4,8 +4,8 @@
 //! `cargo bench --bench preview`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use glam::Vec3;
 use gradtrace::math::sh;
+use gradtrace::math::Vec3;
 use gradtrace::preview::shadow_field::{self as sf, deform, precompute, Settings};
 use std::path::Path;
 

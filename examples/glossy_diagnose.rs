@@ -107,8 +107,8 @@ fn main() {
         for k in &m {
             let lobe = gradtrace::math::vmf::Vmf::from_mean_resultant(k.mean_dir * k.resultant);
             let v = luminance(
-                k.rgb.as_vec3()
-                    * env.lookup(at.frame.to_world(lobe.mu.as_vec3()), lobe.kappa as f32),
+                k.rgb.as_vec3a()
+                    * env.lookup(at.frame.to_world(lobe.mu.as_vec3a()), lobe.kappa as f32),
             );
             tot += v;
             println!("own EM (local): {k:?} kappa {} value {v}", lobe.kappa);
@@ -182,7 +182,7 @@ fn main() {
                             sobol_burley::sample(i, 0, seed) as f64,
                             sobol_burley::sample(i, 1, seed) as f64,
                         ];
-                        acc += env_src.eval(v.sample(u).as_vec3());
+                        acc += env_src.eval(v.sample(u).as_vec3a());
                     }
                     smc[3 * part + k % 3] += luminance(l.alpha * acc / 4096.0);
                     s32[3 * part + k % 3] += value(&sl32[k]);

@@ -312,9 +312,9 @@ fn leak_count(
         .triangles
         .iter()
         .map(|t| obvhs::triangle::Triangle {
-            v0: m.positions[t[0] as usize].into(),
-            v1: m.positions[t[1] as usize].into(),
-            v2: m.positions[t[2] as usize].into(),
+            v0: m.positions[t[0] as usize],
+            v1: m.positions[t[1] as usize],
+            v2: m.positions[t[2] as usize],
         })
         .collect();
     let (mut rays, mut leaks, mut naive_leaks) = (0, 0, 0);
@@ -326,7 +326,7 @@ fn leak_count(
         if hit.is_none() || !occ {
             leaks += 1;
         }
-        let r = obvhs::ray::Ray::new_inf(o.into(), ray.dir.into());
+        let r = obvhs::ray::Ray::new_inf(o, ray.dir);
         if naive.iter().all(|t| t.intersect(&r) == f32::INFINITY) {
             naive_leaks += 1;
         }

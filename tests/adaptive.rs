@@ -5,8 +5,9 @@
 mod common;
 
 use common::perspective_floor;
-use glam::{DVec2, DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2};
 use gradtrace::adaptive::{refine, surfaces_differ, SampleSet, SampleValue, Settings, Strategy};
+use gradtrace::math::Vec3;
 use gradtrace::reconstruct::{reconstruct, Interpolation};
 
 /// A gentle ramp plus a sharp Gaussian bump (σ = 3 px) at `(40, 80)`.

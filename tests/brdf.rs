@@ -45,12 +45,12 @@ fn cook_torrance(n: f32) -> Material {
 /// direction lies at azimuth φ = 0.
 fn wo_at(theta_deg: f64) -> Vec3 {
     let t = theta_deg.to_radians();
-    DVec3::new(-t.sin(), 0.0, t.cos()).as_vec3()
+    DVec3::new(-t.sin(), 0.0, t.cos()).as_vec3a()
 }
 
 /// wo with a given cos θo (for grazing angles beyond f64 degrees' resolution).
 fn wo_cos(cos_o: f64) -> Vec3 {
-    DVec3::new(-(1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o).as_vec3()
+    DVec3::new(-(1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o).as_vec3a()
 }
 
 // ---------------------------------------------------------------------------
@@ -198,7 +198,7 @@ fn albedo_direct(m: &Material, wo: Vec3, panels: usize) -> f64 {
     for &(c, wc) in &mu {
         let s = (1.0 - c * c).sqrt();
         for &(p, wp) in &ph {
-            let wi = DVec3::new(s * p.cos(), s * p.sin(), c).as_vec3();
+            let wi = DVec3::new(s * p.cos(), s * p.sin(), c).as_vec3a();
             sum += wc * wp * m.eval(wo, wi).x as f64 * c;
         }
     }
@@ -225,7 +225,7 @@ fn albedo_half_vector(m: &Material, n: f64, wo: Vec3) -> f64 {
             if wi.z <= 0.0 || lh <= 0.0 {
                 continue;
             }
-            let f = m.eval(wo, wi.as_vec3()).x as f64;
+            let f = m.eval(wo, wi.as_vec3a()).x as f64;
             sum += wu * wp * f * wi.z * 4.0 * lh * jac;
         }
     }
@@ -402,7 +402,7 @@ fn chi2_case(
             let u = Vec2::new(rng.next_f32(), rng.next_f32());
             sampler.sample(wo, u_lobe, u).map(|s| s.wi.as_dvec3())
         },
-        &|d| density.pdf(wo, d.as_vec3()) as f64,
+        &|d| density.pdf(wo, d.as_vec3a()) as f64,
     );
     match &out {
         Ok(o) => println!(
@@ -454,7 +454,7 @@ fn chi2_lambert() {
             let u = Vec2::new(rng.next_f32(), rng.next_f32());
             m.sample(wo, rng.next_f32(), u).map(|s| s.wi.as_dvec3())
         },
-        &|d| m.pdf(wo, d.as_vec3()) as f64,
+        &|d| m.pdf(wo, d.as_vec3a()) as f64,
     );
     if let Ok(o) = &out {
         println!(
@@ -518,7 +518,7 @@ fn chi2_negative_controls_are_rejected() {
             let u = Vec2::new(rng.next_f32(), rng.next_f32());
             lam.sample(wo, 0.5, u).map(|s| s.wi.as_dvec3())
         },
-        &|d| lam.pdf(wo, d.as_vec3()) as f64 * (1.0 + 0.2 * d.z) / (1.0 + 0.2 * 2.0 / 3.0),
+        &|d| lam.pdf(wo, d.as_vec3a()) as f64 * (1.0 + 0.2 * d.z) / (1.0 + 0.2 * 2.0 / 3.0),
     );
     if let Ok(o) = &out {
         println!("negative control (tilted Lambert): p = {:.3e}", o.p_value);
@@ -564,7 +564,7 @@ fn chi2_negative_controls_are_rejected() {
         CHI2_SAMPLES,
         || {
             let u = Vec2::new(rng.next_f32(), rng.next_f32());
-            m.sample(wo.as_vec3(), 0.0, u).map(|s| s.wi.as_dvec3())
+            m.sample(wo.as_vec3a(), 0.0, u).map(|s| s.wi.as_dvec3())
         },
         &|wi| {
             if wi.z <= 0.0 {
@@ -593,7 +593,7 @@ fn random_upper(rng: &mut Rng) -> Vec3 {
     };
     let phi = 2.0 * PI * rng.next_f64();
     let s = (1.0 - z * z).sqrt();
-    DVec3::new(s * phi.cos(), s * phi.sin(), z).as_vec3()
+    DVec3::new(s * phi.cos(), s * phi.sin(), z).as_vec3a()
 }
 
 fn rel_close(a: f32, b: f32, tol: f32) -> bool {
@@ -915,7 +915,7 @@ fn dual_evaluation_matches_eval_and_finite_differences() {
                 dual(wo, 0, DVec3::ZERO),
                 dual(wi, 0, axis_i.cross(wi)),
             );
-            let want = m.eval(wo.as_vec3(), wi.as_vec3()) * wi.as_vec3().z;
+            let want = m.eval(wo.as_vec3a(), wi.as_vec3a()) * wi.as_vec3a().z;
             let h = 1e-6;
             let fd_i = (0..3).map(|c| (at(h, 0.0)[c] - at(-h, 0.0)[c]) / (2.0 * h));
             let fd_n = (0..3).map(|c| (at(0.0, h)[c] - at(0.0, -h)[c]) / (2.0 * h));

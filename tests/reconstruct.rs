@@ -5,8 +5,8 @@
 mod common;
 
 use common::perspective_floor;
-use glam::{Vec2, Vec3};
 use gradtrace::adaptive::{refine, Sample, SampleSet, SampleValue, Settings, Strategy};
+use gradtrace::math::{Vec2, Vec3};
 use gradtrace::reconstruct::{reconstruct, reconstruct_with, Interpolation, Options};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 

@@ -578,7 +578,7 @@ fn noisy_scene() -> (gradtrace::scene::Scene, gradtrace::accel::Accel) {
     gradtrace::pipeline::load(&path).unwrap()
 }
 
-fn mse(a: &[glam::Vec3], b: &[glam::Vec3]) -> f64 {
+fn mse(a: &[gradtrace::math::Vec3], b: &[gradtrace::math::Vec3]) -> f64 {
     let sum: f64 = a
         .iter()
         .zip(b)
@@ -690,7 +690,7 @@ fn noise_adaptive_sampling_spends_samples_on_noise_stops_at_the_threshold_and_be
         mse(&out.beauty, &reference.beauty),
         mse(&uniform.beauty, &reference.beauty),
     );
-    let relmse = |img: &[glam::Vec3]| {
+    let relmse = |img: &[gradtrace::math::Vec3]| {
         gradtrace::output::metrics::relmse(img, &reference.beauty).unwrap() as f64
     };
     let (e_adaptive, e_uniform) = (relmse(&out.beauty), relmse(&uniform.beauty));

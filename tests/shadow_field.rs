@@ -5,8 +5,9 @@
 // Index loops mirror the matrix subscripts.
 #![allow(clippy::needless_range_loop)]
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use gradtrace::math::sh::{self, COEFFS};
+use gradtrace::math::Vec3;
 use gradtrace::pipeline::preview::shadow_field::{run, ShadowFieldOptions};
 use gradtrace::preview::shadow_field::precompute::EntityGeometry;
 use gradtrace::preview::shadow_field::Settings;

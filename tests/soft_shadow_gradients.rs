@@ -108,7 +108,7 @@ fn add_blocker(s: &mut Scene, faces: &[Face]) {
     let mut triangles = Vec::new();
     for f in faces {
         let base = positions.len() as u32;
-        positions.extend(f.verts.iter().map(|v| v.as_vec3()));
+        positions.extend(f.verts.iter().map(|v| v.as_vec3a()));
         for k in 1..f.verts.len() as u32 - 1 {
             triangles.push([base, base + k, base + k + 1]);
         }

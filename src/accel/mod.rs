@@ -382,7 +382,7 @@ impl Accel {
                     rejected += 1;
                     continue;
                 };
-                let aabb = Aabb::new(a.min(b).min(c).into(), a.max(b).max(c).into());
+                let aabb = Aabb::new(a.min(b).min(c), a.max(b).max(c));
                 if !(a.is_finite() && b.is_finite() && c.is_finite() && box_is_buildable(&aabb)) {
                     rejected += 1;
                     continue;
@@ -403,7 +403,7 @@ impl Accel {
             let this = input_count;
             input_count += 1;
             let r = Vec3::splat(s.radius);
-            let aabb = Aabb::new((s.center - r).into(), (s.center + r).into());
+            let aabb = Aabb::new(s.center - r, s.center + r);
             if !(s.center.is_finite() && s.radius > 0.0 && box_is_buildable(&aabb)) {
                 rejected += 1;
                 continue;
@@ -434,7 +434,7 @@ impl Accel {
         for (_, b) in &inputs {
             bounds_box = bounds_box.union(b);
         }
-        let bounds = (!inputs.is_empty()).then(|| (bounds_box.min.into(), bounds_box.max.into()));
+        let bounds = (!inputs.is_empty()).then_some((bounds_box.min, bounds_box.max));
         let aabbs: Vec<Aabb> = inputs.iter().map(|(_, b)| *b).collect();
         let mut bvh = if preset.node_width == 8 && bvh8::supported() {
             Tree::Eight(build::build_tree(&aabbs, preset))

@@ -10,7 +10,7 @@
 //!   scale; our barycentrics come straight out of the watertight test (U, V, W
 //!   divided by their sum), so they are exact and sum to one.
 
-use glam::Vec3;
+use crate::math::Vec3;
 use wide::f32x4;
 
 /// γ(n) = n·u / (1 − n·u) with u = 2⁻²⁴, the relative error bound of n rounded

@@ -4,7 +4,7 @@ use super::Material;
 use std::fmt;
 
 /// `[x, y, z]`, as the scene file writes a colour.
-pub(crate) struct V3(pub glam::Vec3);
+pub(crate) struct V3(pub crate::math::Vec3);
 
 impl fmt::Display for V3 {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {

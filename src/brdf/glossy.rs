@@ -162,7 +162,7 @@ impl Glossy {
             let phi = 2.0 * PI * u.y as f64;
             let h = DVec3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h);
             let wi = (2.0 * wo.dot(h) * h - wo).normalize_or_zero();
-            let wi32 = wi.as_vec3();
+            let wi32 = wi.as_vec3a();
             (wi32.z > 0.0).then_some(wi32)
         } else {
             let wi = warp::square_to_cosine_hemisphere(u);

@@ -336,7 +336,7 @@ fn finite_nonneg(x: f32) -> f32 {
 /// f64 → f32 colour; anything that would not be a finite non-negative f32 becomes 0
 /// (cannot happen for sanitised parameters, kept as the last guard).
 fn to_f32(c: DVec3) -> Vec3 {
-    let v = c.as_vec3();
+    let v = c.as_vec3a();
     Vec3::new(finite_nonneg(v.x), finite_nonneg(v.y), finite_nonneg(v.z))
 }
 

@@ -11,7 +11,14 @@ pub mod sh;
 pub mod vmf;
 pub mod warp;
 
-pub use glam::{Vec2, Vec3, Vec3A};
+pub use glam::Vec2;
+/// The crate's 3-vector (points, directions, RGB): glam's 16-byte SIMD-aligned
+/// `Vec3A`, so that each vector operation is one SSE instruction instead of three
+/// scalar ones (−8 % instructions on a cornell render, benches/README.md). Lane
+/// for lane the same IEEE operations as the scalar `glam::Vec3`, except
+/// `normalize` (v / |v|, one rounding, where the scalar type multiplies by
+/// 1 / |v|) and min/max with NaN operands (never relied on: NaN is tested for).
+pub type Vec3 = glam::Vec3A;
 
 /// A ray `o + t d`, valid for `t` in `[t_min, t_max]`. `d` need not be normalised
 /// for intersection, but every producer in this crate normalises it.

@@ -14,7 +14,8 @@
 
 mod product;
 
-use glam::{DMat3, DVec3, Vec3};
+use crate::math::Vec3;
+use glam::{DMat3, DVec3};
 
 pub use product::{product, product_f64};
 

@@ -14,12 +14,12 @@ use super::output_set::image_of_render;
 use crate::accel::Accel;
 use crate::adaptive::{Settings, Strategy};
 use crate::math::sampler::hash2;
+use crate::math::Vec3;
 use crate::output::report::{self, ReferenceInfo, ReportInput, ReportRow, Run, RunKind};
 use crate::reconstruct::Interpolation;
 use crate::render::{render, RenderOptions, RenderOutput};
 use crate::scene::Scene;
 use crate::{Error, Result};
-use glam::Vec3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

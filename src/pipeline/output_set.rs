@@ -1,12 +1,12 @@
 //! What a run writes: the planes of a render or a reconstruction as one
 //! [`OutputImage`], and the EXR + PNG pair written as a set through `output`.
 
+use crate::math::Vec3;
 use crate::output::names::*;
 use crate::output::{self, ExrHeader, OutputImage};
 use crate::reconstruct::Reconstruction;
 use crate::render::RenderOutput;
 use crate::{Error, Result};
-use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 /// The beauty (`R,G,B`) and every AOV plane the render produced (`normal.X/Y/Z`,

@@ -285,7 +285,7 @@ pub fn reconstruct_with(
                 }
             };
             hint = next;
-            *out = value.as_vec3();
+            *out = value.as_vec3a();
         }
     });
     Ok(Reconstruction {

@@ -187,7 +187,7 @@ fn resolve_key(ctx: &Ctx, at: &KeyPath, k: &KeyRaw) -> crate::Result<Key> {
                     "expected [axis_x, axis_y, axis_z, degrees] with a non-zero axis",
                 ));
             }
-            Quat::from_axis_angle(axis.normalize(), deg.to_radians())
+            Quat::from_axis_angle(axis.normalize().into(), deg.to_radians())
         }
     };
     Ok(Key {

@@ -40,11 +40,11 @@ impl Xform {
     }
 
     pub(super) fn point(&self, p: Vec3) -> Vec3 {
-        self.affine.transform_point3(p)
+        self.affine.transform_point3a(p)
     }
 
     pub(super) fn vector(&self, v: Vec3) -> Vec3 {
-        self.affine.transform_vector3(v)
+        self.affine.transform_vector3a(v)
     }
 
     /// Transforms a normal with the inverse transpose and renormalises it; `None`
@@ -193,11 +193,11 @@ mod tests {
     fn cube_faces_point_outwards_even_when_mirrored() {
         for affine in [
             Affine3A::from_scale_rotation_translation(
-                Vec3::new(0.3, 0.6, 0.2),
+                glam::Vec3::new(0.3, 0.6, 0.2),
                 Quat::from_rotation_y(0.3),
-                Vec3::new(1.0, 2.0, 3.0),
+                glam::Vec3::new(1.0, 2.0, 3.0),
             ),
-            Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0)),
+            Affine3A::from_scale(glam::Vec3::new(-1.0, 1.0, 1.0)),
         ] {
             let xf = Xform::new(affine).unwrap();
             let g = cube(&xf);

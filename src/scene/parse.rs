@@ -161,7 +161,7 @@ fn within_range(
 
 /// Within ±[`MAX_MAGNITUDE`] (false for NaN).
 fn in_range(q: Vec3) -> bool {
-    q.abs().max_element() <= MAX_MAGNITUDE
+    q.abs().cmple(Vec3::splat(MAX_MAGNITUDE)).all()
 }
 
 fn out_of_range(what: &str, q: Vec3) -> String {
@@ -257,7 +257,7 @@ fn matrix_of(p: &Params, v: &Value) -> crate::Result<Affine3A> {
     ]);
     Ok(Affine3A::from_mat3_translation(
         linear,
-        Vec3::new(rows[0][3], rows[1][3], rows[2][3]),
+        Vec3::new(rows[0][3], rows[1][3], rows[2][3]).into(),
     ))
 }
 
@@ -278,21 +278,21 @@ fn transform_of(p: &Params) -> crate::Result<Xform> {
         }
         matrix_of(p, m)?
     } else {
-        let mut a = Affine3A::from_scale(scale);
+        let mut a = Affine3A::from_scale(scale.into());
         for r in &rotations {
             let axis = Vec3::new(r[0], r[1], r[2]).normalize_or_zero();
             if axis == Vec3::ZERO {
                 return Err(p.err(Some("rotate"), "rotation axis must be non-zero"));
             }
-            a = Affine3A::from_quat(Quat::from_axis_angle(axis, r[3].to_radians())) * a;
+            a = Affine3A::from_quat(Quat::from_axis_angle(axis.into(), r[3].to_radians())) * a;
         }
         if let Some(t) = translate {
-            a = Affine3A::from_translation(Vec3::from(t)) * a;
+            a = Affine3A::from_translation(glam::Vec3::from(t)) * a;
         }
         a
     };
     let det = Mat3::from(affine.matrix3).determinant();
-    if !det.is_finite() || !in_range(affine.translation.into()) {
+    if !det.is_finite() || !in_range(affine.translation) {
         return Err(p.err(
             None,
             format!(

@@ -248,9 +248,9 @@ fn prefilter(src: &Grid, kappa: f32) -> Grid {
                 }
             }
             if wsum > 0.0 {
-                (sum / wsum).as_vec3()
+                (sum / wsum).as_vec3a()
             } else {
-                src.lookup(d.as_vec3())
+                src.lookup(d.as_vec3a())
             }
         })
         .collect();

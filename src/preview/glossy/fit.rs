@@ -156,8 +156,8 @@ impl MaterialFit {
         if wi.z <= 0.0 {
             return None;
         }
-        let f = d.eval(Vec3::Z, wi.as_vec3());
-        Some((wi.as_vec3(), f * (wi.z / lobe.pdf(wi)) as f32))
+        let f = d.eval(Vec3::Z, wi.as_vec3a());
+        Some((wi.as_vec3a(), f * (wi.z / lobe.pdf(wi)) as f32))
     }
 
     /// Draws ωi from the fitted glossy lobe (with the defensive cosine part);
@@ -180,9 +180,9 @@ impl MaterialFit {
             return None;
         }
         let pdf = (1.0 - DEFENSIVE) * entry.lobe.pdf(wi) + DEFENSIVE * wi.z / std::f64::consts::PI;
-        let f = g.eval(wo, wi.as_vec3());
+        let f = g.eval(wo, wi.as_vec3a());
         let weight = f * (wi.z / pdf) as f32;
-        weight.is_finite().then_some((wi.as_vec3(), weight))
+        weight.is_finite().then_some((wi.as_vec3a(), weight))
     }
 }
 
@@ -238,7 +238,7 @@ impl KnownLobe {
     pub fn to_world(&self, frame: &crate::math::Frame) -> Self {
         let w = |d: DVec3| {
             frame
-                .to_world(d.as_vec3())
+                .to_world(d.as_vec3a())
                 .as_dvec3()
                 .normalize_or(DVec3::Z)
         };
@@ -285,7 +285,7 @@ const EM_ITERATIONS: usize = 24;
 /// no interpolation) is 6.6 % of the image mean, the mixture's 2.1 %. The paper
 /// (Sec. 5.2) names the multi-lobe EM as the extension; it keeps one lobe.
 pub fn fit_mixture(samples: &[(DVec3, DVec3)], count: u64) -> [KnownLobe; DIRECT_LOBES] {
-    let lum = |w: &DVec3| luminance(w.as_vec3()) as f64;
+    let lum = |w: &DVec3| luminance(w.as_vec3a()) as f64;
     let mut one = LobeAccumulator::default();
     for (s, w) in samples {
         one.add(*s, lum(w));
@@ -365,7 +365,7 @@ fn fit_glossy(g: &Material, wo: Vec3, samples: u32) -> GlossyEntry {
         .estimate(samples as u64)
         .map_or(Vmf::new(DVec3::Z, vmf::KAPPA_MIN), |e| e.lobe);
     GlossyEntry {
-        albedo: (albedo / samples.max(1) as f64).as_vec3(),
+        albedo: (albedo / samples.max(1) as f64).as_vec3a(),
         lobe,
         direct: fit_mixture(&kept, samples.max(1) as u64),
     }

@@ -205,7 +205,7 @@ impl TraceContext<'_> {
                 sum[k] += (w * env.eval(dir)).as_dvec3()
             }
         });
-        sum.map(|s| (s / samples.max(1) as f64).as_vec3())
+        sum.map(|s| (s / samples.max(1) as f64).as_vec3a())
     }
 
     /// The paths of one slice: calls `visit(path, type, escape direction,
@@ -304,9 +304,9 @@ impl Bin {
     fn lobe(&self, samples: u32) -> Lobe {
         match self.acc.estimate(samples as u64) {
             Some(e) => Lobe {
-                mu: e.lobe.mu.as_vec3(),
+                mu: e.lobe.mu.as_vec3a(),
                 kappa: e.lobe.kappa as f32,
-                alpha: (self.rgb / samples as f64).as_vec3(),
+                alpha: (self.rgb / samples as f64).as_vec3a(),
             },
             None => Lobe::default(),
         }
@@ -324,7 +324,7 @@ fn direct_lobe(bins: &[Bin; 2], known: Option<&KnownLobe>, samples: u32) -> Lobe
     let m = samples.max(1) as f64;
     let weight = k.weight - blocked.acc.weight_sum / m;
     let rgb = (k.rgb - blocked.rgb / m).max(DVec3::ZERO);
-    if weight.is_nan() || weight <= 0.0 || luminance(rgb.as_vec3()) <= 0.0 {
+    if weight.is_nan() || weight <= 0.0 || luminance(rgb.as_vec3a()) <= 0.0 {
         return Lobe::default();
     }
     let lobe =
@@ -333,9 +333,9 @@ fn direct_lobe(bins: &[Bin; 2], known: Option<&KnownLobe>, samples: u32) -> Lobe
     // more is noise in the difference (its r can even reach 1, κ = ∞).
     let kappa_max = 4.0 * Vmf::from_mean_resultant(k.mean_dir * k.resultant).kappa;
     Lobe {
-        mu: lobe.mu.as_vec3(),
+        mu: lobe.mu.as_vec3a(),
         kappa: lobe.kappa.min(kappa_max) as f32,
-        alpha: rgb.as_vec3(),
+        alpha: rgb.as_vec3a(),
     }
 }
 

@@ -214,7 +214,7 @@ impl BaseSphere {
                 let (t, p) = (i / n_phi, i % n_phi);
                 let u = grid_dir(n_theta, n_phi, t, p);
                 let frame = Frame::from_normal(-u);
-                let m = Mat3::from_cols(frame.s, frame.t, frame.n);
+                let m = Mat3::from_cols(frame.s.into(), frame.t.into(), frame.n.into());
                 // The poles repeat one point for every φ: trace it once (p = 0).
                 if (t == 0 || t == n_theta - 1) && p > 0 {
                     return ([f32::NAN; COEFFS], m);

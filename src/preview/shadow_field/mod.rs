@@ -119,7 +119,7 @@ pub fn environment_sh(env: Option<&Environment>) -> [ShF; 3] {
         return std::array::from_fn(|c| one.map(|x| (x * f64::from(radiance[c])) as f32));
     }
     let rule = sh::sphere_quadrature(96, 192);
-    let values: Vec<Vec3> = rule.iter().map(|(d, _)| env.eval(d.as_vec3())).collect();
+    let values: Vec<Vec3> = rule.iter().map(|(d, _)| env.eval(d.as_vec3a())).collect();
     std::array::from_fn(|c| {
         let mut out = [0.0f64; COEFFS];
         for ((d, w), v) in rule.iter().zip(&values) {

@@ -868,7 +868,7 @@ fn object_space_line_f64(
         if kv.abs() < 1e-9 || d <= 0.0 {
             return;
         }
-        let tr = transport(w.as_vec3());
+        let tr = transport(w.as_vec3a());
         for (j, delta) in dx.iter().enumerate() {
             let delta: DVec3 = delta.as_dvec3();
             let s_k = delta.dot(vv) / kv;
@@ -957,7 +957,7 @@ pub fn object_space_gradient(
         }
     }
     let inv = 1.0 / std::f64::consts::TAU;
-    ([(g[0] * inv).as_vec3(), (g[1] * inv).as_vec3()], b as f32)
+    ([(g[0] * inv).as_vec3a(), (g[1] * inv).as_vec3a()], b as f32)
 }
 
 /// Integrates a per-φ quantity (a visibility gradient pair) over φ ∈ [0, 2π) by
@@ -1045,7 +1045,7 @@ pub fn integrate_phi_adaptive(
 /// everywhere (the paper's Fig. 4 case "no occluders") and line sampling, which
 /// exists to find visibility jumps, is skipped.
 pub fn scene_can_cast_shadows(scene: &Scene) -> bool {
-    use glam::Vec3 as V;
+    use crate::math::Vec3 as V;
     let objects: Vec<bool> = scene
         .meshes
         .iter()
