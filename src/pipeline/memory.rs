@@ -3,19 +3,24 @@
 //! A 1,000,000² render must fail in a millisecond with a clear line, not abort
 //! after minutes with "memory allocation failed".
 
-use crate::render::gradients::GradientSample;
-use crate::render::RenderOptions;
+use crate::math::Vec3;
+use crate::render::gradients::GradientSum;
+use crate::render::{PixelAccumulator, RenderOptions};
 use crate::{Error, Result};
 
-/// Bytes per pixel of a full render: its planes, the tiles' copies of them, the
+/// Bytes per pixel of a full render: the film's running sums, its planes, the
 /// output image and the EXR encoder's copy of that, and the PNG.
 pub fn full_render_bytes(pixels: u64, opts: &RenderOptions) -> u64 {
-    let mut per_pixel = 12 * 4 + 3; // beauty: tile, plane, image, encoder; PNG
+    // Planes hold `Vec3`s (16 bytes, SIMD-aligned); the output image and the EXR
+    // encoder three f32 channels each.
+    let vec3 = std::mem::size_of::<Vec3>() as u64;
+    let mut per_pixel = std::mem::size_of::<PixelAccumulator>() as u64 + vec3 + 2 * 12 + 3;
     if opts.aovs {
-        per_pixel += 44 * 4; // variance, normal, depth, albedo, id
+        // variance, normal, albedo, depth, id: planes, then image and encoder.
+        per_pixel += 3 * vec3 + 8 + 2 * 44;
     }
     if opts.gradients {
-        per_pixel += std::mem::size_of::<GradientSample>() as u64 + 52 * 3;
+        per_pixel += std::mem::size_of::<GradientSum>() as u64 + 52 * 3;
     }
     pixels * per_pixel
 }

@@ -14,7 +14,7 @@ use crate::math::sampler::PixelSampler;
 use crate::math::{finite_or_zero, luminance, Vec2, Vec3};
 use crate::scene::{Integrator, Scene};
 use gradients::geometry::unit_direction_derivatives;
-use gradients::GradientSample;
+use gradients::{GradientSample, GradientSum};
 use lights::LightSet;
 use path::{PathTracer, SampleResult};
 use rayon::prelude::*;
@@ -454,7 +454,7 @@ pub fn render_passes(
         gradients: opts.gradients,
         first: range.start,
     };
-    let mut film = Film::new(crop, setup.camera.width as usize);
+    let mut film = Film::new(crop, setup.camera.width as usize, ctx.gradients);
     let cancelled = || {
         passes
             .cancel
@@ -555,10 +555,13 @@ struct FilmTile {
     x1: usize,
     y1: usize,
     pixels: Vec<PixelAccumulator>,
+    /// Each pixel's gradient sums, with `--gradients` only (empty otherwise: at
+    /// 160 bytes a pixel they would be most of the film).
+    gradients: Vec<GradientSum>,
 }
 
 impl Film {
-    pub fn new(crop: Crop, full_width: usize) -> Self {
+    pub fn new(crop: Crop, full_width: usize, gradients: bool) -> Self {
         let (cx0, cy0) = (crop.x0 as usize, crop.y0 as usize);
         let (cx1, cy1) = (crop.x1 as usize, crop.y1 as usize);
         let tiles_x = (cx1 - cx0).div_ceil(TILE);
@@ -568,12 +571,14 @@ impl Film {
             .map(|t| {
                 let (x0, y0) = (cx0 + t % tiles_x * TILE, cy0 + t / tiles_x * TILE);
                 let (x1, y1) = ((x0 + TILE).min(cx1), (y0 + TILE).min(cy1));
+                let n = (x1 - x0) * (y1 - y0);
                 FilmTile {
                     x0,
                     y0,
                     x1,
                     y1,
-                    pixels: vec![PixelAccumulator::default(); (x1 - x0) * (y1 - y0)],
+                    pixels: vec![PixelAccumulator::default(); n],
+                    gradients: vec![GradientSum::default(); if gradients { n } else { 0 }],
                 }
             })
             .collect();
@@ -611,7 +616,8 @@ impl Film {
                     }
                     for x in t.x0..t.x1 {
                         let pixel = y * w + x;
-                        let acc = &mut t.pixels[(y - t.y0) * tw + x - t.x0];
+                        let i = (y - t.y0) * tw + x - t.x0;
+                        let acc = &mut t.pixels[i];
                         for s in plan(pixel) {
                             let r = camera_sample(
                                 &ctx.tracer,
@@ -623,6 +629,9 @@ impl Film {
                                 Vec2::ZERO,
                             );
                             acc.add(&r, s, s == ctx.first);
+                            if let (Some(g), Some(sum)) = (&r.gradient, t.gradients.get_mut(i)) {
+                                sum.add(g);
+                            }
                         }
                     }
                 }
@@ -639,12 +648,17 @@ impl Film {
         }
     }
 
-    /// Calls `f(pixel, accumulator)` for every pixel (linear index in the full image).
-    pub fn for_each(&self, mut f: impl FnMut(usize, &PixelAccumulator)) {
+    /// Calls `f(pixel, accumulator, gradient sums)` for every pixel (linear index
+    /// in the full image); the gradient sums are there when the film keeps them.
+    pub fn for_each(&self, mut f: impl FnMut(usize, &PixelAccumulator, Option<&GradientSum>)) {
         for t in &self.tiles {
             let tw = t.x1 - t.x0;
             for (i, acc) in t.pixels.iter().enumerate() {
-                f((t.y0 + i / tw) * self.full_width + t.x0 + i % tw, acc);
+                f(
+                    (t.y0 + i / tw) * self.full_width + t.x0 + i % tw,
+                    acc,
+                    t.gradients.get(i),
+                );
             }
         }
     }
@@ -682,12 +696,12 @@ impl Film {
         let (cx0, cy0) = out.origin;
         let mut rays = 0;
         let mut spp = 0;
-        self.for_each(|pixel, acc| {
+        self.for_each(|pixel, acc, gradient| {
             let (x, y) = (pixel % self.full_width, pixel / self.full_width);
             let i = (y - cy0) * cw + x - cx0;
             rays += acc.rays;
             spp = spp.max(acc.count);
-            acc.store(&mut out, i);
+            acc.store(&mut out, i, gradient);
         });
         out.spp = spp;
         out.stats.rays = rays;
@@ -758,7 +772,6 @@ pub(crate) struct PixelAccumulator {
     object_id: u32,
     hits: u32,
     rays: u64,
-    gradient: GradientSample,
 }
 
 /// Splits the sample indices into two halves whose means are two independent
@@ -793,9 +806,6 @@ impl PixelAccumulator {
             }
         }
         self.rays += r.rays as u64;
-        if let Some(g) = &r.gradient {
-            self.gradient.add_scaled(g, 1.0);
-        }
     }
 
     /// The pixel mean I and the class-A estimate A (twice the class-A sum over the
@@ -807,15 +817,16 @@ impl PixelAccumulator {
 }
 
 impl PixelAccumulator {
-    /// Writes this pixel's means into pixel `i` of `out`'s planes (those present).
-    fn store(&self, out: &mut RenderOutput, i: usize) {
+    /// Writes this pixel's means (and those of its `gradient` sums) into pixel `i`
+    /// of `out`'s planes (those present).
+    fn store(&self, out: &mut RenderOutput, i: usize, gradient: Option<&GradientSum>) {
         let spp = self.count.max(1);
         let n = spp as f64;
         let mean = [self.sum[0] / n, self.sum[1] / n, self.sum[2] / n];
         out.beauty[i] = Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
-        if let Some(planes) = &mut out.gradients {
+        if let (Some(planes), Some(sum)) = (&mut out.gradients, gradient) {
             let mut mean = GradientSample::default();
-            mean.add_scaled(&self.gradient, 1.0 / spp as f32);
+            mean.add_scaled(&sum.sample(), 1.0 / spp as f32);
             planes.set(i, &mean);
             if let Some(terms) = out.merge.as_mut().and_then(|m| m.grad_terms.as_mut()) {
                 let [sv, dv, cdv, vis, ind] =

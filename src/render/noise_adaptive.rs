@@ -132,7 +132,7 @@ pub fn render_noise_adaptive(
         gradients: opts.gradients,
         first: 0,
     };
-    let mut film = Film::new(Crop::full(w as u32, h as u32), w);
+    let mut film = Film::new(Crop::full(w as u32, h as u32), w, ctx.gradients);
     let mut counts = vec![0u32; w * h];
     let mut active = vec![true; w * h];
     let step = settings.check_every;
@@ -168,7 +168,7 @@ pub fn render_noise_adaptive(
             }
         }
         let mut unconverged = vec![false; w * h];
-        film.for_each(|p, acc| {
+        film.for_each(|p, acc, _| {
             if active[p] && counts[p] < settings.max_spp {
                 let (i, a) = acc.mean_and_half();
                 unconverged[p] = pixel_error(i, a) >= threshold;

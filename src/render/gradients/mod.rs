@@ -104,6 +104,55 @@ impl GradientSample {
     }
 }
 
+/// A pixel's running [`GradientSample`] sum as the film keeps it: the same 40
+/// numbers in 12-byte vectors (160 bytes instead of the 224 of the sample's
+/// SIMD-aligned ones, for every pixel of a gradient render).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GradientSum {
+    /// `value`, then the (u, v) pairs of `sv`, `cdv`, `cam`, `dv`, `vis`, `indirect`.
+    rgb: [glam::Vec3; 13],
+    cv: f32,
+}
+
+impl GradientSum {
+    /// Adds one sample (the bits of `GradientSample::add_scaled` with weight 1).
+    pub fn add(&mut self, g: &GradientSample) {
+        let mut sum = self.sample();
+        sum.add_scaled(g, 1.0);
+        *self = Self::from(&sum);
+    }
+
+    /// The sum as a [`GradientSample`].
+    pub fn sample(&self) -> GradientSample {
+        let r = |i: usize| Vec3::from(self.rgb[i]);
+        let pair = |i: usize| [r(i), r(i + 1)];
+        GradientSample {
+            value: r(0),
+            sv: pair(1),
+            cdv: pair(3),
+            cam: pair(5),
+            dv: pair(7),
+            vis: pair(9),
+            indirect: pair(11),
+            cv: self.cv,
+        }
+    }
+}
+
+impl From<&GradientSample> for GradientSum {
+    fn from(g: &GradientSample) -> Self {
+        let [sv, cdv, cam, dv, vis, ind] = [g.sv, g.cdv, g.cam, g.dv, g.vis, g.indirect];
+        let v = [
+            g.value, sv[0], sv[1], cdv[0], cdv[1], cam[0], cam[1], dv[0], dv[1], vis[0], vis[1],
+            ind[0], ind[1],
+        ];
+        Self {
+            rgb: v.map(glam::Vec3::from),
+            cv: g.cv,
+        }
+    }
+}
+
 /// Magnitude of a (u, v) pair of RGB gradients, on luminance.
 pub fn magnitude(g: &[Vec3; 2]) -> f32 {
     luminance(g[0]).hypot(luminance(g[1]))
