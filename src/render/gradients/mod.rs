@@ -157,3 +157,38 @@ impl From<&GradientSample> for GradientSum {
 pub fn magnitude(g: &[Vec3; 2]) -> f32 {
     luminance(g[0]).hypot(luminance(g[1]))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every field goes to its own slot and back: a swapped index would move one
+    /// term's sum into another's plane.
+    #[test]
+    fn gradient_sum_keeps_each_term_in_its_place() {
+        let mut k = 0.0f32;
+        let mut next = || {
+            k += 1.0;
+            Vec3::new(k, k + 0.25, k + 0.5)
+        };
+        let mut pair = || [next(), next()];
+        let g = GradientSample {
+            value: Vec3::new(-1.0, -2.0, -3.0),
+            sv: pair(),
+            cdv: pair(),
+            cam: pair(),
+            dv: pair(),
+            vis: pair(),
+            indirect: pair(),
+            cv: 0.75,
+        };
+        assert_eq!(GradientSum::from(&g).sample(), g);
+        let mut sum = GradientSum::default();
+        sum.add(&g);
+        sum.add(&g);
+        let mut twice = GradientSample::default();
+        twice.add_scaled(&g, 1.0);
+        twice.add_scaled(&g, 1.0);
+        assert_eq!(sum.sample(), twice);
+    }
+}
