@@ -97,10 +97,11 @@ struct PathState {
 }
 
 /// What the first hit records besides radiance (pbrt-v4's `VisibleSurface`): the
-/// AOVs and, with gradients, the gradient capture.
+/// AOVs and, with gradients, the gradient capture (boxed: it is ~1 KB, and a
+/// plain render would otherwise copy that much per sample for a `None`).
 struct VisibleSurface<'a> {
     aovs: FirstHit,
-    gradient: Option<GradientCapture<'a>>,
+    gradient: Option<Box<GradientCapture<'a>>>,
 }
 
 /// The gradient stage's view of the first hit: its duals, the gradient gathered so
@@ -236,7 +237,7 @@ impl PathTracer<'_> {
     ) -> VisibleSurface<'m> {
         let gradient = dd.map(|dd| {
             let hd = hit_duals(self.scene, si, ray, dd);
-            GradientCapture {
+            Box::new(GradientCapture {
                 hd,
                 g: GradientSample {
                     cv: hd.cv,
@@ -244,7 +245,7 @@ impl PathTracer<'_> {
                 },
                 continuation: None,
                 direct_done: None,
-            }
+            })
         });
         VisibleSurface {
             aovs: FirstHit {
@@ -616,7 +617,7 @@ fn first_hit_capture<'v, 'm>(
     depth: u32,
 ) -> Option<&'v mut GradientCapture<'m>> {
     match (depth, visible.as_mut()) {
-        (1, Some(v)) => v.gradient.as_mut(),
+        (1, Some(v)) => v.gradient.as_deref_mut(),
         _ => None,
     }
 }
