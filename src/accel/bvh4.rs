@@ -256,19 +256,10 @@ impl<N: WideNode> Bvh<N> {
     /// leaves and on other architectures).
     #[inline(always)]
     pub(super) fn prefetch(&self, child: u32) {
-        #[cfg(target_arch = "x86_64")]
         if child & LEAF_BIT == 0 {
-            // SAFETY: prefetching is a hint and never faults; the pointer is in
-            // bounds of `nodes` (inner references index it).
+            // SAFETY: inner references index `nodes`, so the node is in bounds.
             unsafe {
-                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                let p = self.nodes.as_ptr().add(child as usize) as *const i8;
-                // A plain counted loop: `step_by` costs a division per call.
-                let mut line = 0;
-                while line < std::mem::size_of::<N>() {
-                    _mm_prefetch::<_MM_HINT_T0>(p.add(line));
-                    line += 64;
-                }
+                super::prefetch_lines(self.nodes.as_ptr().add(child as usize), 1);
             }
         }
     }

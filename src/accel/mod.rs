@@ -624,20 +624,9 @@ impl Accel {
         if !self.prefetch_leaves {
             return;
         }
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the leaf's blocks are `blocks[first..first + count]`, so every
-        // line start is inside the allocation; a prefetch never faults.
-        unsafe {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let (count, _) = LeafCode::decode(code);
-            let p = self.blocks.as_ptr().add(first) as *const i8;
-            // A plain counted loop: `step_by` costs a division per call.
-            let (mut line, bytes) = (0, count * std::mem::size_of::<LeafBlock>());
-            while line < bytes {
-                _mm_prefetch::<_MM_HINT_T0>(p.add(line));
-                line += 64;
-            }
-        }
+        let (count, _) = LeafCode::decode(code);
+        // SAFETY: the leaf's blocks are `blocks[first..first + count]`.
+        unsafe { prefetch_lines(self.blocks.as_ptr().add(first), count) }
     }
 
     /// The input index of a primitive: triangles of mesh 0, mesh 1, …, then
@@ -1014,6 +1003,28 @@ fn ray_is_valid(ray: &Ray) -> bool {
         && ray.t_min.is_finite()
         && !ray.t_max.is_nan()
         && ray.t_min <= ray.t_max
+}
+
+/// Starts loading every cache line of `items[0..n]` (a hint; a no-op on other
+/// architectures). A plain counted loop: `step_by` costs a division per call.
+///
+/// # Safety
+/// `p..p + n` must lie inside one allocation (a prefetch never faults, but the
+/// pointer arithmetic must stay in bounds).
+#[inline(always)]
+unsafe fn prefetch_lines<T>(p: *const T, n: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let (p, bytes) = (p as *const i8, n * std::mem::size_of::<T>());
+        let mut line = 0;
+        while line < bytes {
+            _mm_prefetch::<_MM_HINT_T0>(p.add(line));
+            line += 64;
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (p, n);
 }
 
 #[cfg(test)]
