@@ -46,7 +46,7 @@ use crate::scene::{Mesh, Sphere};
 use bvh4::{BoxRay, Bvh, Bvh4, Entry, WideNode};
 use bvh8::Bvh8;
 use obvhs::aabb::Aabb;
-use primitive::{intersect_sphere, with_axes, Tri4, WatertightRay, WatertightRay4};
+use primitive::{intersect_sphere, Tri4, WatertightRay, WatertightRay4};
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
@@ -82,18 +82,12 @@ impl Prim {
         }
     }
 
-    /// The exact intersection with `t` in `[t_min, t_max]`; `KX, KY, KZ` are
-    /// `wr`'s axis permutation.
+    /// The exact intersection with `t` in `[t_min, t_max]`.
     #[inline(always)]
-    fn intersect<const KX: usize, const KY: usize, const KZ: usize>(
-        &self,
-        ray: &Ray,
-        wr: &WatertightRay,
-        t_max: f32,
-    ) -> Option<Hit> {
+    fn intersect(&self, ray: &Ray, wr: &WatertightRay, t_max: f32) -> Option<Hit> {
         match *self {
             Prim::Triangle { v, mesh, tri } => wr
-                .intersect::<KX, KY, KZ>(v[0], v[1], v[2], ray.t_min, t_max)
+                .intersect(v[0], v[1], v[2], ray.t_min, t_max)
                 .map(|(t, b1, b2)| Hit {
                     t,
                     prim: PrimRef::Triangle { mesh, tri },
@@ -485,10 +479,7 @@ impl Accel {
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
         with_stack(self.bvh.stack_size(), |stack| {
-            with_axes!(
-                wr.axes,
-                self.closest_with(ray, &wr, stack, &mut (0, 0), false)
-            )
+            self.closest_with(ray, &wr, stack, &mut (0, 0), false)
         })
     }
 
@@ -500,7 +491,7 @@ impl Accel {
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
         with_stack(self.bvh.stack_size(), |stack| {
-            with_axes!(wr.axes, self.any_with(ray, &wr, stack, &mut 0))
+            self.any_with(ray, &wr, stack, &mut 0)
         })
     }
 
@@ -569,10 +560,7 @@ impl Accel {
         let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut stack = vec![Entry::default(); self.bvh.stack_size()];
         let mut work = (0, 0);
-        with_axes!(
-            wr.axes,
-            self.closest_with(ray, &wr, &mut stack, &mut work, true)
-        );
+        self.closest_with(ray, &wr, &mut stack, &mut work, true);
         work
     }
 
@@ -585,7 +573,7 @@ impl Accel {
         let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut stack = vec![Entry::default(); self.bvh.stack_size()];
         let mut nodes = 0;
-        with_axes!(wr.axes, self.any_with(ray, &wr, &mut stack, &mut nodes));
+        self.any_with(ray, &wr, &mut stack, &mut nodes);
         nodes
     }
 
@@ -596,18 +584,14 @@ impl Accel {
             return None;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        with_axes!(wr.axes, self.closest_brute_force(ray, &wr))
+        self.closest_brute_force(ray, &wr)
     }
 
-    fn closest_brute_force<const KX: usize, const KY: usize, const KZ: usize>(
-        &self,
-        ray: &Ray,
-        wr: &WatertightRay,
-    ) -> Option<Hit> {
+    fn closest_brute_force(&self, ray: &Ray, wr: &WatertightRay) -> Option<Hit> {
         let mut best: Option<(u32, Hit)> = None;
         for p in &self.prims {
             let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
-            if let Some(h) = p.intersect::<KX, KY, KZ>(ray, wr, t_max) {
+            if let Some(h) = p.intersect(ray, wr, t_max) {
                 let id = self.input_of(p.prim_ref());
                 if nearer(h.t, id, best.map(|(b, bh)| (bh.t, b))) {
                     best = Some((id, h));
@@ -665,17 +649,13 @@ impl Accel {
             return false;
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        with_axes!(wr.axes, self.any_brute_force(ray, &wr))
+        self.any_brute_force(ray, &wr)
     }
 
-    fn any_brute_force<const KX: usize, const KY: usize, const KZ: usize>(
-        &self,
-        ray: &Ray,
-        wr: &WatertightRay,
-    ) -> bool {
+    fn any_brute_force(&self, ray: &Ray, wr: &WatertightRay) -> bool {
         self.prims
             .iter()
-            .any(|p| p.intersect::<KX, KY, KZ>(ray, wr, ray.t_max).is_some())
+            .any(|p| p.intersect(ray, wr, ray.t_max).is_some())
     }
 
     /// The geometric data of a hit needed to continue a path robustly: the hit
@@ -704,7 +684,7 @@ impl Accel {
         }
         let p = self.prim(prim)?;
         let wr = WatertightRay::new(ray.origin, ray.dir);
-        with_axes!(wr.axes, p.intersect(ray, &wr, ray.t_max))
+        p.intersect(ray, &wr, ray.t_max)
     }
 
     /// The stored primitive of a [`PrimRef`], `None` when out of range or rejected.
@@ -730,7 +710,7 @@ impl Accel {
     /// only with `count_prims` (counting reads each block's ids, a cache line
     /// a query without a hit need not load).
     #[inline(always)]
-    fn closest_with<const KX: usize, const KY: usize, const KZ: usize>(
+    fn closest_with(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
@@ -762,10 +742,9 @@ impl Accel {
                         prims_tested += blocks[0].primitive_count() + blocks[1].primitive_count();
                     }
                     // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
-                    let (h, scalar) = unsafe {
-                        self.leaf8::<KX, KY, KZ, false>(wr, blocks, spheres, ray.t_min, t_max)
-                    };
-                    self.take_lanes::<KX, KY, KZ>(
+                    let (h, scalar) =
+                        unsafe { self.leaf8::<false>(wr, blocks, spheres, ray.t_min, t_max) };
+                    self.take_lanes(
                         ray,
                         wr,
                         (h.hits | scalar, h.hits),
@@ -780,7 +759,7 @@ impl Accel {
                     if count_prims {
                         prims_tested += block.primitive_count();
                     }
-                    let h = wr4.intersect::<KX, KY, KZ, false>(&block.tris, ray.t_min, t_max);
+                    let h = wr4.intersect::<false>(&block.tris, ray.t_min, t_max);
                     let mut lanes = h.hits | h.fallback;
                     if spheres {
                         lanes |= block.sphere_lanes(self.first_sphere);
@@ -790,7 +769,7 @@ impl Accel {
                     }
                     let (ts, b1, b2) = (h.t.to_array(), h.b1.to_array(), h.b2.to_array());
                     let id = |lane: usize| block.ids[lane];
-                    self.take_lanes::<KX, KY, KZ>(
+                    self.take_lanes(
                         ray,
                         wr,
                         (lanes, h.hits),
@@ -820,7 +799,7 @@ impl Accel {
     /// same image on every CPU.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn take_lanes<const KX: usize, const KY: usize, const KZ: usize>(
+    fn take_lanes(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
@@ -838,7 +817,7 @@ impl Accel {
                 (ts[lane] <= *t_max).then(|| (ts[lane], Vec2::new(b1[lane], b2[lane])))
             } else {
                 self.prim_of_input(id)
-                    .intersect::<KX, KY, KZ>(ray, wr, *t_max)
+                    .intersect(ray, wr, *t_max)
                     .map(|hit| (hit.t, hit.bary))
             };
             if let Some((t, bary)) = found {
@@ -857,7 +836,7 @@ impl Accel {
     /// As [`primitive::avx::intersect8`]: only from the 8-wide (AVX2) traversal.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn leaf8<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
+    unsafe fn leaf8<const ANY: bool>(
         &self,
         wr: &WatertightRay,
         blocks: &[LeafBlock],
@@ -865,13 +844,8 @@ impl Accel {
         t_min: f32,
         t_max: f32,
     ) -> (primitive::avx::Hits8, u32) {
-        let h = primitive::avx::intersect8::<KX, KY, KZ, ANY>(
-            wr,
-            &blocks[0].tris,
-            &blocks[1].tris,
-            t_min,
-            t_max,
-        );
+        let h =
+            primitive::avx::intersect8::<ANY>(wr, &blocks[0].tris, &blocks[1].tris, t_min, t_max);
         let mut scalar = h.fallback;
         if spheres {
             scalar |= blocks[0].sphere_lanes(self.first_sphere)
@@ -883,7 +857,7 @@ impl Accel {
     /// Whether one of the `lanes` left to the scalar test (primitive: input
     /// index `id(lane)`) is hit.
     #[inline(always)]
-    fn scalar_hit<const KX: usize, const KY: usize, const KZ: usize>(
+    fn scalar_hit(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
@@ -895,7 +869,7 @@ impl Accel {
             lanes &= lanes - 1;
             if self
                 .prim_of_input(id)
-                .intersect::<KX, KY, KZ>(ray, wr, ray.t_max)
+                .intersect(ray, wr, ray.t_max)
                 .is_some()
             {
                 return true;
@@ -905,7 +879,7 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn any_with<const KX: usize, const KY: usize, const KZ: usize>(
+    fn any_with(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
@@ -930,23 +904,19 @@ impl Accel {
                 #[cfg(target_arch = "x86_64")]
                 if eight_lanes && count == 2 {
                     // SAFETY: eight-lane leaves only in an 8-wide (AVX2) tree.
-                    let (h, scalar) = unsafe {
-                        self.leaf8::<KX, KY, KZ, true>(wr, blocks, spheres, ray.t_min, ray.t_max)
-                    };
+                    let (h, scalar) =
+                        unsafe { self.leaf8::<true>(wr, blocks, spheres, ray.t_min, ray.t_max) };
                     hit = h.hits != 0
-                        || self.scalar_hit::<KX, KY, KZ>(ray, wr, scalar, |lane| {
-                            blocks[lane >> 2].ids[lane & 3]
-                        });
+                        || self.scalar_hit(ray, wr, scalar, |lane| blocks[lane >> 2].ids[lane & 3]);
                     return (!hit).then_some(f32::INFINITY);
                 }
                 for block in blocks {
-                    let h = wr4.intersect::<KX, KY, KZ, true>(&block.tris, ray.t_min, ray.t_max);
+                    let h = wr4.intersect::<true>(&block.tris, ray.t_min, ray.t_max);
                     let mut lanes = h.fallback;
                     if spheres {
                         lanes |= block.sphere_lanes(self.first_sphere);
                     }
-                    hit = h.hits != 0
-                        || self.scalar_hit::<KX, KY, KZ>(ray, wr, lanes, |lane| block.ids[lane]);
+                    hit = h.hits != 0 || self.scalar_hit(ray, wr, lanes, |lane| block.ids[lane]);
                     if hit {
                         return None;
                     }

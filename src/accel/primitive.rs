@@ -202,109 +202,67 @@ impl<F: MaskLanes> LaneTest<F> {
 /// "Ray transformation"): the permutation that makes `kz` the dominant direction
 /// axis, and the shear constants that map the ray to the +z axis of a unit space.
 ///
-/// The permutation is a type-level choice ([`Axes`]): traversal is instantiated
-/// once per permutation, so that `A[kx] − Sx·A[kz]` reads fixed fields instead
-/// of runtime-indexed ones (the per-ray set-up is then three divisions and a
-/// compare; an earlier version folded the permutation into three dot products,
-/// which cost 3× the multiplications per vertex and gives the same bits).
+/// The permutation is a run-time value: the SIMD leaf tests read their triangles
+/// in SoA rows, so `A[kx]` is a row picked by index, as cheap as a fixed one, and
+/// the traversal is one instance instead of one per permutation (six copies of
+/// the closest-hit and any-hit loops did not fit the instruction cache).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WatertightRay {
     org: Vec3,
     sx: f32,
     sy: f32,
     sz: f32,
-    pub(crate) axes: Axes,
+    /// (kx, ky, kz): `kz` the dominant axis, kx and ky swapped when
+    /// `dir[kz] < 0` to keep the winding. Each is below 3 (set only by `new`),
+    /// which is what makes [`pick`] safe.
+    axes: [usize; 3],
 }
 
-/// The six axis permutations (kx, ky, kz) of the watertight test: `kz` the
-/// dominant axis, kx and ky swapped when `dir[kz] < 0` to keep the winding.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Axes {
-    /// (1, 2, 0)
-    X,
-    /// (2, 1, 0)
-    XNeg,
-    /// (2, 0, 1)
-    Y,
-    /// (0, 2, 1)
-    YNeg,
-    /// (0, 1, 2)
-    Z,
-    /// (1, 0, 2)
-    ZNeg,
+/// `row[axis]` for an axis of a [`WatertightRay`]'s permutation, without a
+/// bounds check in the leaf tests' inner loop.
+#[inline(always)]
+fn pick<T: Copy>(row: &[T; 3], axis: usize) -> T {
+    debug_assert!(axis < 3);
+    // SAFETY: every axis of a permutation is 0, 1 or 2 (`WatertightRay::new`).
+    unsafe { *row.get_unchecked(axis) }
 }
-
-/// Calls `$f::<KX, KY, KZ>($args)` for the permutation `$axes` (an [`Axes`]).
-macro_rules! with_axes {
-    ($axes:expr, $($f:ident).+ ( $($arg:expr),* $(,)? )) => {
-        match $axes {
-            $crate::accel::primitive::Axes::X => $($f).+::<1, 2, 0>($($arg),*),
-            $crate::accel::primitive::Axes::XNeg => $($f).+::<2, 1, 0>($($arg),*),
-            $crate::accel::primitive::Axes::Y => $($f).+::<2, 0, 1>($($arg),*),
-            $crate::accel::primitive::Axes::YNeg => $($f).+::<0, 2, 1>($($arg),*),
-            $crate::accel::primitive::Axes::Z => $($f).+::<0, 1, 2>($($arg),*),
-            $crate::accel::primitive::Axes::ZNeg => $($f).+::<1, 0, 2>($($arg),*),
-        }
-    };
-}
-pub(crate) use with_axes;
 
 impl WatertightRay {
     pub(crate) fn new(org: Vec3, dir: Vec3) -> Self {
         let a = dir.abs();
         // kz = index of the largest |dir| component (paper: max_dim(abs(dir))),
         // kx, ky the next two, swapped when dir[kz] < 0 to preserve the winding.
-        let (axes, dz, dx, dy) = if a.x > a.y {
+        let kz = if a.x > a.y {
             if a.x > a.z {
-                (Axes::X, dir.x, dir.y, dir.z)
+                0
             } else {
-                (Axes::Z, dir.z, dir.x, dir.y)
+                2
             }
         } else if a.y > a.z {
-            (Axes::Y, dir.y, dir.z, dir.x)
+            1
         } else {
-            (Axes::Z, dir.z, dir.x, dir.y)
+            2
         };
-        let (axes, dx, dy) = if dz < 0.0 {
-            let negated = match axes {
-                Axes::X => Axes::XNeg,
-                Axes::Y => Axes::YNeg,
-                _ => Axes::ZNeg,
-            };
-            (negated, dy, dx)
-        } else {
-            (axes, dx, dy)
-        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let d = dir.to_array();
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
         // Shear constants (paper §3: Sx = dx/dz, Sy = dy/dz, Sz = 1/dz).
-        let sz = 1.0 / dz;
+        let sz = 1.0 / d[kz];
         Self {
             org,
-            sx: dx * sz,
-            sy: dy * sz,
+            sx: d[kx] * sz,
+            sy: d[ky] * sz,
             sz,
-            axes,
+            axes: [kx, ky, kz],
         }
-    }
-
-    /// [`WatertightRay::intersect`] for this ray's own permutation (one match per
-    /// call: for tests, not for traversal).
-    #[cfg(test)]
-    pub(crate) fn intersect_dyn(
-        &self,
-        v0: Vec3,
-        v1: Vec3,
-        v2: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<(f32, f32, f32)> {
-        with_axes!(self.axes, self.intersect(v0, v1, v2, t_min, t_max))
     }
 
     /// Returns `(t, b1, b2)` for a hit with `t_min <= t <= t_max`, where b1, b2 are
     /// the barycentric weights of `v1` and `v2`. Two-sided (no back-face culling).
-    /// `KX, KY, KZ` must be this ray's permutation ([`WatertightRay::axes`]).
     #[inline(always)]
-    pub(crate) fn intersect<const KX: usize, const KY: usize, const KZ: usize>(
+    pub(crate) fn intersect(
         &self,
         v0: Vec3,
         v1: Vec3,
@@ -317,9 +275,20 @@ impl WatertightRay {
         let b = (v1 - self.org).to_array();
         let c = (v2 - self.org).to_array();
         // Shear and scale of the vertices (paper §3, Listing 1).
-        let (ax, ay) = (a[KX] - self.sx * a[KZ], a[KY] - self.sy * a[KZ]);
-        let (bx, by) = (b[KX] - self.sx * b[KZ], b[KY] - self.sy * b[KZ]);
-        let (cx, cy) = (c[KX] - self.sx * c[KZ], c[KY] - self.sy * c[KZ]);
+        let [kx, ky, kz] = self.axes;
+        let p = pick::<f32>;
+        let (ax, ay) = (
+            p(&a, kx) - self.sx * p(&a, kz),
+            p(&a, ky) - self.sy * p(&a, kz),
+        );
+        let (bx, by) = (
+            p(&b, kx) - self.sx * p(&b, kz),
+            p(&b, ky) - self.sy * p(&b, kz),
+        );
+        let (cx, cy) = (
+            p(&c, kx) - self.sx * p(&c, kz),
+            p(&c, ky) - self.sy * p(&c, kz),
+        );
         // Scaled barycentric coordinates = 2D edge functions (paper §3, eq. 3).
         // Rust never contracts `a*b - c*d` into an FMA, which is what makes the
         // edge function of a shared edge exactly anti-symmetric between the two
@@ -349,7 +318,11 @@ impl WatertightRay {
             return None;
         }
         // Scaled hit distance (paper eq. 5): T = U·Az + V·Bz + W·Cz.
-        let (az, bz, cz) = (self.sz * a[KZ], self.sz * b[KZ], self.sz * c[KZ]);
+        let (az, bz, cz) = (
+            self.sz * p(&a, kz),
+            self.sz * p(&b, kz),
+            self.sz * p(&c, kz),
+        );
         let t_scaled = u * az + v * bz + w * cz;
         let rcp_det = 1.0 / det;
         let t = t_scaled * rcp_det;
@@ -414,6 +387,7 @@ pub(crate) struct WatertightRay4 {
     sx: f32x4,
     sy: f32x4,
     sz: f32x4,
+    axes: [usize; 3],
 }
 
 /// The four lanes' results: `hits` the lanes with a hit in range; `fallback`
@@ -434,22 +408,17 @@ impl WatertightRay4 {
             sx: f32x4::splat(wr.sx),
             sy: f32x4::splat(wr.sy),
             sz: f32x4::splat(wr.sz),
+            axes: wr.axes,
         }
     }
 
-    /// [`WatertightRay::intersect`] on four triangles; `KX, KY, KZ` the ray's
-    /// permutation. Barycentrics are only computed when some lane hits (`ANY`
+    /// [`WatertightRay::intersect`] on four triangles. Barycentrics are only computed when some lane hits (`ANY`
     /// false) — an any-hit query needs only the masks.
     #[inline(always)]
-    pub(crate) fn intersect<const KX: usize, const KY: usize, const KZ: usize, const ANY: bool>(
-        &self,
-        tri: &Tri4,
-        t_min: f32,
-        t_max: f32,
-    ) -> Hits4 {
-        let axes = [KX, KY, KZ];
+    pub(crate) fn intersect<const ANY: bool>(&self, tri: &Tri4, t_min: f32, t_max: f32) -> Hits4 {
+        let axes = self.axes;
         let lt = lane_test(
-            |k, i| tri.v[k][axes[i]] - self.org[axes[i]],
+            |k, i| pick(&tri.v[k], axes[i]) - pick(&self.org, axes[i]),
             [self.sx, self.sy, self.sz],
         );
         let (hits, on_edge) = lt.decide(t_min, t_max);
@@ -589,12 +558,7 @@ pub(crate) mod avx {
     /// target-feature function is called out of line, which cost ~4 % of closest-hit rays/s), and
     /// its intrinsics inline once it sits in an AVX2 body.
     #[inline(always)]
-    pub(crate) unsafe fn intersect8<
-        const KX: usize,
-        const KY: usize,
-        const KZ: usize,
-        const ANY: bool,
-    >(
+    pub(crate) unsafe fn intersect8<const ANY: bool>(
         wr: &WatertightRay,
         lo: &Tri4,
         hi: &Tri4,
@@ -602,14 +566,15 @@ pub(crate) mod avx {
         t_max: f32,
     ) -> Hits8 {
         let org = wr.org.to_array().map(F8::from);
-        // SAFETY: a `wide::f32x4` is four f32 in 16 aligned bytes.
+        // SAFETY: a `wide::f32x4` is four f32 in 16 aligned bytes; `axis` is
+        // below 3 (see `pick`).
         let load = |k: usize, axis: usize| {
-            let p = |t: &Tri4| &t.v[k][axis] as *const _ as *const f32;
+            let p = |t: &Tri4| t.v[k].as_ptr().add(axis) as *const f32;
             F8(_mm256_loadu2_m128(p(hi), p(lo)))
         };
-        let axes = [KX, KY, KZ];
+        let axes = wr.axes;
         let lt = lane_test(
-            |k, i| load(k, axes[i]) - org[axes[i]],
+            |k, i| load(k, axes[i]) - super::pick(&org, axes[i]),
             [wr.sx, wr.sy, wr.sz].map(F8::from),
         );
         let (hits, on_edge) = lt.decide(t_min, t_max);
@@ -703,20 +668,20 @@ mod tests {
         );
         let o = Vec3::new(0.25, 0.5, 2.0);
         let wr = WatertightRay::new(o, -Vec3::Z);
-        let (t, b1, b2) = wr.intersect_dyn(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
+        let (t, b1, b2) = wr.intersect(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
         assert!((t - 2.0).abs() < 1e-6);
         assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
         // Same from below (other winding relative to the ray).
         let wr = WatertightRay::new(Vec3::new(0.25, 0.5, -3.0), Vec3::Z);
-        let (t, b1, b2) = wr.intersect_dyn(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
+        let (t, b1, b2) = wr.intersect(v0, v1, v2, 0.0, f32::INFINITY).unwrap();
         assert!((t - 3.0).abs() < 1e-6);
         assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
         // Range limits.
-        assert!(wr.intersect_dyn(v0, v1, v2, 0.0, 2.9).is_none());
-        assert!(wr.intersect_dyn(v0, v1, v2, 3.1, 9.0).is_none());
+        assert!(wr.intersect(v0, v1, v2, 0.0, 2.9).is_none());
+        assert!(wr.intersect(v0, v1, v2, 3.1, 9.0).is_none());
         // Miss.
         let wr = WatertightRay::new(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z);
-        assert!(wr.intersect_dyn(v0, v1, v2, 0.0, f32::INFINITY).is_none());
+        assert!(wr.intersect(v0, v1, v2, 0.0, f32::INFINITY).is_none());
     }
 
     #[test]
