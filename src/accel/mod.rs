@@ -64,22 +64,6 @@ pub struct Hit {
     pub prim: PrimRef,
     /// Barycentrics (b1, b2) of vertices 1 and 2 for triangles; unused for spheres.
     pub bary: Vec2,
-    /// A triangle's vertices in its index order (zero for spheres): read from
-    /// the leaf block the test has just loaded, so that building the
-    /// interaction does not re-read the mesh's index and position buffers
-    /// (cache misses on a large mesh, a third of `interaction` on the bunny).
-    pub vertices: [Vec3; 3],
-}
-
-/// The nearest hit of a closest-hit query so far: input index, distance,
-/// barycentrics, and the block lane that holds its primitive.
-#[derive(Clone, Copy)]
-struct Nearest<'a> {
-    id: u32,
-    t: f32,
-    bary: Vec2,
-    block: &'a LeafBlock,
-    lane: usize,
 }
 
 /// One primitive, stored in BVH leaf order so that the traversal callback reads
@@ -108,7 +92,6 @@ impl Prim {
                     t,
                     prim: PrimRef::Triangle { mesh, tri },
                     bary: Vec2::new(b1, b2),
-                    vertices: v,
                 }),
             Prim::Sphere { center, radius, id } => {
                 intersect_sphere(ray.origin, ray.dir, center, radius, ray.t_min, t_max).map(|t| {
@@ -116,7 +99,6 @@ impl Prim {
                         t,
                         prim: PrimRef::Sphere(id),
                         bary: Vec2::ZERO,
-                        vertices: [Vec3::ZERO; 3],
                     }
                 })
             }
@@ -741,7 +723,7 @@ impl Accel {
         #[cfg(target_arch = "x86_64")]
         let eight_lanes = self.bvh.eight_lane_leaves();
         // (input index, t, b1, b2) of the nearest hit so far.
-        let mut best: Option<Nearest> = None;
+        let mut best: Option<(u32, f32, Vec2)> = None;
         let mut t_max = ray.t_max;
         let mut prims_tested = 0;
         traverse!(
@@ -767,7 +749,7 @@ impl Accel {
                         wr,
                         (h.hits | scalar, h.hits),
                         (&h.t, &h.b1, &h.b2),
-                        |lane| (&blocks[lane >> 2], lane & 3),
+                        |lane| blocks[lane >> 2].ids[lane & 3],
                         &mut t_max,
                         &mut best,
                     );
@@ -786,12 +768,13 @@ impl Accel {
                         continue;
                     }
                     let (ts, b1, b2) = (h.t.to_array(), h.b1.to_array(), h.b2.to_array());
+                    let id = |lane: usize| block.ids[lane];
                     self.take_lanes(
                         ray,
                         wr,
                         (lanes, h.hits),
                         (&ts, &b1, &b2),
-                        |lane| (block, lane),
+                        id,
                         &mut t_max,
                         &mut best,
                     );
@@ -801,44 +784,35 @@ impl Accel {
             |first, code| self.prefetch_leaf(first, code),
         );
         work.1 += prims_tested;
-        best.map(|b| {
-            let prim = self.prim_ref_of_input(b.id);
-            Hit {
-                t: b.t,
-                prim,
-                bary: b.bary,
-                vertices: match prim {
-                    PrimRef::Triangle { .. } => b.block.tris.vertices(b.lane),
-                    PrimRef::Sphere(_) => [Vec3::ZERO; 3],
-                },
-            }
+        best.map(|(id, t, bary)| Hit {
+            t,
+            prim: self.prim_ref_of_input(id),
+            bary,
         })
     }
 
     /// Takes the `lanes` of a leaf test into `best` (`hits`: the lanes the
     /// SIMD test decided, with their `t`, `b1`, `b2`; the rest go to the scalar
-    /// test), the lane's primitive being lane `l` of block `b` for
-    /// `(b, l) = slot(lane)`. A hit at the
+    /// test), the lane's primitive being input index `id(lane)`. A hit at the
     /// same distance as the best so far (a ray through a shared edge) wins by
     /// input order, not by visit order, which depends on the node width: the
     /// same image on every CPU.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn take_lanes<'a>(
-        &'a self,
+    fn take_lanes(
+        &self,
         ray: &Ray,
         wr: &WatertightRay,
         (mut lanes, hits): (u32, u32),
         (ts, b1, b2): (&[f32], &[f32], &[f32]),
-        slot: impl Fn(usize) -> (&'a LeafBlock, usize),
+        id: impl Fn(usize) -> u32,
         t_max: &mut f32,
-        best: &mut Option<Nearest<'a>>,
+        best: &mut Option<(u32, f32, Vec2)>,
     ) {
         while lanes != 0 {
             let lane = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            let (block, block_lane) = slot(lane);
-            let id = block.ids[block_lane];
+            let id = id(lane);
             let found = if hits & (1 << lane) != 0 {
                 (ts[lane] <= *t_max).then(|| (ts[lane], Vec2::new(b1[lane], b2[lane])))
             } else {
@@ -847,15 +821,9 @@ impl Accel {
                     .map(|hit| (hit.t, hit.bary))
             };
             if let Some((t, bary)) = found {
-                if nearer(t, id, best.map(|b| (b.t, b.id))) {
+                if nearer(t, id, best.map(|(b, bt, _)| (bt, b))) {
                     *t_max = t;
-                    *best = Some(Nearest {
-                        id,
-                        t,
-                        bary,
-                        block,
-                        lane: block_lane,
-                    });
+                    *best = Some((id, t, bary));
                 }
             }
         }

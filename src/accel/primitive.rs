@@ -362,17 +362,6 @@ pub(crate) struct Tri4 {
 }
 
 impl Tri4 {
-    /// Lane `lane`'s triangle (NaN vertices for an empty lane).
-    pub(crate) fn vertices(&self, lane: usize) -> [Vec3; 3] {
-        self.v.map(|vk| {
-            Vec3::new(
-                vk[0].as_array()[lane],
-                vk[1].as_array()[lane],
-                vk[2].as_array()[lane],
-            )
-        })
-    }
-
     pub(crate) fn new(lanes: [Option<[Vec3; 3]>; 4]) -> Self {
         let mut v = [[[f32::NAN; 4]; 3]; 3];
         for (lane, tri) in lanes.iter().enumerate() {

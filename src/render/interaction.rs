@@ -42,9 +42,8 @@ pub fn interaction(scene: &Scene, ray: &Ray, hit: &Hit) -> Interaction {
 
 fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32) -> Interaction {
     let m = &scene.meshes[mesh as usize];
-    // The vertices come with the hit; the index buffer only for normals and uvs.
-    let [p0, p1, p2] = hit.vertices;
-    let index = || m.triangles[tri as usize].map(|i| i as usize);
+    let [i0, i1, i2] = m.triangles[tri as usize].map(|i| i as usize);
+    let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
     let (b1, b2) = (hit.bary.x, hit.bary.y);
     let b0 = 1.0 - b1 - b2;
     // Interpolating the vertices is more accurate than o + t·d far from the
@@ -56,7 +55,6 @@ fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32
     let ns_orig = if m.normals.is_empty() {
         ng_orig
     } else {
-        let [i0, i1, i2] = index();
         let n = b0 * m.normals[i0] + b1 * m.normals[i1] + b2 * m.normals[i2];
         let n = n.normalize_or_zero();
         if n == Vec3::ZERO {
@@ -69,7 +67,6 @@ fn triangle_interaction(scene: &Scene, ray: &Ray, hit: &Hit, mesh: u32, tri: u32
     let (uv, dpdu, dpdv) = if m.uvs.is_empty() {
         (Vec2::new(b1, b2), e1, e2)
     } else {
-        let [i0, i1, i2] = index();
         let (t0, t1, t2) = (m.uvs[i0], m.uvs[i1], m.uvs[i2]);
         let uv = b0 * t0 + b1 * t1 + b2 * t2;
         let d1 = t1 - t0;
