@@ -276,19 +276,11 @@ impl WatertightRay {
         let c = (v2 - self.org).to_array();
         // Shear and scale of the vertices (paper §3, Listing 1).
         let [kx, ky, kz] = self.axes;
-        let p = pick::<f32>;
-        let (ax, ay) = (
-            p(&a, kx) - self.sx * p(&a, kz),
-            p(&a, ky) - self.sy * p(&a, kz),
-        );
-        let (bx, by) = (
-            p(&b, kx) - self.sx * p(&b, kz),
-            p(&b, ky) - self.sy * p(&b, kz),
-        );
-        let (cx, cy) = (
-            p(&c, kx) - self.sx * p(&c, kz),
-            p(&c, ky) - self.sy * p(&c, kz),
-        );
+        let shear = |v: &[f32; 3]| {
+            let z = pick(v, kz);
+            (pick(v, kx) - self.sx * z, pick(v, ky) - self.sy * z)
+        };
+        let ((ax, ay), (bx, by), (cx, cy)) = (shear(&a), shear(&b), shear(&c));
         // Scaled barycentric coordinates = 2D edge functions (paper §3, eq. 3).
         // Rust never contracts `a*b - c*d` into an FMA, which is what makes the
         // edge function of a shared edge exactly anti-symmetric between the two
@@ -319,9 +311,9 @@ impl WatertightRay {
         }
         // Scaled hit distance (paper eq. 5): T = U·Az + V·Bz + W·Cz.
         let (az, bz, cz) = (
-            self.sz * p(&a, kz),
-            self.sz * p(&b, kz),
-            self.sz * p(&c, kz),
+            self.sz * pick(&a, kz),
+            self.sz * pick(&b, kz),
+            self.sz * pick(&c, kz),
         );
         let t_scaled = u * az + v * bz + w * cz;
         let rcp_det = 1.0 / det;
@@ -412,8 +404,9 @@ impl WatertightRay4 {
         }
     }
 
-    /// [`WatertightRay::intersect`] on four triangles. Barycentrics are only computed when some lane hits (`ANY`
-    /// false) — an any-hit query needs only the masks.
+    /// [`WatertightRay::intersect`] on four triangles. Barycentrics are only
+    /// computed when some lane hits (`ANY` false) — an any-hit query needs only
+    /// the masks.
     #[inline(always)]
     pub(crate) fn intersect<const ANY: bool>(&self, tri: &Tri4, t_min: f32, t_max: f32) -> Hits4 {
         let axes = self.axes;
