@@ -11,6 +11,7 @@
 //! widened by `1 + 2γ₃`, here generously `1 + 4ε`), on boxes padded by the
 //! build (`build.rs`), so no box a ray touches at an edge or vertex is culled.
 
+use crate::math::Vec3;
 use obvhs::bvh2::Bvh2;
 use wide::f32x4;
 
@@ -119,11 +120,13 @@ impl BoxRay {
     /// `dir` components must be nonzero (the caller clamps them away from 0, so
     /// that the reciprocal is finite and `0 · ∞` cannot occur); `t_lo ≥ 0`.
     #[inline(always)]
-    pub(super) fn new(org: [f32; 3], dir: [f32; 3], t_lo: f32) -> Self {
+    pub(super) fn new(org: Vec3, dir: Vec3, t_lo: f32) -> Self {
+        // One packed division for the three reciprocals.
+        let inv = (Vec3::ONE / dir).to_array();
         Self {
-            org: org.map(f32x4::splat),
-            inv: dir.map(|d| f32x4::splat(1.0 / d)),
-            near: dir.map(|d| (d < 0.0) as usize),
+            org: org.to_array().map(f32x4::splat),
+            inv: inv.map(f32x4::splat),
+            near: dir.to_array().map(|d| (d < 0.0) as usize),
             t_lo: f32x4::splat(t_lo),
         }
     }

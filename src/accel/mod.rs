@@ -292,28 +292,20 @@ impl Tree {
 fn node_ray(ray: &Ray) -> (BoxRay, f32) {
     // |d| is clamped to 1e-20 (inverse ±1e20: finite, no NaN from 0·∞), with
     // the sign kept (−0.0 counts as positive, like `d < 0.0` in the node test).
-    let fix = |d: f32| {
-        if d.abs() >= 1.0e-20 {
-            d
-        } else if d < 0.0 {
-            -1.0e-20
-        } else {
-            1.0e-20
-        }
-    };
-    let dir = Vec3::new(fix(ray.dir.x), fix(ray.dir.y), fix(ray.dir.z));
+    // Lane-wise selects rather than a branch per component.
+    let d = ray.dir;
+    let tiny = Vec3::select(
+        d.cmplt(Vec3::ZERO),
+        Vec3::splat(-1.0e-20),
+        Vec3::splat(1.0e-20),
+    );
+    let dir = Vec3::select(d.abs().cmplt(Vec3::splat(1.0e-20)), tiny, d);
     if ray.t_min >= 0.0 {
-        return (
-            BoxRay::new(ray.origin.to_array(), dir.to_array(), ray.t_min),
-            0.0,
-        );
+        return (BoxRay::new(ray.origin, dir, ray.t_min), 0.0);
     }
     let back_off = 2.0e-4 + ray.origin.abs().max_element() * (1.0 / 262_144.0) - ray.t_min;
     let origin = ray.origin - dir * back_off;
-    (
-        BoxRay::new(origin.to_array(), dir.to_array(), 0.0),
-        back_off,
-    )
+    (BoxRay::new(origin, dir, 0.0), back_off)
 }
 
 /// The acceleration structure over all shapes of a scene.
