@@ -145,7 +145,7 @@ fn geometric_lanes_match_retraced_rays() {
                     let ray = c.generate_ray(q);
                     accel
                         .intersect(&ray)
-                        .map(|hit| (ray, hit, interaction(&s, &ray, &hit)))
+                        .map(|hit| (ray, hit, interaction(&s, &accel, &ray, &hit)))
                 };
                 let Some((ray, _, si)) = trace(p) else {
                     continue;

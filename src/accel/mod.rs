@@ -58,12 +58,26 @@ pub enum PrimRef {
 }
 
 /// The closest hit along a ray.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct Hit {
     pub t: f32,
     pub prim: PrimRef,
     /// Barycentrics (b1, b2) of vertices 1 and 2 for triangles; unused for spheres.
     pub bary: Vec2,
+    /// Where the traversal found the triangle: leaf block × 4 + lane, or
+    /// [`NO_SLOT`]. A hint, not part of the hit's identity (`==` ignores it):
+    /// [`Accel::hit_vertices`] reads the vertices from the block the leaf
+    /// test has just loaded instead of through the mesh's index buffer.
+    pub(crate) slot: u32,
+}
+
+/// [`Hit::slot`] of a hit found outside the leaf blocks.
+pub(crate) const NO_SLOT: u32 = u32::MAX;
+
+impl PartialEq for Hit {
+    fn eq(&self, o: &Self) -> bool {
+        self.t == o.t && self.prim == o.prim && self.bary == o.bary
+    }
 }
 
 /// One primitive, stored in BVH leaf order so that the traversal callback reads
@@ -92,6 +106,7 @@ impl Prim {
                     t,
                     prim: PrimRef::Triangle { mesh, tri },
                     bary: Vec2::new(b1, b2),
+                    slot: NO_SLOT,
                 }),
             Prim::Sphere { center, radius, id } => {
                 intersect_sphere(ray.origin, ray.dir, center, radius, ray.t_min, t_max).map(|t| {
@@ -99,6 +114,7 @@ impl Prim {
                         t,
                         prim: PrimRef::Sphere(id),
                         bary: Vec2::ZERO,
+                        slot: NO_SLOT,
                     }
                 })
             }
@@ -665,6 +681,26 @@ impl Accel {
         }
     }
 
+    /// The vertices of a triangle hit, from the leaf block where the traversal
+    /// found it (the same values as the mesh's, copied at build time); `None`
+    /// for spheres and for hits found outside the blocks ([`NO_SLOT`]).
+    #[inline]
+    pub fn hit_vertices(&self, hit: &Hit) -> Option<[Vec3; 3]> {
+        if !matches!(hit.prim, PrimRef::Triangle { .. }) {
+            return None;
+        }
+        let block = self.blocks.get((hit.slot / 4) as usize)?;
+        let lane = (hit.slot % 4) as usize;
+        let v = &block.tris.v;
+        Some([0, 1, 2].map(|k| {
+            Vec3::new(
+                v[k][0].as_array()[lane],
+                v[k][1].as_array()[lane],
+                v[k][2].as_array()[lane],
+            )
+        }))
+    }
+
     /// The hit of `ray` with the one primitive `prim`, by the exact test
     /// [`Accel::intersect`] runs (same t and barycentrics, bit for bit): for a
     /// caller that already knows which primitive the ray sees (the previews find
@@ -714,8 +750,8 @@ impl Accel {
         let wr4 = WatertightRay4::new(wr);
         #[cfg(target_arch = "x86_64")]
         let eight_lanes = self.bvh.eight_lane_leaves();
-        // (input index, t, b1, b2) of the nearest hit so far.
-        let mut best: Option<(u32, f32, Vec2)> = None;
+        // (input index, t, (b1, b2), slot) of the nearest hit so far.
+        let mut best: Option<(u32, f32, Vec2, u32)> = None;
         let mut t_max = ray.t_max;
         let mut prims_tested = 0;
         traverse!(
@@ -742,12 +778,13 @@ impl Accel {
                         (h.hits | scalar, h.hits),
                         (&h.t, &h.b1, &h.b2),
                         |lane| blocks[lane >> 2].ids[lane & 3],
+                        4 * first as u32,
                         &mut t_max,
                         &mut best,
                     );
                     return Some(t_max + back_off);
                 }
-                for block in blocks {
+                for (i, block) in blocks.iter().enumerate() {
                     if count_prims {
                         prims_tested += block.primitive_count();
                     }
@@ -767,6 +804,7 @@ impl Accel {
                         (lanes, h.hits),
                         (&ts, &b1, &b2),
                         id,
+                        4 * (first + i) as u32,
                         &mut t_max,
                         &mut best,
                     );
@@ -776,16 +814,18 @@ impl Accel {
             |first, code| self.prefetch_leaf(first, code),
         );
         work.1 += prims_tested;
-        best.map(|(id, t, bary)| Hit {
+        best.map(|(id, t, bary, slot)| Hit {
             t,
             prim: self.prim_ref_of_input(id),
             bary,
+            slot,
         })
     }
 
     /// Takes the `lanes` of a leaf test into `best` (`hits`: the lanes the
     /// SIMD test decided, with their `t`, `b1`, `b2`; the rest go to the scalar
-    /// test), the lane's primitive being input index `id(lane)`. A hit at the
+    /// test), the lane's primitive being input index `id(lane)` and its
+    /// [`Hit::slot`] `slot_base + lane`. A hit at the
     /// same distance as the best so far (a ray through a shared edge) wins by
     /// input order, not by visit order, which depends on the node width: the
     /// same image on every CPU.
@@ -798,8 +838,9 @@ impl Accel {
         (mut lanes, hits): (u32, u32),
         (ts, b1, b2): (&[f32], &[f32], &[f32]),
         id: impl Fn(usize) -> u32,
+        slot_base: u32,
         t_max: &mut f32,
-        best: &mut Option<(u32, f32, Vec2)>,
+        best: &mut Option<(u32, f32, Vec2, u32)>,
     ) {
         while lanes != 0 {
             let lane = lanes.trailing_zeros() as usize;
@@ -813,9 +854,9 @@ impl Accel {
                     .map(|hit| (hit.t, hit.bary))
             };
             if let Some((t, bary)) = found {
-                if nearer(t, id, best.map(|(b, bt, _)| (bt, b))) {
+                if nearer(t, id, best.map(|(b, bt, ..)| (bt, b))) {
                     *t_max = t;
-                    *best = Some((id, t, bary));
+                    *best = Some((id, t, bary, slot_base + lane as u32));
                 }
             }
         }

@@ -174,7 +174,7 @@ impl PathTracer<'_> {
                 mark_direct_done(&mut visible, depth, st.radiance);
                 break;
             };
-            let si = interaction(scene, &ray, &hit);
+            let si = interaction(scene, self.accel, &ray, &hit);
             if depth == 1 {
                 visible = Some(self.visible_surface(&si, &ray, hit.t, dd));
             }

@@ -151,7 +151,7 @@ impl<'a> PointEstimator<'a> {
         let scene = self.tracer.scene;
         let ray = self.camera.generate_ray(p);
         let hit = self.tracer.accel.intersect(&ray)?;
-        let si = interaction(scene, &ray, &hit);
+        let si = interaction(scene, self.tracer.accel, &ray, &hit);
         let d = ray.dir;
         let [du, dv] = self.camera.direction_derivatives();
         let g = Vec2::new(si.ng.dot(du), si.ng.dot(dv)) / (hit.t * si.ng.dot(d));
