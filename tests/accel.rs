@@ -182,6 +182,16 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
                 ray.at(h.t)
             );
             assert!((sp.n_geo.length() - 1.0).abs() < 1e-5);
+            // A triangle hit's vertices from its leaf block are its mesh's, and
+            // a hit of the brute force (no block) has none.
+            if let PrimRef::Triangle { mesh, tri } = h.prim {
+                let m = &meshes[mesh as usize];
+                let want = m.triangles[tri as usize].map(|i| m.positions[i as usize]);
+                assert_eq!(accel.hit_vertices(&h), Some(want), "{ray:?}");
+                assert_eq!(accel.hit_vertices(&b.expect("brute force agrees")), None);
+            } else {
+                assert_eq!(accel.hit_vertices(&h), None);
+            }
         }
         let occ = accel.occluded(&ray);
         assert_eq!(occ, b.is_some(), "{ray:?}");

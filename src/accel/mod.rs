@@ -683,14 +683,19 @@ impl Accel {
 
     /// The vertices of a triangle hit, from the leaf block where the traversal
     /// found it (the same values as the mesh's, copied at build time); `None`
-    /// for spheres and for hits found outside the blocks ([`NO_SLOT`]).
+    /// for spheres, for hits found outside the blocks ([`NO_SLOT`]) and for a
+    /// hit whose slot holds another primitive (a hit from another `Accel`).
     #[inline]
     pub fn hit_vertices(&self, hit: &Hit) -> Option<[Vec3; 3]> {
-        if !matches!(hit.prim, PrimRef::Triangle { .. }) {
+        let PrimRef::Triangle { mesh, tri } = hit.prim else {
             return None;
-        }
+        };
         let block = self.blocks.get((hit.slot / 4) as usize)?;
         let lane = (hit.slot % 4) as usize;
+        let input = self.mesh_first.get(mesh as usize)?.checked_add(tri)?;
+        if block.ids[lane] != input {
+            return None;
+        }
         let v = &block.tris.v;
         Some([0, 1, 2].map(|k| {
             Vec3::new(
