@@ -687,23 +687,12 @@ impl Accel {
     /// hit whose slot holds another primitive (a hit from another `Accel`).
     #[inline]
     pub fn hit_vertices(&self, hit: &Hit) -> Option<[Vec3; 3]> {
-        let PrimRef::Triangle { mesh, tri } = hit.prim else {
-            return None;
-        };
-        let block = self.blocks.get((hit.slot / 4) as usize)?;
-        let lane = (hit.slot % 4) as usize;
-        let input = self.mesh_first.get(mesh as usize)?.checked_add(tri)?;
-        if block.ids[lane] != input {
+        if !matches!(hit.prim, PrimRef::Triangle { .. }) {
             return None;
         }
-        let v = &block.tris.v;
-        Some([0, 1, 2].map(|k| {
-            Vec3::new(
-                v[k][0].as_array()[lane],
-                v[k][1].as_array()[lane],
-                v[k][2].as_array()[lane],
-            )
-        }))
+        let block = self.blocks.get((hit.slot / 4) as usize)?;
+        let lane = (hit.slot % 4) as usize;
+        (block.ids[lane] == self.checked_input_of(hit.prim)?).then(|| block.tris.lane(lane))
     }
 
     /// The hit of `ray` with the one primitive `prim`, by the exact test
@@ -722,17 +711,24 @@ impl Accel {
 
     /// The stored primitive of a [`PrimRef`], `None` when out of range or rejected.
     fn prim(&self, prim: PrimRef) -> Option<&Prim> {
-        let input = match prim {
+        let input = self.checked_input_of(prim)?;
+        let slot = *self.slot_of_input.get(input as usize)?;
+        self.prims.get(slot as usize)
+    }
+
+    /// [`Accel::input_of`] for a `PrimRef` that may not be of this BVH:
+    /// `None` when its mesh or index is out of range.
+    #[inline]
+    fn checked_input_of(&self, prim: PrimRef) -> Option<u32> {
+        match prim {
             PrimRef::Triangle { mesh, tri } => {
                 let first = *self.mesh_first.get(mesh as usize)?;
                 let end = *self.mesh_first.get(mesh as usize + 1)?;
                 let i = first.checked_add(tri)?;
-                (i < end).then_some(i)?
+                (i < end).then_some(i)
             }
-            PrimRef::Sphere(s) => self.mesh_first.last()?.checked_add(s)?,
-        };
-        let slot = *self.slot_of_input.get(input as usize)?;
-        self.prims.get(slot as usize)
+            PrimRef::Sphere(s) => self.mesh_first.last()?.checked_add(s),
+        }
     }
 
     fn traversable(&self, ray: &Ray) -> bool {

@@ -368,6 +368,13 @@ impl Tri4 {
             v: v.map(|vk| vk.map(f32x4::new)),
         }
     }
+
+    /// The triangle of `lane` (< 4), as [`Tri4::new`] took it.
+    #[inline(always)]
+    pub(crate) fn lane(&self, lane: usize) -> [Vec3; 3] {
+        let at = |k: usize, axis: usize| self.v[k][axis].as_array()[lane];
+        [0, 1, 2].map(|k| Vec3::new(at(k, 0), at(k, 1), at(k, 2)))
+    }
 }
 
 /// [`WatertightRay`] splatted for [`Tri4`]: each lane runs exactly the scalar
