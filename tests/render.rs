@@ -5,7 +5,7 @@
 use gradtrace::accel::Accel;
 use gradtrace::brdf::Material;
 use gradtrace::math::sampler::PixelSampler;
-use gradtrace::math::{Vec2, Vec3};
+use gradtrace::math::{Frame, Vec2, Vec3};
 use gradtrace::render::lights::LightSet;
 use gradtrace::render::path::PathTracer;
 use gradtrace::render::{render, RenderOptions};
@@ -115,7 +115,13 @@ fn light_sample_densities_are_consistent() {
     for i in 0..n {
         let mut smp = PixelSampler::new(0, i, 3);
         let ls = lights
-            .sample(&s, p, Vec3::Y, smp.next_1d(), smp.next_2d())
+            .sample(
+                &s,
+                p,
+                &Frame::from_normal(Vec3::Y),
+                smp.next_1d(),
+                smp.next_2d(),
+            )
             .unwrap();
         let (q, nq) = ls.point.unwrap();
         let again = lights.pdf_emitter(&s, gradtrace::accel::PrimRef::Sphere(0), p, q, nq);
@@ -144,7 +150,13 @@ fn light_sample_densities_are_consistent() {
     let mut est = 0.0f64;
     for i in 0..n {
         let mut smp = PixelSampler::new(1, i, 3);
-        if let Some(ls) = lights.sample(&s2, p, Vec3::Y, smp.next_1d(), smp.next_2d()) {
+        if let Some(ls) = lights.sample(
+            &s2,
+            p,
+            &Frame::from_normal(Vec3::Y),
+            smp.next_1d(),
+            smp.next_2d(),
+        ) {
             let (_, nq) = ls.point.unwrap();
             est += 1.0 / ls.pdf as f64;
             assert!(nq.y < 0.0);
@@ -178,7 +190,13 @@ fn gaussian_sky_sampling_integrates_the_sky() {
         for i in 0..n {
             let mut smp = PixelSampler::new(2, i, 9);
             let ls = lights
-                .sample(&s, Vec3::ZERO, Vec3::Y, smp.next_1d(), smp.next_2d())
+                .sample(
+                    &s,
+                    Vec3::ZERO,
+                    &Frame::from_normal(Vec3::Y),
+                    smp.next_1d(),
+                    smp.next_2d(),
+                )
                 .unwrap();
             assert!((lights.pdf_env(&s, ls.wi, Vec3::Y) - ls.pdf).abs() < 1e-3 * ls.pdf);
             est += (ls.radiance.x / ls.pdf) as f64;
@@ -198,6 +216,51 @@ fn gaussian_sky_sampling_integrates_the_sky() {
 /// every sample lies in its hemisphere, `pdf_env` reproduces the density, and
 /// E[cos θ · L / pdf] is the irradiance π·L, with zero variance (the estimator is
 /// constant), for normals in every orientation.
+/// The shading frame is a continuous function of the shading normal: two hits a
+/// hair apart on either side of a mesh edge get nearly the same tangents, so that a
+/// pixel's stratified BSDF and sky samples stay stratified across the triangles it
+/// covers. A frame aligned with each triangle's dpdu fails this: neighbouring
+/// triangles' parametrisations differ by tens of degrees.
+#[test]
+fn shading_frames_are_continuous_across_mesh_edges() {
+    let mut s = empty_scene(camera(8, 8));
+    let m = add_material(&mut s, Material::Lambert { albedo: Vec3::ONE });
+    add_icosphere(&mut s, Vec3::ZERO, 1.0, 3, m);
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let (mut crossings, mut worst) = (0, 0.0f32);
+    for i in 0..4000u32 {
+        // Fibonacci directions over the sphere; each ray and a twin 2e-3 rad away.
+        let z = 1.0 - (i as f32 + 0.5) / 2000.0;
+        let phi = i as f32 * 2.399_963;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let side = Frame::from_normal(d).s;
+        let hits = [d, (d + 2e-3 * side).normalize()].map(|d| {
+            let ray = gradtrace::math::Ray::new(3.0 * d, -d);
+            let hit = accel.intersect(&ray).expect("the sphere is hit");
+            (
+                hit.prim,
+                gradtrace::render::interaction::interaction(&s, &accel, &ray, &hit).frame,
+            )
+        });
+        let [(p1, f1), (p2, f2)] = hits;
+        // Duff et al.'s frame flips with the sign of n.z, by design.
+        if p1 == p2 || f1.n.z.abs() < 0.05 || f2.n.z.abs() < 0.05 || f1.n.z * f2.n.z < 0.0 {
+            continue;
+        }
+        crossings += 1;
+        let dn = (f1.n - f2.n).length();
+        let ds = (f1.s - f2.s).length().max((f1.t - f2.t).length());
+        worst = worst.max(ds / dn);
+        assert!(
+            ds <= 4.0 * dn + 1e-5,
+            "ray {i}: |Δn| {dn:e}, |Δs|, |Δt| up to {ds:e}"
+        );
+    }
+    assert!(crossings > 40, "only {crossings} edge crossings");
+    println!("{crossings} crossings, |Δframe| / |Δn| up to {worst}");
+}
+
 #[test]
 fn constant_environment_sampling_is_cosine_weighted_about_the_normal() {
     let mut s = empty_scene(camera(4, 4));
@@ -215,7 +278,13 @@ fn constant_environment_sampling_is_cosine_weighted_about_the_normal() {
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);
         for i in 0..count {
             let mut smp = PixelSampler::new(4, i, 2);
-            let Some(ls) = lights.sample(&s, Vec3::ZERO, n, smp.next_1d(), smp.next_2d()) else {
+            let Some(ls) = lights.sample(
+                &s,
+                Vec3::ZERO,
+                &Frame::from_normal(n),
+                smp.next_1d(),
+                smp.next_2d(),
+            ) else {
                 continue;
             };
             let cos = ls.wi.dot(n);
@@ -283,7 +352,7 @@ fn image_environment_sampling_integrates_the_map() {
         let mut smp = PixelSampler::new(5, i, 1);
         let (u1, u2) = (smp.next_1d(), smp.next_2d());
         let ls = lights
-            .sample(&s, Vec3::ZERO, Vec3::Y, u1, u2)
+            .sample(&s, Vec3::ZERO, &Frame::from_normal(Vec3::Y), u1, u2)
             .unwrap_or_else(|| panic!("{u1} {u2}"));
         assert!((lights.pdf_env(&s, ls.wi, Vec3::Y) - ls.pdf).abs() < 1e-3 * ls.pdf.max(1e-3));
         est += (ls.radiance.x / ls.pdf) as f64;

@@ -75,22 +75,6 @@ impl Frame {
         Self { s, t, n }
     }
 
-    /// Builds a frame from a normal and a (not necessarily orthogonal) tangent hint;
-    /// falls back to [`Frame::from_normal`] when the hint is parallel to `n`.
-    pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
-        let s = tangent - n * n.dot(tangent);
-        let len2 = s.length_squared();
-        if len2.is_nan() || len2 <= 1e-12 {
-            return Self::from_normal(n);
-        }
-        let s = s / len2.sqrt();
-        Self {
-            s,
-            t: n.cross(s),
-            n,
-        }
-    }
-
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }

@@ -181,7 +181,13 @@ fn finish(
     if ns.dot(ng) <= 1e-4 {
         ns = ng;
     }
-    let frame = Frame::from_normal_tangent(ns, dpdu);
+    // The frame is a function of the normal alone, continuous across a mesh:
+    // samples stratified over a pixel (BSDF and cosine-sky directions) stay
+    // stratified across the triangles the pixel covers. A frame aligned with
+    // each triangle's dpdu turned every triangle's mapping by its own angle and
+    // scattered them (bunny RMSE +8 %). Every BSDF here is isotropic, so the
+    // tangent's direction is otherwise free.
+    let frame = Frame::from_normal(ns);
     Interaction {
         p: sp.p,
         p_error: sp.p_error,

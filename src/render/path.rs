@@ -331,7 +331,7 @@ impl PathTracer<'_> {
         if material.is_delta() {
             return (Vec3::ZERO, 0);
         }
-        let Some(ls) = self.lights.sample(scene, si.p, si.frame.n, u_pick, u_light) else {
+        let Some(ls) = self.lights.sample(scene, si.p, &si.frame, u_pick, u_light) else {
             return (Vec3::ZERO, 0);
         };
         let wi_local = si.frame.to_local(ls.wi);
