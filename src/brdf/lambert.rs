@@ -1,7 +1,7 @@
 //! Lambertian reflection: f = albedo/π with cosine-weighted sampling, for which
 //! `f · cos θi / pdf = albedo` exactly (no division is performed).
 
-use super::{sanitize, unit_z, BsdfSample};
+use super::{sanitize, BsdfSample};
 use crate::math::{warp, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -18,14 +18,14 @@ pub(super) fn pdf(cos: f64) -> f64 {
 
 /// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the
 /// horizon (checked by the caller). A direction on the horizon (the rim of the disk)
-/// has zero density and is rejected.
+/// has zero density and is rejected. The map's direction is of unit length to a few
+/// ulp (z = √(1 − r²)), so its z is cos θi as it stands: [`pdf`]'s f64
+/// normalisation would move the density by ~1e-7 and cost a square root and a
+/// division on the path's critical chain (its `Material::pdf` still normalises, for
+/// directions from elsewhere).
 pub(super) fn sample(albedo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let wi = warp::square_to_cosine_hemisphere(u);
-    let z = unit_z(wi)?;
-    if z <= 0.0 {
-        return None;
-    }
-    let pdf = pdf(z) as f32;
+    let pdf = wi.z * FRAC_1_PI;
     if pdf <= 0.0 {
         return None;
     }
