@@ -212,10 +212,6 @@ fn gaussian_sky_sampling_integrates_the_sky() {
     }
 }
 
-/// Constant-environment sampling is cosine-weighted about the receiver's normal:
-/// every sample lies in its hemisphere, `pdf_env` reproduces the density, and
-/// E[cos θ · L / pdf] is the irradiance π·L, with zero variance (the estimator is
-/// constant), for normals in every orientation.
 /// The shading frame is a continuous function of the shading normal: two hits a
 /// hair apart on either side of a mesh edge get nearly the same tangents, so that a
 /// pixel's stratified BSDF and sky samples stay stratified across the triangles it
@@ -261,6 +257,10 @@ fn shading_frames_are_continuous_across_mesh_edges() {
     println!("{crossings} crossings, |Δframe| / |Δn| up to {worst}");
 }
 
+/// Constant-environment sampling is cosine-weighted about the receiver's normal:
+/// every sample lies in its hemisphere, `pdf_env` reproduces the density, and
+/// E[cos θ · L / pdf] is the irradiance π·L, with zero variance (the estimator is
+/// constant), for normals in every orientation.
 #[test]
 fn constant_environment_sampling_is_cosine_weighted_about_the_normal() {
     let mut s = empty_scene(camera(4, 4));
