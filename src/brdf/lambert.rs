@@ -19,13 +19,13 @@ pub(super) fn pdf(cos: f64) -> f64 {
 /// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the
 /// horizon (checked by the caller). A direction on the horizon (the rim of the disk)
 /// has zero density and is rejected. The map's direction is of unit length to a few
-/// ulp (z = √(1 − r²)), so its z is cos θi as it stands: [`pdf`]'s f64
-/// normalisation would move the density by ~1e-7 and cost a square root and a
-/// division on the path's critical chain (its `Material::pdf` still normalises, for
-/// directions from elsewhere).
+/// ulp (z = √(1 − r²)), so the warp's own density applies as it stands:
+/// `Material::pdf`'s f64 normalisation (kept there, for directions from elsewhere)
+/// would move it by ~1e-7 and cost a square root and a division on the path's
+/// critical chain.
 pub(super) fn sample(albedo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let wi = warp::square_to_cosine_hemisphere(u);
-    let pdf = wi.z * FRAC_1_PI;
+    let pdf = warp::cosine_hemisphere_pdf(wi);
     if pdf <= 0.0 {
         return None;
     }

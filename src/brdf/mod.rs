@@ -363,9 +363,9 @@ mod tests {
 
     #[test]
     fn lambert_shortcuts_give_the_bits_of_the_f64_normalisation() {
-        // pdf and sample skip normalising at f64 what only needs its sign or z;
-        // the reference below is the general path they replace. pdf keeps its
-        // bits; a sample's density is its map's own cos θi/π, within 1e-6.
+        // pdf skips normalising at f64 what only needs its sign or z, and sample
+        // takes its warp's density; the reference below is the general path they
+        // replace. pdf keeps its bits; a sample's density is within 1e-6 of it.
         let reference_pdf = |wo: Vec3, wi: Vec3| {
             upper_pair(wo, wi).map_or(0.0, |(_, wi)| finite_nonneg(lambert::pdf(wi.z) as f32))
         };
