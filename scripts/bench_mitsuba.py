@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Speed and error of gradtrace against Mitsuba 3, each at its best sampler.
 
-    python3 scripts/bench_mitsuba.py [--gradtrace BINARY] [--runs 3] [--ref-spp 1024]
-                                     [--scenes cornell,bunny] [--no-gradtrace] [--no-llvm]
+    python3 scripts/bench_mitsuba.py [--gradtrace BINARY] [--pgo [BINARY]] [--runs 3]
+                                     [--ref-spp 1024] [--scenes cornell,bunny]
+                                     [--no-gradtrace] [--no-llvm]
 
 Scenes: `cornell` = scenes/validation/cornell_256.toml (mi.cornell_box() in our
 format), 256x256, 64 spp, max depth 8; `bunny` = the Stanford bunny (diffuse, on a
@@ -12,6 +13,9 @@ depth 5. Box filter. Timed at equal spp:
     in the EXR header: light set-up, rendering and the film, as `mi.render`
     covers), median of --runs; the rest of the `render` process (scene load, BVH
     build, EXR and PNG writing) is reported separately as its scene load;
+    with --pgo, the PGO build of scripts/build_pgo.sh as a further row (built
+    by the script unless a BINARY is given), whose ratios against the Mitsuba
+    rows follow each table;
   * Mitsuba 3 `scalar_rgb` (independent sampler) and `llvm_ad_rgb` with each of
     its `independent`, `multijitter` and `ldsampler` samplers: `mi.render` wall
     time, median of --runs; scene loading (`mi.load_dict`) and, for LLVM, the
@@ -262,15 +266,15 @@ class GradtraceRenderer:
     """The `gradtrace render` process, round by round: its render time (what
     `mi.render` covers) and, apart, the rest of the process."""
 
-    def __init__(self, b: Bench, binary: str):
-        self.b, self.binary = b, binary
+    def __init__(self, b: Bench, binary: str, pgo: bool = False):
+        self.b, self.binary, self.pgo = b, binary, pgo
         self.times: list[float] = []
         self.process_times: list[float] = []
         self.errs: list[float] = []
 
     def run(self, i: int, ref: Reference) -> None:
         b = self.b
-        out = OUT / f"gradtrace_{b.key}_{i}.exr"
+        out = OUT / f"gradtrace{'_pgo' if self.pgo else ''}_{b.key}_{i}.exr"
         t0 = time.perf_counter()
         subprocess.run(
             [self.binary, "render", str(b.path), "--out", str(out), "--spp", str(b.spp), "--seed", str(100 + i), "--no-aovs", "--quiet"],
@@ -287,8 +291,8 @@ class GradtraceRenderer:
 
     def row(self) -> dict:
         return {
-            "name": "gradtrace (Owen-scrambled Sobol)",
-            "variant": "gradtrace",
+            "name": "gradtrace, PGO build (`scripts/build_pgo.sh`)" if self.pgo else "gradtrace (Owen-scrambled Sobol)",
+            "variant": "gradtrace-pgo" if self.pgo else "gradtrace",
             "sampler": "sobol",
             "spp": self.b.spp,
             "render_s": statistics.median(self.times),
@@ -302,6 +306,16 @@ class GradtraceRenderer:
         }
 
 
+def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None]]:
+    """(t·RMSE²)_a / (t·RMSE²)_b from the medians, and the same within each
+    round (the rows of a round ran back to back: its spread shows how far the
+    machine's noise moves the figure)."""
+    cost = b["render_s"] * b["rmse"] ** 2
+    ratio = a["render_s"] * a["rmse"] ** 2 / cost if cost > 0 else None
+    rounds = [t0 * e0**2 / (t * e**2) if t * e > 0 else None for t0, e0, t, e in zip(a["times_s"], a["rmses"], b["times_s"], b["rmses"])]
+    return ratio, rounds
+
+
 def add_ratios(rows: list[dict]) -> None:
     """Speed at equal spp against scalar_rgb, and the efficiency ratio against
     gradtrace: (t·RMSE²)_gradtrace / (t·RMSE²)_this."""
@@ -309,14 +323,23 @@ def add_ratios(rows: list[dict]) -> None:
     ours = next((r for r in rows if r["variant"] == "gradtrace"), None)
     for r in rows:
         r["speed_vs_scalar"] = scalar["render_s"] / r["render_s"] if scalar else None
-        cost = r["render_s"] * r["rmse"] ** 2
-        r["efficiency_ratio"] = ours["render_s"] * ours["rmse"] ** 2 / cost if ours and cost > 0 else None
-        # The same ratio within each round (the rows of a round ran back to back):
-        # its spread shows how far the machine's noise moves the figure.
-        r["efficiency_ratio_rounds"] = [
-            t0 * e0**2 / (t * e**2) if t * e > 0 else None
-            for t0, e0, t, e in zip(ours["times_s"], ours["rmses"], r["times_s"], r["rmses"])
-        ] if ours else []
+        r["efficiency_ratio"], r["efficiency_ratio_rounds"] = efficiency(ours, r) if ours else (None, [])
+
+
+def pgo_note(label: str, rows: list[dict]) -> str | None:
+    """The PGO build's efficiency ratios against the Mitsuba rows (the table's
+    ratio column is the default build's)."""
+    pgo = next((r for r in rows if r["variant"] == "gradtrace-pgo"), None)
+    if pgo is None:
+        return None
+    parts = []
+    for r in rows:
+        if r["variant"].startswith("gradtrace"):
+            continue
+        ratio, rounds = efficiency(pgo, r)
+        vals = ", ".join("—" if v is None else f"{v:.2f}" for v in rounds)
+        parts.append(f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}]")
+    return f"{label}, the PGO build's efficiency ratio (PGO / row): " + "; ".join(parts) + "."
 
 
 def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
@@ -346,6 +369,9 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
                 f"| {r['name']} | {r['render_s']:.2f} | {f(r['speed_vs_scalar'])}× | {r['rmse']:.4f} | "
                 f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['load_s'])} | {f(r['warmup_s'])} |"
             )
+        note = pgo_note(b.label, rows)
+        if note:
+            lines += ["", note]
     for note in meta["notes"]:
         lines.append(f"\n{note}")
     return "\n".join(lines)
@@ -366,6 +392,7 @@ def write_readme(table: str) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--gradtrace", help="gradtrace binary (default: cargo build --release, target/release/gradtrace)")
+    ap.add_argument("--pgo", nargs="?", const="build", metavar="BINARY", help="also time the PGO build (default: scripts/build_pgo.sh builds it)")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--ref-spp", type=int, default=1024, help="reference spp, a multiple of 16 (its noise is subtracted from the RMSE, so 1024 suffices)")
     ap.add_argument("--scenes", default="cornell,bunny", help="comma-separated: cornell, bunny")
@@ -381,12 +408,20 @@ def main() -> int:
     if not args.no_gradtrace and args.gradtrace is None and shutil.which("cargo") is None:
         ap.error("cargo not found; pass --gradtrace BINARY or --no-gradtrace")
     binary = None if args.no_gradtrace else gradtrace_binary(args.gradtrace)
+    pgo_binary = None
+    if args.pgo == "build":
+        built = subprocess.run(["bash", "scripts/build_pgo.sh"], cwd=ms.REPO, check=True, stdout=subprocess.PIPE, text=True)
+        pgo_binary = str(ms.REPO / built.stdout.strip().splitlines()[-1])
+    elif args.pgo is not None:
+        pgo_binary = args.pgo
     if not args.no_llvm and LIBLLVM is None:
         notes.append("llvm_ad_rgb skipped: no libLLVM found (apt-get install -y libllvm19).")
     scene_rows = []
     for b in benches(args.scenes.split(",")):
         ref = reference(b, args.ref_spp)
         renderers: list = [] if binary is None else [GradtraceRenderer(b, binary)]
+        if pgo_binary is not None:
+            renderers.append(GradtraceRenderer(b, pgo_binary, pgo=True))
         renderers.append(MitsubaRenderer(b, "scalar_rgb", "independent"))
         if not args.no_llvm and LIBLLVM is not None:
             renderers += [MitsubaRenderer(b, "llvm_ad_rgb", s) for s in LLVM_SAMPLERS]

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Builds gradtrace with profile-guided optimisation (PGO): an instrumented build
+# renders a training set of bundled scenes at low sample counts, and the final
+# build lays out and inlines the code by that profile. Same images bit for bit
+# (checked at the end: PGO changes no floating-point operation); faster by the
+# figures in benches/README.md ("PGO build").
+#
+#   scripts/build_pgo.sh            -> target/pgo/release/gradtrace
+#
+# The release profile, in target dirs of their own (fat LTO and one codegen
+# unit on top measured no faster). Needs rustup's llvm-tools (`llvm-profdata` of the compiler's own LLVM);
+# installed here when missing. Environment: RUSTFLAGS, as for cargo (default:
+# the `rustflags` of .cargo/config.toml, which an explicit RUSTFLAGS replaces).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+die() { echo "build_pgo.sh: $*" >&2; exit 1; }
+
+sysroot=$(rustc --print sysroot)
+host=$(rustc -vV | sed -n 's/^host: //p')
+profdata="$sysroot/lib/rustlib/$host/bin/llvm-profdata"
+# Exit status 3: no llvm-profdata to be had (no rustup, or offline).
+no_tools() { echo "build_pgo.sh: $*" >&2; exit 3; }
+if [ ! -x "$profdata" ]; then
+    command -v rustup >/dev/null || no_tools "llvm-profdata not found at $profdata and no rustup to install llvm-tools"
+    rustup component add llvm-tools >&2 || no_tools "rustup component add llvm-tools failed"
+    [ -x "$profdata" ] || no_tools "llvm-tools installed, but $profdata is missing"
+fi
+
+# RUSTFLAGS replaces .cargo/config.toml's rustflags, so they are carried over.
+if [ -z "${RUSTFLAGS+x}" ]; then
+    RUSTFLAGS=$(sed -n 's/^rustflags = \[\(.*\)\]/\1/p' .cargo/config.toml | tr -d '",')
+fi
+data=$PWD/target/pgo-profiles
+rm -rf "$data"
+mkdir -p "$data"
+
+echo "== instrumented build" >&2
+RUSTFLAGS="$RUSTFLAGS -Cprofile-generate=$data" \
+    cargo build --release --bin gradtrace --target-dir target/pgo-instrumented
+instrumented=target/pgo-instrumented/release/gradtrace
+# The build's own build scripts were instrumented too: only the renders count.
+rm -f "$data"/*.profraw
+
+echo "== training renders" >&2
+train=$(mktemp -d)
+trap 'rm -rf "$train"' EXIT
+export LLVM_PROFILE_FILE="$data/gradtrace-%p-%m.profraw"
+run() { "$instrumented" "$@" --quiet --seed 1; }
+# The reference path tracer on meshes, quads, spheres, glossy and bumped
+# materials and environment light, its AOVs and gradients, the adaptive
+# strategies and Cycles-style adaptive sampling: the paths users run.
+run render scenes/cornell.toml --spp 8 --width 128 --height 128 --out "$train/cornell.exr"
+run render scenes/bunny_env.toml --spp 16 --width 96 --height 96 --out "$train/bunny_env.exr"
+run render scenes/spheres_table.toml --spp 8 --width 96 --height 64 --out "$train/spheres.exr"
+run render scenes/glossy_teapot.toml --spp 8 --width 96 --height 72 --out "$train/teapot.exr"
+run render scenes/objects_bumpy.toml --spp 8 --width 96 --height 72 --gradients --out "$train/bumpy.exr"
+run render scenes/three_spheres_env.toml --spp 16 --width 96 --height 72 --strategy gradient --out "$train/adaptive.exr"
+run render scenes/cornell.toml --noise-threshold 0.05 --spp 64 --width 96 --height 96 --out "$train/cycles.exr"
+"$profdata" merge -o "$data/merged.profdata" "$data"/*.profraw
+unset LLVM_PROFILE_FILE
+
+echo "== optimised build" >&2
+RUSTFLAGS="$RUSTFLAGS -Cprofile-use=$data/merged.profdata" \
+    cargo build --release --bin gradtrace --target-dir target/pgo
+built=target/pgo/release/gradtrace
+
+# The profile may move code, never results: both builds must render the same bits.
+"$instrumented" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/a.exr"
+"$built" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/b.exr"
+"$built" diff "$train/a.exr" "$train/b.exr" --threshold 0 >/dev/null ||
+    die "the PGO build renders other pixels than the instrumented one"
+echo "$built"
