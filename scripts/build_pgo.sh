@@ -8,9 +8,10 @@
 #   scripts/build_pgo.sh            -> target/pgo/release/gradtrace
 #
 # The release profile, in target dirs of their own (fat LTO and one codegen
-# unit on top measured no faster). Needs rustup's llvm-tools (`llvm-profdata` of the compiler's own LLVM);
-# installed here when missing. Environment: RUSTFLAGS, as for cargo (default:
-# the `rustflags` of .cargo/config.toml, which an explicit RUSTFLAGS replaces).
+# unit on top measured no faster). Needs rustup's llvm-tools (the compiler's
+# own `llvm-profdata`), installed here when missing; exit status 3 when they
+# cannot be had. Environment: RUSTFLAGS, as for cargo (default: the x86-64
+# `rustflags` of .cargo/config.toml, which an explicit RUSTFLAGS replaces).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,7 +20,6 @@ die() { echo "build_pgo.sh: $*" >&2; exit 1; }
 sysroot=$(rustc --print sysroot)
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$sysroot/lib/rustlib/$host/bin/llvm-profdata"
-# Exit status 3: no llvm-profdata to be had (no rustup, or offline).
 no_tools() { echo "build_pgo.sh: $*" >&2; exit 3; }
 if [ ! -x "$profdata" ]; then
     command -v rustup >/dev/null || no_tools "llvm-profdata not found at $profdata and no rustup to install llvm-tools"
@@ -27,9 +27,13 @@ if [ ! -x "$profdata" ]; then
     [ -x "$profdata" ] || no_tools "llvm-tools installed, but $profdata is missing"
 fi
 
-# RUSTFLAGS replaces .cargo/config.toml's rustflags, so they are carried over.
+# RUSTFLAGS replaces .cargo/config.toml's rustflags (x86-64 only), so they are
+# carried over.
 if [ -z "${RUSTFLAGS+x}" ]; then
-    RUSTFLAGS=$(sed -n 's/^rustflags = \[\(.*\)\]/\1/p' .cargo/config.toml | tr -d '",')
+    RUSTFLAGS=""
+    if [ "$(uname -m)" = x86_64 ]; then
+        RUSTFLAGS=$(sed -n 's/^rustflags = \[\(.*\)\]/\1/p' .cargo/config.toml | tr -d '",')
+    fi
 fi
 data=$PWD/target/pgo-profiles
 rm -rf "$data"
@@ -59,14 +63,19 @@ run render scenes/three_spheres_env.toml --spp 16 --width 96 --height 72 --strat
 run render scenes/cornell.toml --noise-threshold 0.05 --spp 64 --width 96 --height 96 --out "$train/cycles.exr"
 "$profdata" merge -o "$data/merged.profdata" "$data"/*.profraw
 unset LLVM_PROFILE_FILE
+# Named by its content: cargo sees the flag, not the file, so a new profile
+# must change the flag to be built with.
+profile="$data/merged-$(sha256sum "$data/merged.profdata" | cut -c1-16).profdata"
+mv "$data/merged.profdata" "$profile"
 
 echo "== optimised build" >&2
-RUSTFLAGS="$RUSTFLAGS -Cprofile-use=$data/merged.profdata" \
+RUSTFLAGS="$RUSTFLAGS -Cprofile-use=$profile" \
     cargo build --release --bin gradtrace --target-dir target/pgo
 built=target/pgo/release/gradtrace
 
 # The profile may move code, never results: both builds must render the same bits.
-"$instrumented" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/a.exr"
+LLVM_PROFILE_FILE="$train/check.profraw" \
+    "$instrumented" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/a.exr"
 "$built" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/b.exr"
 "$built" diff "$train/a.exr" "$train/b.exr" --threshold 0 >/dev/null ||
     die "the PGO build renders other pixels than the instrumented one"
