@@ -15,16 +15,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-die() { echo "build_pgo.sh: $*" >&2; exit 1; }
+# die MESSAGE [STATUS]: status 1 unless given (3: no llvm-tools to be had).
+die() { echo "build_pgo.sh: $1" >&2; exit "${2:-1}"; }
 
 sysroot=$(rustc --print sysroot)
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$sysroot/lib/rustlib/$host/bin/llvm-profdata"
-no_tools() { echo "build_pgo.sh: $*" >&2; exit 3; }
 if [ ! -x "$profdata" ]; then
-    command -v rustup >/dev/null || no_tools "llvm-profdata not found at $profdata and no rustup to install llvm-tools"
-    rustup component add llvm-tools >&2 || no_tools "rustup component add llvm-tools failed"
-    [ -x "$profdata" ] || no_tools "llvm-tools installed, but $profdata is missing"
+    command -v rustup >/dev/null || die "llvm-profdata not found at $profdata and no rustup to install llvm-tools" 3
+    rustup component add llvm-tools >&2 || die "rustup component add llvm-tools failed" 3
+    [ -x "$profdata" ] || die "llvm-tools installed, but $profdata is missing" 3
 fi
 
 # RUSTFLAGS replaces .cargo/config.toml's rustflags (x86-64 only), so they are
@@ -74,9 +74,9 @@ RUSTFLAGS="$RUSTFLAGS -Cprofile-use=$profile" \
 built=target/pgo/release/gradtrace
 
 # The profile may move code, never results: both builds must render the same bits.
-LLVM_PROFILE_FILE="$train/check.profraw" \
-    "$instrumented" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/a.exr"
-"$built" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$train/b.exr"
+check() { "$1" render scenes/cornell.toml --spp 4 --width 64 --height 64 --seed 7 --quiet --out "$2"; }
+LLVM_PROFILE_FILE="$train/check.profraw" check "$instrumented" "$train/a.exr"
+check "$built" "$train/b.exr"
 "$built" diff "$train/a.exr" "$train/b.exr" --threshold 0 >/dev/null ||
     die "the PGO build renders other pixels than the instrumented one"
 echo "$built"
