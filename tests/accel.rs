@@ -941,3 +941,106 @@ fn ties_on_shared_edges_go_the_same_way_for_every_tree_width_and_leaf_size() {
     }
     assert!(multi * 2 > rays, "{multi} hits (all ties) of {rays} rays");
 }
+
+/// Packets of eight rays (`Accel::intersect8`, `occluded8`) give each lane the
+/// single-ray query's hit bit for bit, whatever the other lanes hold: mixed
+/// scene with spheres, restricted intervals, segments, rays starting behind
+/// t = 0, invalid rays, unused lanes, and coherent packets (eight rays from one
+/// point) as well as scattered ones; and the shared-edge ties at both widths.
+#[test]
+fn ray_packets_match_single_rays_lane_by_lane() {
+    let mut rng = Rng::new(11);
+    let (meshes, spheres) = mixed_scene(&mut rng);
+    let mut trees = vec![Accel::build(&meshes, &spheres)];
+    trees.push(Accel::build_with_preset(
+        &meshes,
+        &spheres,
+        &gradtrace::accel::BuildPreset {
+            node_width: 4,
+            ..Default::default()
+        },
+    ));
+    let (mut hits, mut occluded, mut lanes_traced) = (0, 0, 0);
+    for packet in 0..600 {
+        let coherent = packet % 2 == 0;
+        let shared_origin = rng.vec(-1.5, 1.5);
+        let rays: [Ray; 8] = std::array::from_fn(|i| {
+            let origin = if coherent {
+                shared_origin + rng.vec(-0.01, 0.01)
+            } else {
+                rng.vec(-1.5, 1.5)
+            };
+            let mut ray = Ray::new(origin, rng.unit());
+            match (packet / 2 + i) % 6 {
+                1 => {
+                    ray.t_min = rng.range(0.0, 1.0);
+                    ray.t_max = ray.t_min + rng.range(0.0, 2.0);
+                }
+                2 => {
+                    let d = rng.vec(-1.5, 1.5) - origin;
+                    ray = Ray::segment(origin, d.normalize(), d.length());
+                }
+                3 => ray.t_min = -rng.range(0.0, 0.5),
+                4 if packet % 5 == 0 => ray.dir = Vec3::new(f32::NAN, 0.0, 1.0),
+                _ => {}
+            }
+            ray
+        });
+        let active = if packet % 3 == 0 {
+            0xff
+        } else {
+            rng.next_u64() as u32 & 0xff
+        };
+        for accel in &trees {
+            let got = accel.intersect8(&rays, active);
+            let occ = accel.occluded8(&rays, active);
+            for (i, ray) in rays.iter().enumerate() {
+                if active >> i & 1 == 0 {
+                    assert!(got[i].is_none() && occ >> i & 1 == 0);
+                    continue;
+                }
+                let want = accel.intersect(ray);
+                same_hit(got[i], want, ray);
+                if let (Some(a), Some(b)) = (got[i], want) {
+                    assert_eq!(accel.hit_vertices(&a), accel.hit_vertices(&b), "{ray:?}");
+                }
+                assert_eq!(occ >> i & 1 == 1, accel.occluded(ray), "{ray:?}");
+                lanes_traced += 1;
+                hits += want.is_some() as usize;
+                occluded += (occ >> i & 1) as usize;
+            }
+        }
+    }
+    println!("{lanes_traced} lanes: {hits} hits, {occluded} occluded");
+    assert!(
+        hits > lanes_traced / 4 && hits < lanes_traced * 9 / 10,
+        "{hits}"
+    );
+    assert!(occluded > lanes_traced / 4, "{occluded}");
+
+    // Ties: every hit on the two coincident grids goes to mesh 0, in packets too.
+    let n = 16;
+    let grids = [grid(n, Vec3::ZERO), grid(n, Vec3::ZERO)];
+    for width in [4, 8] {
+        let preset = gradtrace::accel::BuildPreset {
+            node_width: width,
+            ..Default::default()
+        };
+        let accel = Accel::build_with_preset(&grids, &[], &preset);
+        for j in 0..n {
+            let rays: [Ray; 8] = std::array::from_fn(|i| {
+                let target = Vec3::new(i as f32 + 0.5 * (j % 2) as f32, 0.0, j as f32) / n as f32;
+                let origin = target + Vec3::new(0.3, 1.0, -0.2);
+                Ray::new(origin, (target - origin).normalize())
+            });
+            let got = accel.intersect8(&rays, 0xff);
+            for (i, ray) in rays.iter().enumerate() {
+                assert_eq!(got[i], accel.intersect(ray), "{ray:?}");
+                assert!(matches!(
+                    got[i].map(|h| h.prim),
+                    Some(PrimRef::Triangle { mesh: 0, .. })
+                ));
+            }
+        }
+    }
+}

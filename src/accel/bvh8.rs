@@ -195,3 +195,166 @@ impl Bvh8 {
         }
     }
 }
+
+/// Eight rays for [`Bvh8::traverse_packet`], one per lane, as each lane's
+/// [`BoxRay`] would hold them: origins, reciprocal directions, the lanes whose
+/// direction is negative per axis (all bits set: their near plane is the
+/// maximum), and the interval's start.
+#[derive(Default)]
+pub(super) struct BoxRays8 {
+    pub(super) org: [[f32; 8]; 3],
+    pub(super) inv: [[f32; 8]; 3],
+    pub(super) negative: [[f32; 8]; 3],
+    pub(super) t_lo: [f32; 8],
+}
+
+/// A pending subtree of a packet traversal: its lanes and the nearest entry
+/// distance among them.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PacketEntry {
+    node: u32,
+    lanes: u32,
+    t: f32,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Bvh8 {
+    /// [`Bvh8::traverse`] for eight rays at once (a packet): each node's
+    /// children are tested against all the packet's lanes (one child at a
+    /// time, one lane per ray, each lane the single-ray test's very operations),
+    /// and a child is visited by the lanes that hit it. `hi` holds each lane's
+    /// widened far distance; `leaf(first, count, lanes, hi)` tests a leaf for
+    /// `lanes`, may lower their `hi`, and returns the lanes still active
+    /// (any-hit: those not yet occluded). Nearest-first by the nearest lane's
+    /// entry distance when `SORTED`.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 ([`supported`]).
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn traverse_packet<const SORTED: bool>(
+        &self,
+        rays: &BoxRays8,
+        hi: &mut [f32; 8],
+        mut active: u32,
+        stack: &mut [PacketEntry],
+        mut leaf: impl FnMut(usize, usize, u32, &mut [f32; 8]) -> u32,
+    ) {
+        use std::arch::x86_64::*;
+        let load = |a: &[f32; 8]| _mm256_loadu_ps(a.as_ptr());
+        let (org, inv, neg) = (
+            rays.org.map(|a| load(&a)),
+            rays.inv.map(|a| load(&a)),
+            rays.negative.map(|a| load(&a)),
+        );
+        let t_lo = load(&rays.t_lo);
+        let widen = _mm256_set1_ps(WIDEN);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let mut hi_w = load(hi);
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        let mut lanes = active;
+        loop {
+            while cur & LEAF_BIT == 0 {
+                let node = &self.nodes[cur as usize];
+                let b = &node.bounds;
+                let mut kids = [PacketEntry::default(); 8];
+                let mut k = 0;
+                for c in 0..8 {
+                    let child = node.children[c];
+                    if child == EMPTY {
+                        break;
+                    }
+                    // Each lane: the single-ray slab test (`traverse`), its
+                    // near plane picked by the lane's direction sign.
+                    let slab = |a: usize| {
+                        let t0 = _mm256_mul_ps(
+                            _mm256_sub_ps(_mm256_set1_ps(b[2 * a][c]), org[a]),
+                            inv[a],
+                        );
+                        let t1 = _mm256_mul_ps(
+                            _mm256_sub_ps(_mm256_set1_ps(b[2 * a + 1][c]), org[a]),
+                            inv[a],
+                        );
+                        (
+                            _mm256_blendv_ps(t0, t1, neg[a]),
+                            _mm256_blendv_ps(t1, t0, neg[a]),
+                        )
+                    };
+                    let ((tnx, tfx), (tny, tfy), (tnz, tfz)) = (slab(0), slab(1), slab(2));
+                    let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
+                    let t_far = _mm256_min_ps(
+                        _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz), widen),
+                        hi_w,
+                    );
+                    let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far);
+                    let m = _mm256_movemask_ps(hit) as u32 & lanes;
+                    if m == 0 {
+                        continue;
+                    }
+                    let t = if SORTED {
+                        let mut ts = [0f32; 8];
+                        _mm256_storeu_ps(ts.as_mut_ptr(), _mm256_blendv_ps(inf, t_near, hit));
+                        let mut t = f32::INFINITY;
+                        for (l, &x) in ts.iter().enumerate() {
+                            if m & (1 << l) != 0 {
+                                t = t.min(x);
+                            }
+                        }
+                        t
+                    } else {
+                        0.0
+                    };
+                    kids[k] = PacketEntry {
+                        node: child,
+                        lanes: m,
+                        t,
+                    };
+                    k += 1;
+                }
+                if k == 0 {
+                    cur = EMPTY;
+                    break;
+                }
+                if SORTED {
+                    // Farthest first (stable), so the nearest is visited next.
+                    for i in 1..k {
+                        let e = kids[i];
+                        let mut j = i;
+                        while j > 0 && kids[j - 1].t < e.t {
+                            kids[j] = kids[j - 1];
+                            j -= 1;
+                        }
+                        kids[j] = e;
+                    }
+                }
+                stack[sp..sp + k - 1].copy_from_slice(&kids[..k - 1]);
+                sp += k - 1;
+                cur = kids[k - 1].node;
+                lanes = kids[k - 1].lanes;
+            }
+            if cur != EMPTY {
+                let (first, count) = decode_leaf(cur);
+                active &= leaf(first, count, lanes, hi);
+                if active == 0 {
+                    return;
+                }
+                hi_w = load(hi);
+            }
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let e = stack[sp];
+                // The lanes still active whose far distance reaches the
+                // entry's nearest lane.
+                let reach = _mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_set1_ps(e.t), hi_w);
+                lanes = e.lanes & active & _mm256_movemask_ps(reach) as u32;
+                if lanes != 0 {
+                    cur = e.node;
+                    break;
+                }
+            }
+        }
+    }
+}
