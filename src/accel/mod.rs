@@ -33,7 +33,6 @@ mod build;
 mod bvh4;
 mod bvh8;
 mod offset;
-mod packet;
 mod primitive;
 
 #[doc(hidden)]
@@ -307,14 +306,6 @@ impl Tree {
 /// their sign.
 #[inline(always)]
 fn node_ray(ray: &Ray) -> (BoxRay, f32) {
-    let (origin, dir, t_lo, back_off) = node_ray_parts(ray);
-    (BoxRay::new(origin, dir, t_lo), back_off)
-}
-
-/// [`node_ray`]'s (origin, clamped direction, t_lo, back-off), before the
-/// reciprocals: the packet set-up (`packet.rs`) lays them out per lane.
-#[inline(always)]
-fn node_ray_parts(ray: &Ray) -> (Vec3, Vec3, f32, f32) {
     // |d| is clamped to 1e-20 (inverse ±1e20: finite, no NaN from 0·∞), with
     // the sign kept (−0.0 counts as positive, like `d < 0.0` in the node test).
     // Lane-wise selects rather than a branch per component.
@@ -326,10 +317,11 @@ fn node_ray_parts(ray: &Ray) -> (Vec3, Vec3, f32, f32) {
     );
     let dir = Vec3::select(d.abs().cmplt(Vec3::splat(1.0e-20)), tiny, d);
     if ray.t_min >= 0.0 {
-        return (ray.origin, dir, ray.t_min, 0.0);
+        return (BoxRay::new(ray.origin, dir, ray.t_min), 0.0);
     }
     let back_off = 2.0e-4 + ray.origin.abs().max_element() * (1.0 / 262_144.0) - ray.t_min;
-    (ray.origin - dir * back_off, dir, 0.0, back_off)
+    let origin = ray.origin - dir * back_off;
+    (BoxRay::new(origin, dir, 0.0), back_off)
 }
 
 /// The acceleration structure over all shapes of a scene.

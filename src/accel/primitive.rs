@@ -181,26 +181,18 @@ impl<F: MaskLanes> LaneTest<F> {
     /// scalar test must decide (its double-precision path).
     #[inline(always)]
     fn decide(&self, t_min: f32, t_max: f32) -> (u32, u32) {
-        let forward = if t_min >= 0.0 { u32::MAX } else { 0 };
-        self.decide_lanes(F::from(t_min), F::from(t_max), forward)
-    }
-
-    /// [`Self::decide`] with an interval per lane (rays in lanes, `avx::Rays8`);
-    /// `forward`: the lanes whose ray may only go forward (t_min ≥ 0).
-    #[inline(always)]
-    fn decide_lanes(&self, t_min: F, t_max: F, forward: u32) -> (u32, u32) {
         let [u, v, w] = self.e;
         let zero = F::from(0.0);
         let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
         let negative = u.lt(zero) | v.lt(zero) | w.lt(zero);
         let positive = u.gt(zero) | v.gt(zero) | w.gt(zero);
-        let in_range = self.t.ge(t_min) & self.t.le(t_max);
+        let in_range = self.t.ge(F::from(t_min)) & self.t.le(F::from(t_max));
         // `ne` is true for a NaN det, as the scalar test's `det == 0` is false.
         let mut hits =
             (in_range & self.det.ne(zero)).bits() & !(negative & positive).bits() & !on_edge;
         // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
-        if hits & forward != 0 {
-            hits &= !(self.t.le(self.t_error_bound()).bits() & forward);
+        if hits != 0 && t_min >= 0.0 {
+            hits &= !self.t.le(self.t_error_bound()).bits();
         }
         (hits, on_edge)
     }
@@ -380,13 +372,8 @@ impl Tri4 {
     /// The triangle of `lane` (< 4), as [`Tri4::new`] took it.
     #[inline(always)]
     pub(crate) fn lane(&self, lane: usize) -> [Vec3; 3] {
-        self.rows(lane).map(Vec3::from_array)
-    }
-
-    /// [`Tri4::lane`] as coordinate rows.
-    #[inline(always)]
-    pub(crate) fn rows(&self, lane: usize) -> [[f32; 3]; 3] {
-        [0, 1, 2].map(|k| [0, 1, 2].map(|axis| self.v[k][axis].as_array()[lane]))
+        let at = |k: usize, axis: usize| self.v[k][axis].as_array()[lane];
+        [0, 1, 2].map(|k| Vec3::new(at(k, 0), at(k, 1), at(k, 2)))
     }
 }
 
@@ -603,93 +590,6 @@ pub(crate) mod avx {
             t: lt.t.to_array(),
             b1,
             b2,
-        }
-    }
-
-    /// Eight rays in the lanes of one watertight test against one triangle at
-    /// a time (a ray packet, `Accel::intersect8`): each lane runs
-    /// [`WatertightRay::intersect`]'s operations in its order on its own ray,
-    /// so its bits are the scalar test's. A lane's permutation picks the
-    /// triangle's rows by blends, its origin is stored permuted.
-    pub(crate) struct Rays8 {
-        /// The origin along (kx, ky, kz) of each lane's ray.
-        org: [F8; 3],
-        /// Lanes whose axis i is y (`is_y[i]`) or z (`is_z[i]`).
-        is_y: [F8; 3],
-        is_z: [F8; 3],
-        shear: [F8; 3],
-    }
-
-    impl Rays8 {
-        /// The lanes' rays (all eight lanes must hold one; an unused lane may
-        /// repeat another's).
-        ///
-        /// # Safety
-        /// As [`intersect8`].
-        #[inline(always)]
-        pub(crate) unsafe fn new(wr: &[WatertightRay; 8]) -> Self {
-            let (mut org, mut is_y, mut is_z, mut shear) = (
-                [[0f32; 8]; 3],
-                [[0f32; 8]; 3],
-                [[0f32; 8]; 3],
-                [[0f32; 8]; 3],
-            );
-            let all = f32::from_bits(u32::MAX);
-            for (l, w) in wr.iter().enumerate() {
-                let o = w.org.to_array();
-                for i in 0..3 {
-                    org[i][l] = o[w.axes[i]];
-                    is_y[i][l] = if w.axes[i] == 1 { all } else { 0.0 };
-                    is_z[i][l] = if w.axes[i] == 2 { all } else { 0.0 };
-                }
-                shear[0][l] = w.sx;
-                shear[1][l] = w.sy;
-                shear[2][l] = w.sz;
-            }
-            let load = |a: [[f32; 8]; 3]| a.map(|r| F8(_mm256_loadu_ps(r.as_ptr())));
-            Self {
-                org: load(org),
-                is_y: load(is_y),
-                is_z: load(is_z),
-                shear: load(shear),
-            }
-        }
-
-        /// The triangle `v` against the eight rays, each in its own interval
-        /// (`forward`: the lanes with t_min ≥ 0). Barycentrics only for
-        /// `ANY` false and some lane hit.
-        ///
-        /// # Safety
-        /// As [`intersect8`].
-        #[inline(always)]
-        pub(crate) unsafe fn intersect<const ANY: bool>(
-            &self,
-            v: &[[f32; 3]; 3],
-            t_min: &[f32; 8],
-            t_max: &[f32; 8],
-            forward: u32,
-        ) -> Hits8 {
-            let row = |k: usize, i: usize| {
-                let [x, y, z] = v[k].map(|c| _mm256_set1_ps(c));
-                let xy = _mm256_blendv_ps(x, y, self.is_y[i].0);
-                F8(_mm256_blendv_ps(xy, z, self.is_z[i].0))
-            };
-            let lt = lane_test(|k, i| row(k, i) - self.org[i], self.shear);
-            let load = |a: &[f32; 8]| F8(_mm256_loadu_ps(a.as_ptr()));
-            let (hits, on_edge) = lt.decide_lanes(load(t_min), load(t_max), forward);
-            let (b1, b2) = if ANY || hits == 0 {
-                ([0.0; 8], [0.0; 8])
-            } else {
-                let (b1, b2) = lt.barycentrics();
-                (b1.to_array(), b2.to_array())
-            };
-            Hits8 {
-                hits,
-                fallback: on_edge,
-                t: lt.t.to_array(),
-                b1,
-                b2,
-            }
         }
     }
 }

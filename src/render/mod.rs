@@ -11,7 +11,7 @@ pub mod point;
 
 use crate::accel::Accel;
 use crate::math::sampler::PixelSampler;
-use crate::math::{finite_or_zero, luminance, Ray, Vec2, Vec3};
+use crate::math::{finite_or_zero, luminance, Vec2, Vec3};
 use crate::scene::{Integrator, Scene};
 use gradients::geometry::unit_direction_derivatives;
 use gradients::{GradientSample, GradientSum};
@@ -618,34 +618,20 @@ impl Film {
                         let pixel = y * w + x;
                         let i = (y - t.y0) * tw + x - t.x0;
                         let acc = &mut t.pixels[i];
-                        let mut add = |s: u32, r: SampleResult| {
+                        for s in plan(pixel) {
+                            let r = camera_sample(
+                                &ctx.tracer,
+                                ctx.camera,
+                                pixel as u32,
+                                s,
+                                ctx.seed,
+                                ctx.gradients,
+                                Vec2::ZERO,
+                            );
                             acc.add(&r, s, s == ctx.first);
                             if let (Some(g), Some(sum)) = (&r.gradient, t.gradients.get_mut(i)) {
                                 sum.add(g);
                             }
-                        };
-                        if ctx.gradients {
-                            for s in plan(pixel) {
-                                let r = camera_sample(
-                                    &ctx.tracer,
-                                    ctx.camera,
-                                    pixel as u32,
-                                    s,
-                                    ctx.seed,
-                                    true,
-                                    Vec2::ZERO,
-                                );
-                                add(s, r);
-                            }
-                        } else {
-                            camera_samples(
-                                &ctx.tracer,
-                                ctx.camera,
-                                pixel as u32,
-                                plan(pixel),
-                                ctx.seed,
-                                &mut add,
-                            );
                         }
                     }
                 }
@@ -745,41 +731,6 @@ pub fn camera_sample(
     let w = camera.width;
     let corner = Vec2::new((pixel % w) as f32, (pixel / w) as f32) + shift;
     camera_sample_at(tracer, camera, corner, pixel, sample, seed, gradients)
-}
-
-/// The camera samples `samples` of `pixel` without gradients, passed to
-/// `out(sample, result)` in order: [`camera_sample`]'s results bit for bit,
-/// with each run of eight camera rays traced as one packet
-/// ([`Accel::intersect8`]: a pixel's camera rays are coherent, and a packet
-/// tests each node and triangle once for all of them).
-pub fn camera_samples(
-    tracer: &PathTracer,
-    camera: &crate::scene::Camera,
-    pixel: u32,
-    samples: Range<u32>,
-    seed: u32,
-    out: &mut impl FnMut(u32, SampleResult),
-) {
-    let w = camera.width;
-    let corner = Vec2::new((pixel % w) as f32, (pixel / w) as f32);
-    let mut first = samples.start;
-    while first < samples.end {
-        let n = (samples.end - first).min(8);
-        let mut samplers: [PixelSampler; 8] =
-            std::array::from_fn(|k| PixelSampler::new(pixel, first + k as u32, seed));
-        let rays: [Ray; 8] = std::array::from_fn(|k| {
-            let jitter = samplers[k].next_2d();
-            camera.generate_ray(corner + jitter)
-        });
-        let hits = tracer.accel.intersect8(&rays, (1 << n) - 1);
-        for k in 0..n as usize {
-            out(
-                first + k as u32,
-                tracer.li_from(rays[k], hits[k], &mut samplers[k], None),
-            );
-        }
-        first += n;
-    }
 }
 
 /// One camera sample jittered over the unit square at `corner` (image

@@ -9,7 +9,7 @@ use super::gradients::visibility::{trace_line_and_ring, Domain, LinePoint};
 use super::gradients::{GradientSample, SV};
 use super::interaction::{interaction, Interaction};
 use super::lights::{LightSet, LineLight};
-use crate::accel::{Accel, Hit};
+use crate::accel::Accel;
 use crate::brdf::{BsdfSample, Material};
 use crate::math::sampler::PixelSampler;
 use crate::math::{finite_or_zero, Frame, Ray, Vec2, Vec3};
@@ -146,16 +146,9 @@ impl PathTracer<'_> {
     /// computed from the same light sample and shadow ray as the radiance, plus the
     /// curvature/bump and camera terms of the indirect light from the path's own
     /// continuation (`GradientSample::indirect`).
-    pub fn li(&self, ray: Ray, sampler: &mut PixelSampler, dd: Option<[Vec3; 2]>) -> SampleResult {
-        self.li_from(ray, self.accel.intersect(&ray), sampler, dd)
-    }
-
-    /// [`Self::li`] for a camera ray whose closest hit `first` is already known
-    /// (a pixel's camera rays traced as one packet, `render::camera_samples`).
-    pub fn li_from(
+    pub fn li(
         &self,
         mut ray: Ray,
-        first: Option<Hit>,
         sampler: &mut PixelSampler,
         dd: Option<[Vec3; 2]>,
     ) -> SampleResult {
@@ -173,12 +166,7 @@ impl PathTracer<'_> {
         for depth in 1..=self.max_depth {
             sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
             out.rays += 1;
-            let hit = if depth == 1 {
-                first
-            } else {
-                self.accel.intersect(&ray)
-            };
-            let Some(hit) = hit else {
+            let Some(hit) = self.accel.intersect(&ray) else {
                 if let (Some(env), Some(dd), 1) = (&scene.environment, dd, depth) {
                     out.gradient = Some(escaped_ray_gradient(env, ray.dir, dd));
                 }
