@@ -1,12 +1,15 @@
 //! Acceleration structure benchmarks on the Stanford bunny (69k triangles):
 //! BVH build time, and closest-hit / shadow-ray (any-hit) throughput for
-//! coherent (camera grid) and incoherent (random) rays. Criterion reports the
-//! throughput in elements/s, i.e. rays/s.
+//! coherent (camera grid) and incoherent (random) rays; and on the Cornell box
+//! of `bench_mitsuba` (36 triangles) for a path tracer's bounce rays, from
+//! random points inside the box in random directions (`*/cornell`). Criterion
+//! reports the throughput in elements/s, i.e. rays/s.
 //!
 //! Run: `cargo bench --bench accel -- --warm-up-time 1 --measurement-time 3`
 //!
 //! With `GRADTRACE_ACCEL_RAYS=FILE` set, the bunny's triangles and both ray sets
-//! (with our hit counts) are also written to FILE, so that
+//! (with our hit counts) are also written to FILE, and the Cornell box's to
+//! FILE with `_cornell` before its extension, so that
 //! `scripts/bench_embree.py` traces Embree on exactly the same rays. With
 //! `GRADTRACE_ACCEL_PRESETS=1`, obvhs build presets are compared first by
 //! load-independent figures: SAH cost, node and primitive tests per ray. With
@@ -77,6 +80,41 @@ impl Rng {
 }
 
 const RES: usize = 256;
+
+/// `scenes/validation/cornell_256.toml` (Mitsuba's `cornell_box()`), its
+/// shapes merged into one mesh.
+fn load_cornell() -> Mesh {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/validation/cornell_256.toml"
+    );
+    let scene = gradtrace::scene::load(std::path::Path::new(path))
+        .expect("scenes/validation/cornell_256.toml loads");
+    let mut mesh = Mesh {
+        name: "cornell".into(),
+        ..Default::default()
+    };
+    for m in &scene.meshes {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(&m.positions);
+        mesh.triangles
+            .extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
+    }
+    mesh
+}
+
+/// Random points inside the box (its bounds shrunk by 1 % on each side) in
+/// random directions: what a path tracer's bounces trace in a closed room.
+fn interior_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
+    let mut rng = Rng(0xD1B5_4A32_D192_ED03);
+    let (lo, hi) = (lo + (hi - lo) * 0.01, hi - (hi - lo) * 0.01);
+    (0..RES * RES)
+        .map(|_| {
+            let t = Vec3::new(rng.f32(), rng.f32(), rng.f32());
+            Ray::new(lo + (hi - lo) * t, rng.unit())
+        })
+        .collect()
+}
 
 /// A pinhole camera's primary rays over a 256×256 grid, framing the bunny.
 fn coherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
@@ -189,21 +227,35 @@ fn bench_accel(c: &mut Criterion) {
     if std::env::var_os("GRADTRACE_ACCEL_PRESETS").is_some() {
         compare_presets(&meshes, &sets);
     }
+    let cornell = [load_cornell()];
+    let cornell_accel = Accel::build_with_preset(&cornell, &[], &preset);
+    let (lo, hi) = cornell_accel.bounds().expect("the box is not empty");
+    let cornell_sets = [("cornell", interior_rays(lo, hi))];
     if let Some(path) = std::env::var_os("GRADTRACE_ACCEL_RAYS") {
-        write_rays(std::path::Path::new(&path), &meshes[0], &accel, &sets)
-            .expect("GRADTRACE_ACCEL_RAYS is writable");
+        let path = std::path::PathBuf::from(path);
+        write_rays(&path, &meshes[0], &accel, &sets).expect("GRADTRACE_ACCEL_RAYS is writable");
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        let ext = path
+            .extension()
+            .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+        let cornell_path = path.with_file_name(format!("{stem}_cornell{ext}"));
+        write_rays(&cornell_path, &cornell[0], &cornell_accel, &cornell_sets)
+            .expect("GRADTRACE_ACCEL_RAYS's folder is writable");
     }
 
+    let scenes = [(&accel, &sets[..]), (&cornell_accel, &cornell_sets[..])];
     let mut g = c.benchmark_group("closest_hit");
-    for (name, rays) in &sets {
-        g.throughput(Throughput::Elements(rays.len() as u64));
-        g.bench_function(*name, |b| {
-            b.iter(|| {
-                rays.iter()
-                    .filter(|r| accel.intersect(black_box(r)).is_some())
-                    .count()
-            })
-        });
+    for (accel, sets) in scenes {
+        for (name, rays) in sets {
+            g.throughput(Throughput::Elements(rays.len() as u64));
+            g.bench_function(*name, |b| {
+                b.iter(|| {
+                    rays.iter()
+                        .filter(|r| accel.intersect(black_box(r)).is_some())
+                        .count()
+                })
+            });
+        }
     }
     g.finish();
 
@@ -248,11 +300,13 @@ fn bench_accel(c: &mut Criterion) {
     g.finish();
 
     let mut g = c.benchmark_group("shadow");
-    for (name, rays) in &sets {
-        g.throughput(Throughput::Elements(rays.len() as u64));
-        g.bench_function(*name, |b| {
-            b.iter(|| rays.iter().filter(|r| accel.occluded(black_box(r))).count())
-        });
+    for (accel, sets) in scenes {
+        for (name, rays) in sets {
+            g.throughput(Throughput::Elements(rays.len() as u64));
+            g.bench_function(*name, |b| {
+                b.iter(|| rays.iter().filter(|r| accel.occluded(black_box(r))).count())
+            });
+        }
     }
     g.finish();
 }

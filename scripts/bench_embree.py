@@ -1,22 +1,27 @@
 #!/usr/bin/env python3
-"""Ray throughput of gradtrace's BVH against Embree 4 on the same rays.
+"""Ray throughput of gradtrace's BVH against Embree 4 and Mitsuba 3 on the same rays.
 
-    python3 scripts/bench_embree.py [--rounds 5] [--runs 15] [--measurement-time 2] [--no-cargo]
+    python3 scripts/bench_embree.py [--rounds 5] [--runs 15] [--measurement-time 2] [--no-cargo] [--no-mitsuba]
 
 Runs `cargo bench --bench accel` (closest_hit/*, shadow/*, obvhs_baseline_*) with
 GRADTRACE_ACCEL_RAYS set, so that the bench writes the Stanford bunny and its
 exact ray sets (coherent camera grid, incoherent random rays; the bench's own
-xorshift64* generators) to out/bench/accel_rays.bin; then traces the same rays
-with Embree 4 (PyPI `embreex`: one rtcIntersect1 / rtcOccluded1 per ray, in a C
-loop, on the calling thread) back to back, checks that both find the same
-number of hits, and prints the ratios. Writes out/bench/bench_embree.json and the
-table between the markers in benches/README.md.
+xorshift64* generators) to out/bench/accel_rays.bin, and the Cornell box of
+bench_mitsuba with a path tracer's bounce rays (random points inside the box,
+random directions) to out/bench/accel_rays_cornell.bin; then traces the same
+rays with Embree 4 (PyPI `embreex`: one rtcIntersect1 / rtcOccluded1 per ray, in
+a C loop, on the calling thread) and with Mitsuba 3's `llvm_ad_rgb` variant
+(`ray_intersect_preliminary` / `ray_test` on the whole set as one wavefront, as
+its path tracer traces them, one Dr.Jit thread, in a worker process of its own;
+skipped without libLLVM 19) back to back, checks the hit counts, and prints the
+ratios. Writes out/bench/bench_embree.json and the table between the markers in
+benches/README.md.
 
-gradtrace: criterion's median time per pass over the ray set. Embree: median of
-the passes (`EmbreeScene.run` over all rays) in the same windows as criterion's,
+gradtrace: criterion's median time per pass over the ray set. Embree and
+Mitsuba: median of the passes over all rays in the same windows as criterion's,
 1 s of warm-up then --measurement-time seconds (at least --runs passes); the
-first pass, which commits the scene, i.e. builds Embree's BVH, is timed
-separately. One thread each. On a
+first pass (Embree: committing the scene, i.e. building its BVH; Mitsuba: also
+JIT-compiling the kernel) is timed separately. One thread each. On a
 shared machine the load drifts (seen here: the same binary 25 % slower from one
 minute to the next), so after one full `cargo bench` (which builds, dumps the
 rays and times obvhs' own traversal) each bench is timed in --rounds rounds,
@@ -44,11 +49,11 @@ import mitsuba_scene as ms  # noqa: E402
 ms.ensure_venv()
 
 import numpy as np  # noqa: E402
-from embreex import rtcore_scene as rtcs  # noqa: E402
-from embreex.mesh_construction import TriangleMesh  # noqa: E402
 
 OUT = ms.REPO / "out" / "bench"
 RAYS = OUT / "accel_rays.bin"
+# (scene, ray dump): the bench writes the second next to the first.
+DUMPS = [("Stanford bunny", RAYS), ("Cornell box", OUT / "accel_rays_cornell.bin")]
 CRITERION = ms.REPO / "target" / "criterion"
 README = ms.REPO / "benches" / "README.md"
 BEGIN, END = "<!-- bench_embree:begin -->", "<!-- bench_embree:end -->"
@@ -139,53 +144,91 @@ def time_embree(scene, s: dict, query: str, runs: int, measurement_time: float) 
     return {"median_s": statistics.median(times), "first_s": first_s, "hits": hits}
 
 
+def time_mitsuba(dump: Path, set_name: str, query: str, runs: int, measurement_time: float) -> dict | None:
+    """`time_embree` for Mitsuba's `llvm_ad_rgb`, in a worker process (its own
+    Embree must not meet embreex's in one process); None without libLLVM."""
+    if ms.find_libllvm() is None:
+        return None
+    cmd = [sys.executable, __file__, "--mitsuba-worker", str(dump), set_name, query, str(runs), str(measurement_time)]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def mitsuba_worker(dump: str, set_name: str, query: str, runs: int, measurement_time: float) -> None:
+    """Times one query of one ray set in Mitsuba and prints the result as JSON."""
+    os.environ.setdefault("DRJIT_LIBLLVM_PATH", ms.find_libllvm() or "")
+    import drjit as dr
+    import mitsuba as mi
+
+    dr.set_thread_count(1)
+    mi.set_variant("llvm_ad_rgb")
+    verts, tris, sets = read_dump(Path(dump))
+    s = next(s for s in sets if s["name"] == set_name)
+    mesh = mi.Mesh("dump", vertex_count=len(verts), face_count=len(tris), has_vertex_normals=False, has_vertex_texcoords=False)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(verts.astype(np.float32).ravel())
+    params["faces"] = mi.UInt(tris.astype(np.uint32).ravel())
+    params.update()
+    scene = mi.load_dict({"type": "scene", "mesh": mesh})
+    o, d = s["origins"].astype(np.float32), s["dirs"].astype(np.float32)
+    ray = mi.Ray3f(mi.Point3f(o[:, 0], o[:, 1], o[:, 2]), mi.Vector3f(d[:, 0], d[:, 1], d[:, 2]))
+    dr.eval(ray)
+
+    def run() -> int:
+        if query == "INTERSECT":
+            hit = scene.ray_intersect_preliminary(ray).is_valid()
+        else:
+            hit = scene.ray_test(ray)
+        n = dr.count(hit)
+        dr.eval(n)
+        dr.sync_thread()
+        return int(n[0])
+
+    t0 = time.perf_counter()
+    hits = run()
+    first_s = time.perf_counter() - t0
+    start = time.perf_counter()
+    while time.perf_counter() - start < 1.0:
+        run()
+    times = []
+    start = time.perf_counter()
+    while len(times) < runs or time.perf_counter() - start < measurement_time:
+        t0 = time.perf_counter()
+        assert run() == hits
+        times.append(time.perf_counter() - t0)
+    print(json.dumps({"median_s": statistics.median(times), "first_s": first_s, "hits": hits}))
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rounds", type=int, default=5, help="rounds of back-to-back timings per bench")
     ap.add_argument("--runs", type=int, default=15, help="at least this many Embree passes per bench and round")
     ap.add_argument("--measurement-time", type=float, default=2.0, help="criterion seconds per bench")
     ap.add_argument("--no-cargo", action="store_true", help="skip the full cargo bench run, reusing its ray dump and obvhs figures")
+    ap.add_argument("--no-mitsuba", action="store_true", help="time Embree only")
+    ap.add_argument("--mitsuba-worker", nargs=5, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.mitsuba_worker:
+        dump, set_name, query, runs, measurement_time = args.mitsuba_worker
+        mitsuba_worker(dump, set_name, query, int(runs), float(measurement_time))
+        return 0
+    from embreex import rtcore_scene as rtcs
+    from embreex.mesh_construction import TriangleMesh
+
     if not args.no_cargo:
         run_ours(args.measurement_time)
     exe = bench_executable()
-    verts, tris, sets = read_dump(RAYS)
-    scene = rtcs.EmbreeScene()
-    TriangleMesh(scene, verts.astype(np.float32), tris.astype(np.int32))
-    rows = []
-    for group, query in QUERIES:
-        for s in sets:
-            bench, n = f"{group}/{s['name']}", len(s["origins"])
-            per_round = []
-            for k in range(args.rounds):
-                if k % 2 == 0:
-                    ours_s = time_ours(exe, bench, args.measurement_time)
-                    e = time_embree(scene, s, query, args.runs, args.measurement_time)
-                else:
-                    e = time_embree(scene, s, query, args.runs, args.measurement_time)
-                    ours_s = time_ours(exe, bench, args.measurement_time)
-                per_round.append((ours_s, e))
-                print(f"{bench} round {k + 1}: {e['median_s'] / ours_s:.2f}x", flush=True)
-            ratios = [e["median_s"] / ours for ours, e in per_round]
-            row = {
-                "bench": bench,
-                "rays": n,
-                "gradtrace_mrays_s": statistics.median(n / ours * 1e-6 for ours, _ in per_round),
-                "embree_mrays_s": statistics.median(n / e["median_s"] * 1e-6 for _, e in per_round),
-                "ratio": statistics.median(ratios),
-                "ratios_per_round": ratios,
-                "hits_gradtrace": s["closest_hits"] if query == "INTERSECT" else s["any_hits"],
-                "hits_embree": per_round[0][1]["hits"],
-                "embree_first_pass_s": per_round[0][1]["first_s"],
-            }
-            if group == "closest_hit":
-                try:
-                    row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
-                except FileNotFoundError:
-                    pass
-            rows.append(row)
+    rows, triangles = [], {}
+    for scene_name, dump in DUMPS:
+        verts, tris, sets = read_dump(dump)
+        triangles[scene_name] = len(tris)
+        scene = rtcs.EmbreeScene()
+        TriangleMesh(scene, verts.astype(np.float32), tris.astype(np.int32))
+        for group, query in QUERIES:
+            for s in sets:
+                rows.append(bench_row(args, exe, scene, dump, s, group, query))
     meta = {
-        "triangles": len(tris),
+        "triangles": triangles,
         "rounds": args.rounds,
         "runs": args.runs,
         "measurement_time": args.measurement_time,
@@ -203,6 +246,53 @@ def main() -> int:
     return 0
 
 
+def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str) -> dict:
+    """One bench id timed in --rounds rounds: gradtrace, Embree and Mitsuba back
+    to back, the order turning round by round."""
+    bench, n = f"{group}/{s['name']}", len(s["origins"])
+    timers = {
+        "ours": lambda: time_ours(exe, bench, args.measurement_time),
+        "embree": lambda: time_embree(scene, s, query, args.runs, args.measurement_time),
+    }
+    if not args.no_mitsuba:
+        timers["mitsuba"] = lambda: time_mitsuba(dump, s["name"], query, args.runs, args.measurement_time)
+    rounds = []
+    for k in range(args.rounds):
+        order = list(timers)
+        order = order[k % len(order) :] + order[: k % len(order)]
+        got = {name: timers[name]() for name in order}
+        rounds.append(got)
+        print(f"{bench} round {k + 1}: Embree {got['embree']['median_s'] / got['ours']:.2f}x"
+              + (f", Mitsuba {got['mitsuba']['median_s'] / got['ours']:.2f}x" if got.get("mitsuba") else ""), flush=True)
+    ratios = [r["embree"]["median_s"] / r["ours"] for r in rounds]
+    row = {
+        "bench": bench,
+        "rays": n,
+        "gradtrace_mrays_s": statistics.median(n / r["ours"] * 1e-6 for r in rounds),
+        "embree_mrays_s": statistics.median(n / r["embree"]["median_s"] * 1e-6 for r in rounds),
+        "ratio": statistics.median(ratios),
+        "ratios_per_round": ratios,
+        "hits_gradtrace": s["closest_hits"] if query == "INTERSECT" else s["any_hits"],
+        "hits_embree": rounds[0]["embree"]["hits"],
+        "embree_first_pass_s": rounds[0]["embree"]["first_s"],
+    }
+    if all(r.get("mitsuba") for r in rounds):
+        m_ratios = [r["mitsuba"]["median_s"] / r["ours"] for r in rounds]
+        row |= {
+            "mitsuba_mrays_s": statistics.median(n / r["mitsuba"]["median_s"] * 1e-6 for r in rounds),
+            "mitsuba_ratio": statistics.median(m_ratios),
+            "mitsuba_ratios_per_round": m_ratios,
+            "hits_mitsuba": rounds[0]["mitsuba"]["hits"],
+            "mitsuba_first_pass_s": rounds[0]["mitsuba"]["first_s"],
+        }
+    if group == "closest_hit":
+        try:
+            row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
+        except FileNotFoundError:
+            pass
+    return row
+
+
 def ms_cpu() -> str:
     try:
         for line in open("/proc/cpuinfo"):
@@ -214,21 +304,30 @@ def ms_cpu() -> str:
 
 
 def markdown(rows: list[dict], meta: dict) -> str:
+    scenes = " and ".join(f"the {name} ({n:,} triangles)" for name, n in meta["triangles"].items())
     lines = [
-        f"Stanford bunny ({meta['triangles']:,} triangles), the `accel` bench's rays (65,536 per set), one thread; "
-        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray): median of the passes in {meta['measurement_time']:g} s after 1 s of warm-up, as criterion's; "
-        f"{meta['rounds']} rounds, each timing the two back to back on one bench; ratio = median of the per-round ratios (in brackets), throughputs = medians over rounds. "
+        f"{scenes[0].upper()}{scenes[1:]}, the `accel` bench's rays (65,536 per set), one thread; "
+        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray) and Mitsuba 3 "
+        f"(`llvm_ad_rgb`, `ray_intersect_preliminary`/`ray_test` on the set as one wavefront, one Dr.Jit thread): median of the passes in "
+        f"{meta['measurement_time']:g} s after 1 s of warm-up, as criterion's; "
+        f"{meta['rounds']} rounds, each timing the three back to back on one bench; ratio = median of the per-round ratios (in brackets), throughputs = medians over rounds. "
         f"{meta['cpu']}, measured {meta['date']}, load average {meta['load_avg']:.1f} (shared machine, loaded: compare within a row).",
         "",
-        "| bench | gradtrace (Mrays/s) | Embree (Mrays/s) | gradtrace / Embree | hits (ours / Embree) | obvhs' own traversal (Mrays/s) |",
-        "|---|---:|---:|---:|---:|---:|",
+        "| bench | gradtrace (Mrays/s) | Embree (Mrays/s) | gradtrace / Embree | Mitsuba LLVM (Mrays/s) | gradtrace / Mitsuba LLVM | hits (ours / Embree / Mitsuba) | obvhs' own traversal (Mrays/s) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         base = f"{r['obvhs_baseline_mrays_s']:.2f}" if "obvhs_baseline_mrays_s" in r else "—"
         per_round = ", ".join(f"{x:.2f}" for x in r["ratios_per_round"])
+        if "mitsuba_ratio" in r:
+            m_rounds = ", ".join(f"{x:.2f}" for x in r["mitsuba_ratios_per_round"])
+            mitsuba = f"{r['mitsuba_mrays_s']:.2f} | {r['mitsuba_ratio']:.2f}× [{m_rounds}]"
+            m_hits = f"{r['hits_mitsuba']:,}"
+        else:
+            mitsuba, m_hits = "— | —", "—"
         lines.append(
-            f"| `{r['bench']}` | {r['gradtrace_mrays_s']:.2f} | {r['embree_mrays_s']:.2f} | {r['ratio']:.2f}× [{per_round}] | "
-            f"{r['hits_gradtrace']:,} / {r['hits_embree']:,} | {base} |"
+            f"| `{r['bench']}` | {r['gradtrace_mrays_s']:.2f} | {r['embree_mrays_s']:.2f} | {r['ratio']:.2f}× [{per_round}] | {mitsuba} | "
+            f"{r['hits_gradtrace']:,} / {r['hits_embree']:,} / {m_hits} | {base} |"
         )
     return "\n".join(lines)
 

@@ -37,11 +37,9 @@ the variant is skipped (with a note) when no libLLVM is found.
 from __future__ import annotations
 
 import argparse
-import glob
 import json
 import math
 import os
-import re
 import platform
 import shutil
 import statistics
@@ -56,30 +54,7 @@ import mitsuba_scene as ms  # noqa: E402
 ms.ensure_venv()
 
 
-def find_libllvm() -> str | None:
-    if os.environ.get("DRJIT_LIBLLVM_PATH"):
-        return os.environ["DRJIT_LIBLLVM_PATH"]
-    candidates = []
-    try:
-        listing = subprocess.run(["dpkg", "-L", "libllvm19"], capture_output=True, text=True).stdout
-        candidates += [line for line in listing.splitlines() if "/libLLVM" in line and ".so" in line]
-    except OSError:
-        pass
-    # Other system copies only from LLVM 19 on: with Debian 12's libLLVM-15,
-    # Dr.Jit's kernels abort the process ("LLVM ERROR: Cannot select: fminimum").
-    def major(path: str) -> int:
-        m = re.search(r"libLLVM[-.]?(?:so\.)?(\d+)", os.path.basename(path))
-        return int(m.group(1)) if m else 0
-
-    system = glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM*.so*")
-    candidates += sorted((c for c in system if major(c) >= 19), key=major, reverse=True)
-    for c in candidates:
-        if os.path.isfile(c):
-            return c
-    return None
-
-
-LIBLLVM = find_libllvm()
+LIBLLVM = ms.find_libllvm()
 if LIBLLVM:
     # Must be set before Dr.Jit initialises its LLVM backend.
     os.environ["DRJIT_LIBLLVM_PATH"] = LIBLLVM

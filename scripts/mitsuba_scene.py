@@ -111,6 +111,36 @@ def ensure_venv() -> None:
     os.execv(str(py), [str(py), *sys.argv])
 
 
+def find_libllvm() -> str | None:
+    """The libLLVM (19 or later) for Mitsuba's `llvm_ad_rgb` variant: DRJIT_LIBLLVM_PATH,
+    Debian's libllvm19, or another system copy; None when there is none."""
+    import glob
+    import os
+    import re
+    import subprocess
+
+    if os.environ.get("DRJIT_LIBLLVM_PATH"):
+        return os.environ["DRJIT_LIBLLVM_PATH"]
+    candidates = []
+    try:
+        listing = subprocess.run(["dpkg", "-L", "libllvm19"], capture_output=True, text=True).stdout
+        candidates += [line for line in listing.splitlines() if "/libLLVM" in line and ".so" in line]
+    except OSError:
+        pass
+    # Other system copies only from LLVM 19 on: with Debian 12's libLLVM-15,
+    # Dr.Jit's kernels abort the process ("LLVM ERROR: Cannot select: fminimum").
+    def major(path: str) -> int:
+        m = re.search(r"libLLVM[-.]?(?:so\.)?(\d+)", os.path.basename(path))
+        return int(m.group(1)) if m else 0
+
+    system = glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM*.so*")
+    candidates += sorted((c for c in system if major(c) >= 19), key=major, reverse=True)
+    for c in candidates:
+        if os.path.isfile(c):
+            return c
+    return None
+
+
 # --------------------------------------------------------------------------- helpers
 
 
