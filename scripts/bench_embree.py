@@ -123,32 +123,39 @@ def criterion_median_s(group: str, bench: str) -> float:
     return est["median"]["point_estimate"] * 1e-9
 
 
-def time_embree(scene, s: dict, query: str, runs: int, measurement_time: float) -> dict:
-    """Median seconds per pass, over the same windows as criterion's: 1 s of
-    warm-up, then passes for `measurement_time` seconds (at least `runs`)."""
-    o, d = np.ascontiguousarray(s["origins"]), np.ascontiguousarray(s["dirs"])
+def time_passes(run, runs: int, measurement_time: float) -> dict:
+    """Median seconds per `run()` pass, over the same windows as criterion's:
+    1 s of warm-up, then passes for `measurement_time` seconds (at least
+    `runs`); the first pass is timed apart, and every pass must return what it
+    returned."""
     t0 = time.perf_counter()
-    first = scene.run(o, d, query=query)
+    first = run()
     first_s = time.perf_counter() - t0
     start = time.perf_counter()
     while time.perf_counter() - start < 1.0:
-        scene.run(o, d, query=query)
+        run()
     times = []
     start = time.perf_counter()
     while len(times) < runs or time.perf_counter() - start < measurement_time:
         t0 = time.perf_counter()
-        res = scene.run(o, d, query=query)
+        res = run()
         times.append(time.perf_counter() - t0)
-    assert np.array_equal(first, res)
-    hits = int(np.count_nonzero(res != -1))  # prim id, or 0 when occluded; -1: miss
-    return {"median_s": statistics.median(times), "first_s": first_s, "hits": hits}
+        assert np.array_equal(first, res)
+    return {"median_s": statistics.median(times), "first_s": first_s, "first": first}
 
 
-def time_mitsuba(dump: Path, set_name: str, query: str, runs: int, measurement_time: float) -> dict | None:
+def time_embree(scene, s: dict, query: str, runs: int, measurement_time: float) -> dict:
+    """`time_passes` of Embree over the whole set (the first pass commits the
+    scene, i.e. builds Embree's BVH)."""
+    o, d = np.ascontiguousarray(s["origins"]), np.ascontiguousarray(s["dirs"])
+    t = time_passes(lambda: scene.run(o, d, query=query), runs, measurement_time)
+    hits = int(np.count_nonzero(t.pop("first") != -1))  # prim id, or 0 when occluded; -1: miss
+    return t | {"hits": hits}
+
+
+def time_mitsuba(dump: Path, set_name: str, query: str, runs: int, measurement_time: float) -> dict:
     """`time_embree` for Mitsuba's `llvm_ad_rgb`, in a worker process (its own
-    Embree must not meet embreex's in one process); None without libLLVM."""
-    if ms.find_libllvm() is None:
-        return None
+    Embree must not meet embreex's in one process)."""
     cmd = [sys.executable, __file__, "--mitsuba-worker", str(dump), set_name, query, str(runs), str(measurement_time)]
     out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -184,19 +191,9 @@ def mitsuba_worker(dump: str, set_name: str, query: str, runs: int, measurement_
         dr.sync_thread()
         return int(n[0])
 
-    t0 = time.perf_counter()
-    hits = run()
-    first_s = time.perf_counter() - t0
-    start = time.perf_counter()
-    while time.perf_counter() - start < 1.0:
-        run()
-    times = []
-    start = time.perf_counter()
-    while len(times) < runs or time.perf_counter() - start < measurement_time:
-        t0 = time.perf_counter()
-        assert run() == hits
-        times.append(time.perf_counter() - t0)
-    print(json.dumps({"median_s": statistics.median(times), "first_s": first_s, "hits": hits}))
+    t = time_passes(run, runs, measurement_time)
+    hits = t.pop("first")
+    print(json.dumps(t | {"hits": hits}))
 
 
 def main() -> int:
@@ -215,6 +212,8 @@ def main() -> int:
     from embreex import rtcore_scene as rtcs
     from embreex.mesh_construction import TriangleMesh
 
+    # Mitsuba's rows need libLLVM (looked up once, not per round).
+    args.mitsuba = not args.no_mitsuba and ms.find_libllvm() is not None
     if not args.no_cargo:
         run_ours(args.measurement_time)
     exe = bench_executable()
@@ -254,7 +253,7 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "ours": lambda: time_ours(exe, bench, args.measurement_time),
         "embree": lambda: time_embree(scene, s, query, args.runs, args.measurement_time),
     }
-    if not args.no_mitsuba:
+    if args.mitsuba:
         timers["mitsuba"] = lambda: time_mitsuba(dump, s["name"], query, args.runs, args.measurement_time)
     rounds = []
     for k in range(args.rounds):
@@ -263,7 +262,7 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         got = {name: timers[name]() for name in order}
         rounds.append(got)
         print(f"{bench} round {k + 1}: Embree {got['embree']['median_s'] / got['ours']:.2f}x"
-              + (f", Mitsuba {got['mitsuba']['median_s'] / got['ours']:.2f}x" if got.get("mitsuba") else ""), flush=True)
+              + (f", Mitsuba {got['mitsuba']['median_s'] / got['ours']:.2f}x" if args.mitsuba else ""), flush=True)
     ratios = [r["embree"]["median_s"] / r["ours"] for r in rounds]
     row = {
         "bench": bench,
@@ -276,7 +275,7 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "hits_embree": rounds[0]["embree"]["hits"],
         "embree_first_pass_s": rounds[0]["embree"]["first_s"],
     }
-    if all(r.get("mitsuba") for r in rounds):
+    if args.mitsuba:
         m_ratios = [r["mitsuba"]["median_s"] / r["ours"] for r in rounds]
         row |= {
             "mitsuba_mrays_s": statistics.median(n / r["mitsuba"]["median_s"] * 1e-6 for r in rounds),
