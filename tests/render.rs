@@ -173,6 +173,54 @@ fn light_sample_densities_are_consistent() {
     );
 }
 
+/// A rectangle light is one light, sampled by (u, v) ↦ corner + u·edge_u + v·edge_v:
+/// a k×k stratified pattern of (u, v) puts exactly one point in each cell of the
+/// rectangle's k×k grid (picking one of its two triangles and warping the square
+/// onto it does not), whatever `u_pick` is, and `pdf_emitter` on either of its
+/// triangles returns the sample's own density (the MIS weight of a BSDF ray that
+/// hits it).
+#[test]
+fn rectangle_light_samples_keep_their_strata_and_density() {
+    let mut s = empty_scene(camera(4, 4));
+    let black = add_material(&mut s, Material::Lambert { albedo: Vec3::ZERO });
+    let rect = Rect {
+        corner: Vec3::new(-0.3, 2.0, -0.2),
+        edge_u: Vec3::new(0.6, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, 0.4),
+    };
+    add_quad(&mut s, rect, black, Vec3::ONE);
+    let lights = LightSet::build(&s);
+    let p = Vec3::new(0.1, 0.0, 0.05);
+    let k = 8;
+    for u_pick in [0.0, 0.3, 0.99] {
+        let mut cells = vec![0u32; k * k];
+        for i in 0..k {
+            for j in 0..k {
+                let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                let ls = lights
+                    .sample(&s, p, &Frame::from_normal(Vec3::Y), u_pick, u)
+                    .unwrap();
+                let (q, nq) = ls.point.unwrap();
+                let d = q - rect.corner;
+                let a = d.dot(rect.edge_u) / rect.edge_u.length_squared();
+                let b = d.dot(rect.edge_v) / rect.edge_v.length_squared();
+                assert!(d.dot(rect.normal()).abs() < 1e-6, "{q} off the plane");
+                cells[(a * k as f32) as usize * k + (b * k as f32) as usize] += 1;
+                for tri in 0..2 {
+                    let prim = gradtrace::accel::PrimRef::Triangle { mesh: 0, tri };
+                    let again = lights.pdf_emitter(&s, prim, p, q, nq);
+                    assert!(
+                        (again - ls.pdf).abs() <= 1e-5 * ls.pdf,
+                        "triangle {tri}: {again} vs {}",
+                        ls.pdf
+                    );
+                }
+            }
+        }
+        assert!(cells.iter().all(|&c| c == 1), "{cells:?}");
+    }
+}
+
 /// Gaussian-sky importance sampling: E[L/pdf] = ∫ L dω = 4π·ambient + peak·2π(1−e^{−2κ})/κ.
 #[test]
 fn gaussian_sky_sampling_integrates_the_sky() {

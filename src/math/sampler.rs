@@ -81,6 +81,16 @@ impl PixelSampler {
         Vec2::new(a, b)
     }
 
+    /// The values of dimensions `dim` and `dim + 1`, without moving the cursor.
+    #[inline]
+    pub fn next_2d_at(&mut self, dim: u32) -> Vec2 {
+        let cursor = self.dim;
+        self.dim = dim;
+        let v = self.next_2d();
+        self.dim = cursor;
+        v
+    }
+
     /// `sobol_burley::sample_4d(index, set, seed)`, bit for bit, with the Sobol
     /// matrix product written without branches: the crate loops over the set bits
     /// of the shuffled index, whose number is random, so the loop's exit was a

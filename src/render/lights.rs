@@ -23,6 +23,20 @@ enum Light {
         v: [Vec3; 3],
         n: Vec3,
     },
+    /// A rectangle emitter (a quad mesh with `rect`) as one light, sampled
+    /// uniformly over its area by (u, v) ↦ corner + u·edge_u + v·edge_v. Picking
+    /// one of its two triangles and warping the square onto it scattered a
+    /// pixel's stratified light samples over the rectangle; this map keeps them
+    /// stratified, as Mitsuba's `rectangle` does. The density is the two
+    /// triangles' (area-proportional pick × 1/area), so MIS weights are unchanged.
+    Rect {
+        mesh: u32,
+        area: f32,
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        n: Vec3,
+    },
     Sphere(u32),
     Environment,
 }
@@ -74,7 +88,8 @@ pub enum EnvSampler {
 pub struct LightSet {
     lights: Vec<Light>,
     choose: Option<Distribution1D>,
-    /// Index into `lights` of each mesh's first emitting triangle (u32::MAX if none).
+    /// Index into `lights` of each emitting mesh's rectangle light or first
+    /// emitting triangle (u32::MAX if none).
     mesh_first_light: Vec<u32>,
     sphere_light: Vec<u32>,
     env_light: Option<u32>,
@@ -91,6 +106,19 @@ impl LightSet {
                 continue;
             }
             mesh_first_light[mi] = lights.len() as u32;
+            if let Some(r) = m.rect.filter(|r| r.area() > 0.0) {
+                let area = r.area();
+                lights.push(Light::Rect {
+                    mesh: mi as u32,
+                    area,
+                    corner: r.corner,
+                    edge_u: r.edge_u,
+                    edge_v: r.edge_v,
+                    n: r.normal(),
+                });
+                power.push(luminance(m.emission) * area * PI);
+                continue;
+            }
             for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
                 let cross = (b - a).cross(c - a);
@@ -138,8 +166,14 @@ impl LightSet {
         self.lights.is_empty()
     }
 
-    /// Counts for `info`: (emitting triangles, emitting spheres, environment?).
-    pub fn counts(&self) -> (usize, usize, bool) {
+    /// Counts for `info`: (rectangle lights, other emitting triangles, emitting
+    /// spheres, environment?).
+    pub fn counts(&self) -> (usize, usize, usize, bool) {
+        let rects = self
+            .lights
+            .iter()
+            .filter(|l| matches!(l, Light::Rect { .. }))
+            .count();
         let tris = self
             .lights
             .iter()
@@ -150,7 +184,7 @@ impl LightSet {
             .iter()
             .filter(|l| matches!(l, Light::Sphere(_)))
             .count();
-        (tris, spheres, self.env_light.is_some())
+        (rects, tris, spheres, self.env_light.is_some())
     }
 
     /// Picks a light with `u_pick` and samples a direction toward it from `p`, a
@@ -172,7 +206,20 @@ impl LightSet {
         let pick = choose.discrete_pmf(idx);
         let mut s = match self.lights[idx] {
             Light::Triangle { mesh, area, v, n } => {
-                sample_triangle(v, n, area, scene.meshes[mesh as usize].emission, p, u)?
+                let bary = warp::square_to_uniform_triangle(u);
+                let q = v[0] * (1.0 - bary.x - bary.y) + v[1] * bary.x + v[2] * bary.y;
+                sample_area_point(q, n, area, scene.meshes[mesh as usize].emission, p)?
+            }
+            Light::Rect {
+                mesh,
+                area,
+                corner,
+                edge_u,
+                edge_v,
+                n,
+            } => {
+                let q = corner + u.x * edge_u + u.y * edge_v;
+                sample_area_point(q, n, area, scene.meshes[mesh as usize].emission, p)?
             }
             Light::Sphere(i) => sample_sphere(scene, i, p, u)?,
             Light::Environment => self.sample_env(scene.environment.as_ref()?, frame, u)?,
@@ -190,6 +237,7 @@ impl LightSet {
         match self.lights[idx] {
             Light::Environment => Some((LineLight::Environment, choose.discrete_pmf(idx))),
             Light::Sphere(i) => Some((LineLight::Sphere(i), choose.discrete_pmf(idx))),
+            Light::Rect { mesh, .. } => Some((LineLight::Rect(mesh), choose.discrete_pmf(idx))),
             Light::Triangle { mesh, .. } => {
                 scene.meshes[mesh as usize].rect?;
                 let first = self.mesh_first_light[mesh as usize] as usize;
@@ -224,9 +272,15 @@ impl LightSet {
                 if first == u32::MAX {
                     return 0.0;
                 }
-                let idx = (first + tri) as usize;
-                let Light::Triangle { area, .. } = self.lights[idx] else {
-                    return 0.0;
+                let (idx, area) = match self.lights[first as usize] {
+                    Light::Rect { area, .. } => (first as usize, area),
+                    _ => {
+                        let idx = (first + tri) as usize;
+                        let Light::Triangle { area, .. } = self.lights[idx] else {
+                            return 0.0;
+                        };
+                        (idx, area)
+                    }
                 };
                 let d = q - p;
                 let dist2 = d.length_squared();
@@ -394,18 +448,10 @@ fn scene_radius(scene: &Scene) -> f32 {
     (0.5 * (hi - lo).length()).max(1.0)
 }
 
-/// A point uniform in area on the triangle `[a, b, c]` (unit normal `n`) seen
-/// from `p`, its density in solid angle; `None` from behind.
-fn sample_triangle(
-    [a, b, c]: [Vec3; 3],
-    n: Vec3,
-    area: f32,
-    emission: Vec3,
-    p: Vec3,
-    u: Vec2,
-) -> Option<LightSample> {
-    let bary = warp::square_to_uniform_triangle(u);
-    let q = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
+/// The point `q`, drawn uniformly over an emitter of area `area` (unit normal
+/// `n`), seen from `p`: its direction and density in solid angle; `None` from
+/// behind.
+fn sample_area_point(q: Vec3, n: Vec3, area: f32, emission: Vec3, p: Vec3) -> Option<LightSample> {
     let d = q - p;
     let dist2 = d.length_squared();
     if dist2 <= 0.0 || area <= 0.0 {

@@ -196,7 +196,7 @@ const TILE: usize = 16;
 /// What `render` builds for a scene before tracing: reported by `info`.
 pub fn describe(scene: &Scene) -> String {
     let lights = LightSet::build(scene);
-    let (tris, spheres, env) = lights.counts();
+    let (rects, tris, spheres, env) = lights.counts();
     let env_sampler = match &lights.env_sampler {
         None => "none".to_string(),
         Some(lights::EnvSampler::CosineAboutNormal) => {
@@ -215,7 +215,7 @@ pub fn describe(scene: &Scene) -> String {
         "skipped (nothing can cast a shadow)"
     };
     format!(
-        "light sampling: {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}; with --gradients, visibility term: {shadows}",
+        "light sampling: {rects} rectangle lights, {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}; with --gradients, visibility term: {shadows}",
         if env { ", environment" } else { "" }
     )
 }
