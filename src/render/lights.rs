@@ -106,7 +106,7 @@ impl LightSet {
                 continue;
             }
             mesh_first_light[mi] = lights.len() as u32;
-            if let Some(r) = m.rect.filter(|r| r.area() > 0.0) {
+            if let Some(r) = m.rect {
                 let area = r.area();
                 lights.push(Light::Rect {
                     mesh: mi as u32,
@@ -230,21 +230,15 @@ impl LightSet {
 
     /// Picks a light as [`Self::sample`] does (same `u_pick`) and, when it is one
     /// whose domain can be marched line by line, returns it with the probability of
-    /// choosing it (for a rectangle: of choosing either of its triangles).
-    pub fn pick_line(&self, scene: &Scene, u_pick: f32) -> Option<(LineLight, f32)> {
+    /// choosing it.
+    pub fn pick_line(&self, u_pick: f32) -> Option<(LineLight, f32)> {
         let choose = self.choose.as_ref()?;
         let idx = choose.sample_discrete(u_pick);
         match self.lights[idx] {
             Light::Environment => Some((LineLight::Environment, choose.discrete_pmf(idx))),
             Light::Sphere(i) => Some((LineLight::Sphere(i), choose.discrete_pmf(idx))),
             Light::Rect { mesh, .. } => Some((LineLight::Rect(mesh), choose.discrete_pmf(idx))),
-            Light::Triangle { mesh, .. } => {
-                scene.meshes[mesh as usize].rect?;
-                let first = self.mesh_first_light[mesh as usize] as usize;
-                let n = scene.meshes[mesh as usize].triangles.len();
-                let pmf = (first..first + n).map(|i| choose.discrete_pmf(i)).sum();
-                Some((LineLight::Rect(mesh), pmf))
-            }
+            Light::Triangle { .. } => None,
         }
     }
 
@@ -272,15 +266,14 @@ impl LightSet {
                 if first == u32::MAX {
                     return 0.0;
                 }
-                let (idx, area) = match self.lights[first as usize] {
-                    Light::Rect { area, .. } => (first as usize, area),
-                    _ => {
-                        let idx = (first + tri) as usize;
-                        let Light::Triangle { area, .. } = self.lights[idx] else {
-                            return 0.0;
-                        };
-                        (idx, area)
-                    }
+                // A rectangle is one light; other meshes have one per triangle.
+                let idx = match self.lights[first as usize] {
+                    Light::Rect { .. } => first,
+                    _ => first + tri,
+                } as usize;
+                let (Light::Rect { area, .. } | Light::Triangle { area, .. }) = self.lights[idx]
+                else {
+                    return 0.0;
                 };
                 let d = q - p;
                 let dist2 = d.length_squared();

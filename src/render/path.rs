@@ -334,7 +334,7 @@ impl PathTracer<'_> {
         let scene = self.scene;
         let mut capture = capture;
         if let (true, Some(cfg), Some(c)) = (line, self.lines, capture.as_deref_mut()) {
-            if let Some((ll, pmf)) = self.lights.pick_line(scene, u_pick) {
+            if let Some((ll, pmf)) = self.lights.pick_line(u_pick) {
                 return self.line_direct(si, wo, material, ll, pmf, u_light, cfg, c);
             }
         }
