@@ -167,6 +167,12 @@ fn bench_accel(c: &mut Criterion) {
     {
         preset.reinsertion_ratio = r;
     }
+    if let Some(c) = std::env::var("GRADTRACE_ACCEL_LEAF_COST")
+        .ok()
+        .and_then(|c| c.parse().ok())
+    {
+        preset.leaf_cost = Some(c);
+    }
     if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
         let accel = Accel::build_with_preset(&meshes, &[], &preset);
         let (lo, hi) = accel.bounds().expect("bunny is not empty");

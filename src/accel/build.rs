@@ -49,6 +49,12 @@ pub struct BuildPreset {
     pub max_prims_per_leaf: u32,
     /// Children per node: 8 (taken only where the CPU has AVX2) or 4.
     pub node_width: usize,
+    /// `Some(c)`: the SAH-optimal collapse (`bvh4::SahCollapse`) with a leaf's
+    /// triangle4 block costing `c` wide node tests; `None`: the greedy collapse
+    /// (fill every slot, largest box first). `Some(1.0)` against greedy on the
+    /// bunny, 8-wide: +9 % / +22 % closest-hit and +11 % / +25 % any-hit rays/s
+    /// (coherent / incoherent); 0.5–1.0 alike (`benches/README.md`).
+    pub leaf_cost: Option<f32>,
 }
 
 impl Default for BuildPreset {
@@ -61,6 +67,7 @@ impl Default for BuildPreset {
             reinsertion_ratio: 0.05,
             max_prims_per_leaf: 8,
             node_width: if super::bvh8::supported() { 8 } else { 4 },
+            leaf_cost: Some(1.0),
         }
     }
 }
@@ -69,7 +76,7 @@ impl Default for BuildPreset {
 /// [`MAX_BUILD_MAGNITUDE`]); `leaf_order` refers to `boxes`.
 pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> Bvh<N> {
     if boxes.is_empty() {
-        return Bvh::from_bvh2(&Bvh2::default(), 1.0, 1);
+        return Bvh::from_bvh2(&Bvh2::default(), 1.0, 1, None);
     }
     let mut total = Aabb::empty();
     for b in boxes {
@@ -104,7 +111,12 @@ pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> B
     if groups.unique.len() < scaled.len() {
         groups.expand(&mut bvh2);
     }
-    Bvh::from_bvh2(&bvh2, frame.inv_scale, preset.max_prims_per_leaf)
+    Bvh::from_bvh2(
+        &bvh2,
+        frame.inv_scale,
+        preset.max_prims_per_leaf,
+        preset.leaf_cost,
+    )
 }
 
 /// The power-of-two scale `2^-e` of the build frame, with `e` such that the

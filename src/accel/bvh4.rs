@@ -174,12 +174,19 @@ pub(super) type Bvh4 = Bvh<Node4>;
 
 impl<N: WideNode> Bvh<N> {
     /// Collapses `bvh2` (boxes in a frame scaled by `1/inv_scale`, a power of
-    /// two) into a wide BVH in world space: each node takes its BVH2 node's two
-    /// children and keeps opening the largest-area child holding more than one
-    /// primitive until its `WIDTH` slots are filled; a child with at most `max_leaf`
-    /// primitives becomes a leaf. Iterative, so degenerate chains cannot
+    /// two) into a wide BVH in world space. With `leaf_cost` ([`SahCollapse`]):
+    /// the tree of least SAH cost, leaves of at most `max_leaf` primitives.
+    /// Without (greedy): each node takes its BVH2 node's two children and keeps
+    /// opening the largest-area child holding more than one primitive until its
+    /// `WIDTH` slots are filled; a child with at most `max_leaf` primitives
+    /// becomes a leaf. Iterative, so degenerate chains cannot
     /// overflow the call stack.
-    pub(super) fn from_bvh2(bvh2: &Bvh2, inv_scale: f32, max_leaf: u32) -> Self {
+    pub(super) fn from_bvh2(
+        bvh2: &Bvh2,
+        inv_scale: f32,
+        max_leaf: u32,
+        leaf_cost: Option<f32>,
+    ) -> Self {
         let max_leaf = max_leaf.clamp(1, MAX_LEAF);
         let mut out = Self {
             nodes: Vec::new(),
@@ -191,6 +198,11 @@ impl<N: WideNode> Bvh<N> {
             return out;
         }
         let counts = subtree_counts(bvh2);
+        let sah = leaf_cost.map(|c| {
+            SahCollapse::new(bvh2, &counts, N::WIDTH, max_leaf, |n| {
+                leaf_test_cost::<N>(c, n)
+            })
+        });
         let world = |n: usize| {
             let b = bvh2.nodes[n].aabb();
             (
@@ -201,7 +213,11 @@ impl<N: WideNode> Bvh<N> {
         // (BVH2 node, parent BVH4 node or EMPTY for the root, slot, depth)
         let mut work = vec![(0usize, EMPTY, 0usize, 0u32)];
         while let Some((n, parent, slot, depth)) = work.pop() {
-            let child = if counts[n] <= max_leaf || bvh2.nodes[n].prim_count > 0 {
+            let as_leaf = match &sah {
+                Some(t) => t.is_leaf(bvh2, n),
+                None => counts[n] <= max_leaf || bvh2.nodes[n].prim_count > 0,
+            };
+            let child = if as_leaf {
                 let first = out.leaf_order.len() as u32;
                 collect_primitives(bvh2, n, &mut out.leaf_order);
                 let count = out.leaf_order.len() as u32 - first;
@@ -209,7 +225,10 @@ impl<N: WideNode> Bvh<N> {
             } else {
                 let index = out.nodes.len() as u32;
                 let mut node = N::empty();
-                let kids = open_children(bvh2, n, &counts, N::WIDTH);
+                let kids = match &sah {
+                    Some(t) => t.slots(bvh2, n),
+                    None => open_children(bvh2, n, &counts, N::WIDTH),
+                };
                 for (k, c) in kids.into_iter().enumerate() {
                     let Some(c) = c else { break };
                     let (lo, hi) = world(c);
@@ -285,6 +304,12 @@ impl<N: WideNode> Bvh<N> {
     /// boxes of area(child)/area(root) × (1 per inner child, the primitive
     /// count per leaf).
     pub(super) fn sah_cost(&self) -> f32 {
+        self.sah_cost_with(|count| count as f64) as f32
+    }
+
+    /// [`Self::sah_cost`] with a leaf of `count` primitives weighted
+    /// `leaf(count)` instead of `count`.
+    pub(super) fn sah_cost_with(&self, leaf: impl Fn(u32) -> f64) -> f64 {
         if self.nodes.is_empty() {
             return 0.0;
         }
@@ -314,12 +339,24 @@ impl<N: WideNode> Bvh<N> {
                 let weight = if c & LEAF_BIT == 0 {
                     1.0
                 } else {
-                    decode_leaf(c).1 as f64
+                    leaf(decode_leaf(c).1 as u32)
                 };
                 cost += weight * half_area(node.child_box(k)) / root_area;
             }
         }
-        cost as f32
+        cost
+    }
+}
+
+/// What testing a leaf of `count` primitives costs, in wide node tests, when
+/// one triangle4 block costs `block`: one test per block, except that the
+/// 8-wide tree tests two blocks as one eight-lane test (half again as dear).
+pub(super) fn leaf_test_cost<N: WideNode>(block: f32, count: u32) -> f64 {
+    let block = block as f64;
+    if N::WIDTH == 8 && count > 4 {
+        1.5 * block
+    } else {
+        block * count.div_ceil(4) as f64
     }
 }
 
@@ -516,4 +553,183 @@ fn open_children(bvh2: &Bvh2, n: usize, counts: &[u32], width: usize) -> [Option
         len += 1;
     }
     kids
+}
+
+/// The collapse that minimises the surface-area cost of the wide tree (Ylitie
+/// et al. 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed
+/// Wide BVHs", §4.1): for every BVH2 node `n` and slot budget `i`, the cheapest
+/// way to hang `n`'s subtree from at most `i` slots of its wide parent, by
+/// dynamic programming from the leaves up. Costs are areas × (1 per wide node,
+/// `leaf_cost(count)` per leaf), so a small subtree becomes a leaf or a node by
+/// what its rays will pay, not by filling slots.
+pub(super) struct SahCollapse {
+    width: usize,
+    /// `cost[n·8 + i − 1]`: subtree `n` in at most `i` slots.
+    cost: Vec<f64>,
+    /// For `i = 1`: 0 = one leaf, 1 = one wide node; for `i ≥ 2`: 0 = as for
+    /// `i − 1`, `k` = the left child gets `k` slots and the right `i − k`.
+    choice: Vec<u8>,
+    /// For an inner node made a wide node: the left child's share of `width`.
+    node_split: Vec<u8>,
+}
+
+impl SahCollapse {
+    pub(super) fn new(
+        bvh2: &Bvh2,
+        counts: &[u32],
+        width: usize,
+        max_leaf: u32,
+        leaf_cost: impl Fn(u32) -> f64,
+    ) -> Self {
+        let len = bvh2.nodes.len();
+        let mut out = Self {
+            width,
+            cost: vec![f64::INFINITY; len * 8],
+            choice: vec![0; len * 8],
+            node_split: vec![0; len],
+        };
+        let mut todo = vec![(0usize, false)];
+        while let Some((n, children_done)) = todo.pop() {
+            let node = &bvh2.nodes[n];
+            let area = node.aabb().half_area() as f64;
+            if node.prim_count > 0 {
+                out.cost[n * 8..n * 8 + width].fill(area * leaf_cost(node.prim_count));
+                continue;
+            }
+            let (l, r) = (node.first_index as usize, node.first_index as usize + 1);
+            if !children_done {
+                todo.extend([(n, true), (l, false), (r, false)]);
+                continue;
+            }
+            // distribute[j]: both children in at most j slots (j ≥ 2).
+            let mut distribute = [(f64::INFINITY, 0u8); 9];
+            for (j, d) in distribute.iter_mut().enumerate().take(width + 1).skip(2) {
+                for k in 1..j {
+                    let c = out.cost[l * 8 + k - 1] + out.cost[r * 8 + j - k - 1];
+                    if c < d.0 {
+                        *d = (c, k as u8);
+                    }
+                }
+            }
+            let leaf = if counts[n] <= max_leaf {
+                area * leaf_cost(counts[n])
+            } else {
+                f64::INFINITY
+            };
+            let inner = area + distribute[width].0;
+            out.node_split[n] = distribute[width].1;
+            (out.cost[n * 8], out.choice[n * 8]) =
+                if leaf <= inner { (leaf, 0) } else { (inner, 1) };
+            for (i, &(split, k)) in distribute.iter().enumerate().take(width + 1).skip(2) {
+                let prev = out.cost[n * 8 + i - 2];
+                (out.cost[n * 8 + i - 1], out.choice[n * 8 + i - 1]) =
+                    if split < prev { (split, k) } else { (prev, 0) };
+            }
+        }
+        out
+    }
+
+    /// Whether BVH2 node `n`, given one slot, is a leaf.
+    pub(super) fn is_leaf(&self, bvh2: &Bvh2, n: usize) -> bool {
+        bvh2.nodes[n].prim_count > 0 || self.choice[n * 8] == 0
+    }
+
+    /// The slots of the wide node made from inner BVH2 node `n`: its children
+    /// spread over at most `width` slots as the table chose.
+    pub(super) fn slots(&self, bvh2: &Bvh2, n: usize) -> [Option<usize>; 8] {
+        let mut out = [None; 8];
+        let mut len = 0;
+        let first = bvh2.nodes[n].first_index as usize;
+        // (BVH2 node, slots it may take)
+        let k = self.node_split[n] as usize;
+        let mut todo = vec![(first + 1, self.width - k), (first, k)];
+        while let Some((c, mut i)) = todo.pop() {
+            while i > 1 && self.choice[c * 8 + i - 1] == 0 {
+                i -= 1;
+            }
+            if i <= 1 || bvh2.nodes[c].prim_count > 0 {
+                out[len] = Some(c);
+                len += 1;
+                continue;
+            }
+            let k = self.choice[c * 8 + i - 1] as usize;
+            let g = bvh2.nodes[c].first_index as usize;
+            todo.push((g + 1, i - k));
+            todo.push((g, k));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::bvh8::Node8;
+    use super::*;
+    use obvhs::aabb::Aabb;
+    use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
+
+    /// PLOC over `n` random small boxes in the unit cube.
+    fn random_bvh2(n: usize, mut seed: u64) -> Bvh2 {
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / 16_777_216.0
+        };
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|_| {
+                let lo = Vec3::new(next(), next(), next());
+                let size = Vec3::new(next(), next(), next()) * 0.05;
+                Aabb::new(lo, lo + size)
+            })
+            .collect();
+        PlocBuilder::with_capacity(n).build(
+            PlocSearchDistance::Medium,
+            &boxes,
+            (0..n as u32).collect(),
+            SortPrecision::U64,
+            3,
+        )
+    }
+
+    /// The tree `from_bvh2` builds from the SAH table costs what the table says
+    /// its root costs (so the reconstruction follows the table's choices), is
+    /// never dearer than the greedy collapse under the same cost, and holds every
+    /// primitive once.
+    fn check_sah_collapse<N: WideNode>() {
+        for (n, seed) in [(300, 1), (2000, 2)] {
+            let bvh2 = random_bvh2(n, seed);
+            let root_area = bvh2.nodes[0].aabb().half_area() as f64;
+            for max_leaf in [1, 4, 8] {
+                for block in [0.5f32, 1.0, 3.0] {
+                    let leaf = |count| leaf_test_cost::<N>(block, count);
+                    let table =
+                        SahCollapse::new(&bvh2, &subtree_counts(&bvh2), N::WIDTH, max_leaf, leaf);
+                    let sah = Bvh::<N>::from_bvh2(&bvh2, 1.0, max_leaf, Some(block));
+                    let greedy = Bvh::<N>::from_bvh2(&bvh2, 1.0, max_leaf, None);
+                    let (c_sah, c_greedy) = (sah.sah_cost_with(leaf), greedy.sah_cost_with(leaf));
+                    let expected = table.cost[0] / root_area;
+                    assert!(
+                        (c_sah - expected).abs() <= 1e-5 * expected,
+                        "width {} leaf {max_leaf} block {block}: tree {c_sah}, table {expected}",
+                        N::WIDTH
+                    );
+                    assert!(c_sah <= c_greedy * (1.0 + 1e-6), "{c_sah} > {c_greedy}");
+                    let mut seen = sah.leaf_order.clone();
+                    seen.sort_unstable();
+                    assert_eq!(seen, (0..n as u32).collect::<Vec<_>>());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sah_collapse_builds_the_tree_its_table_prices_4_wide() {
+        check_sah_collapse::<Node4>();
+    }
+
+    #[test]
+    fn sah_collapse_builds_the_tree_its_table_prices_8_wide() {
+        check_sah_collapse::<Node8>();
+    }
 }

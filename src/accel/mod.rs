@@ -7,7 +7,8 @@
 //! analytic spheres and triangles use the watertight test.
 //!
 //! obvhs builds the tree (PLOC + reinsertion, `build.rs`); we collapse it into
-//! our own uncompressed wide BVH and traverse that: 8-wide with AVX2 where the
+//! our own uncompressed wide BVH at least SAH cost (`bvh4::SahCollapse`, the
+//! collapse obvhs does only for its CWBVH) and traverse that: 8-wide with AVX2 where the
 //! CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
 //! leaves hold triangle4 blocks ([`LeafBlock`]), and the 8-wide tree tests a
 //! leaf of two blocks as one eight-lane AVX block (`primitive::avx`). obvhs 0.4
@@ -1108,7 +1109,7 @@ mod tests {
     }
 
     /// The 8-wide and 4-wide trees (leaves of 1 to 8 primitives, so one or
-    /// two triangle4 blocks with sphere lanes) find closest hits bit-identical in
+    /// two triangle4 blocks with sphere lanes; greedy and SAH collapse) find closest hits bit-identical in
     /// distances and barycentrics and the same occlusion as brute force.
     #[test]
     fn node_widths_and_leaf_sizes_agree_with_brute_force() {
@@ -1124,10 +1125,14 @@ mod tests {
         let widths: &[usize] = if bvh8::supported() { &[4, 8] } else { &[4] };
         let mut hits = 0;
         for &node_width in widths {
-            for max_prims_per_leaf in [1, 4, 8] {
+            for (max_prims_per_leaf, leaf_cost) in [1, 4, 8]
+                .into_iter()
+                .flat_map(|m| [(m, None), (m, Some(1.0))])
+            {
                 let preset = BuildPreset {
                     node_width,
                     max_prims_per_leaf,
+                    leaf_cost,
                     ..BuildPreset::default()
                 };
                 let accel = Accel::build_with_preset(&meshes, &spheres, &preset);
