@@ -13,7 +13,7 @@
 //! `scripts/bench_embree.py` traces Embree on exactly the same rays. With
 //! `GRADTRACE_ACCEL_PRESETS=1`, obvhs build presets are compared first by
 //! load-independent figures: SAH cost, node and primitive tests per ray. With
-//! `GRADTRACE_ACCEL_ONCE=coherent` (or `incoherent`, `all`) each query runs
+//! `GRADTRACE_ACCEL_ONCE=coherent` (or `incoherent`, `cornell`, `all`) each query runs
 //! once over that ray set and the bench exits: for instruction counts, e.g.
 //! `valgrind --tool=callgrind --toggle-collect='*trace_once*' target/release/deps/accel-*`.
 
@@ -183,6 +183,12 @@ fn bench_accel(c: &mut Criterion) {
         for (name, rays) in sets.iter().filter(|(n, _)| only == *n || only == "all") {
             let (closest, any) = trace_once(&accel, rays);
             println!("{name}: {closest} closest hits, {any} occluded");
+        }
+        if only == "cornell" || only == "all" {
+            let cornell = Accel::build_with_preset(&[load_cornell()], &[], &preset);
+            let (lo, hi) = cornell.bounds().expect("the box is not empty");
+            let (closest, any) = trace_once(&cornell, &interior_rays(lo, hi));
+            println!("cornell: {closest} closest hits, {any} occluded");
         }
         std::process::exit(0);
     }
