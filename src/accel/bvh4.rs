@@ -564,13 +564,16 @@ fn open_children(bvh2: &Bvh2, n: usize, counts: &[u32], width: usize) -> [Option
 /// what its rays will pay, not by filling slots.
 pub(super) struct SahCollapse {
     width: usize,
-    /// `cost[n·8 + i − 1]`: subtree `n` in at most `i` slots.
-    cost: Vec<f64>,
-    /// For `i = 1`: 0 = one leaf, 1 = one wide node; for `i ≥ 2`: 0 = as for
-    /// `i − 1`, `k` = the left child gets `k` slots and the right `i − k`.
-    choice: Vec<u8>,
-    /// For an inner node made a wide node: the left child's share of `width`.
-    node_split: Vec<u8>,
+    /// Per BVH2 node, how its subtree hangs from `i` slots: `choice[n][0]` is
+    /// 0 for one leaf, else (one wide node) the share `k` of the node's
+    /// `width` slots its left child takes; `choice[n][i − 1]` for `i ≥ 2` is
+    /// 0 for "as for `i − 1`", else the left child's share `k` of `i` slots.
+    /// The costs themselves live only on a stack while the children wait for
+    /// their parent: 8 bytes per BVH2 node stay, not 72.
+    choice: Vec<[u8; 8]>,
+    /// The root's cost with one slot (area units of the build frame).
+    #[cfg_attr(not(test), allow(dead_code))]
+    root_cost: f64,
 }
 
 impl SahCollapse {
@@ -581,31 +584,32 @@ impl SahCollapse {
         max_leaf: u32,
         leaf_cost: impl Fn(u32) -> f64,
     ) -> Self {
-        let len = bvh2.nodes.len();
-        let mut out = Self {
-            width,
-            cost: vec![f64::INFINITY; len * 8],
-            choice: vec![0; len * 8],
-            node_split: vec![0; len],
-        };
+        let mut choice = vec![[0u8; 8]; bvh2.nodes.len()];
+        // cost[i − 1]: the subtree in at most `i` slots, for each finished
+        // subtree whose parent is still to come (right child below left).
+        let mut costs: Vec<[f64; 8]> = Vec::new();
         let mut todo = vec![(0usize, false)];
         while let Some((n, children_done)) = todo.pop() {
             let node = &bvh2.nodes[n];
             let area = node.aabb().half_area() as f64;
             if node.prim_count > 0 {
-                out.cost[n * 8..n * 8 + width].fill(area * leaf_cost(node.prim_count));
+                costs.push([area * leaf_cost(node.prim_count); 8]);
                 continue;
             }
-            let (l, r) = (node.first_index as usize, node.first_index as usize + 1);
             if !children_done {
-                todo.extend([(n, true), (l, false), (r, false)]);
+                // Popped right subtree first, then left, then `n`.
+                let l = node.first_index as usize;
+                todo.extend([(n, true), (l, false), (l + 1, false)]);
                 continue;
             }
+            let (Some(left), Some(right)) = (costs.pop(), costs.pop()) else {
+                unreachable!("both subtrees were pushed before their parent");
+            };
             // distribute[j]: both children in at most j slots (j ≥ 2).
             let mut distribute = [(f64::INFINITY, 0u8); 9];
             for (j, d) in distribute.iter_mut().enumerate().take(width + 1).skip(2) {
                 for k in 1..j {
-                    let c = out.cost[l * 8 + k - 1] + out.cost[r * 8 + j - k - 1];
+                    let c = left[k - 1] + right[j - k - 1];
                     if c < d.0 {
                         *d = (c, k as u8);
                     }
@@ -616,22 +620,32 @@ impl SahCollapse {
             } else {
                 f64::INFINITY
             };
-            let inner = area + distribute[width].0;
-            out.node_split[n] = distribute[width].1;
-            (out.cost[n * 8], out.choice[n * 8]) =
-                if leaf <= inner { (leaf, 0) } else { (inner, 1) };
+            let (inner, split) = (area + distribute[width].0, distribute[width].1);
+            let mut cost = [f64::INFINITY; 8];
+            (cost[0], choice[n][0]) = if leaf <= inner {
+                (leaf, 0)
+            } else {
+                (inner, split)
+            };
             for (i, &(split, k)) in distribute.iter().enumerate().take(width + 1).skip(2) {
-                let prev = out.cost[n * 8 + i - 2];
-                (out.cost[n * 8 + i - 1], out.choice[n * 8 + i - 1]) =
-                    if split < prev { (split, k) } else { (prev, 0) };
+                (cost[i - 1], choice[n][i - 1]) = if split < cost[i - 2] {
+                    (split, k)
+                } else {
+                    (cost[i - 2], 0)
+                };
             }
+            costs.push(cost);
         }
-        out
+        Self {
+            width,
+            choice,
+            root_cost: costs.pop().map_or(0.0, |c| c[0]),
+        }
     }
 
     /// Whether BVH2 node `n`, given one slot, is a leaf.
     pub(super) fn is_leaf(&self, bvh2: &Bvh2, n: usize) -> bool {
-        bvh2.nodes[n].prim_count > 0 || self.choice[n * 8] == 0
+        bvh2.nodes[n].prim_count > 0 || self.choice[n][0] == 0
     }
 
     /// The slots of the wide node made from inner BVH2 node `n`: its children
@@ -641,10 +655,10 @@ impl SahCollapse {
         let mut len = 0;
         let first = bvh2.nodes[n].first_index as usize;
         // (BVH2 node, slots it may take)
-        let k = self.node_split[n] as usize;
+        let k = self.choice[n][0] as usize;
         let mut todo = vec![(first + 1, self.width - k), (first, k)];
         while let Some((c, mut i)) = todo.pop() {
-            while i > 1 && self.choice[c * 8 + i - 1] == 0 {
+            while i > 1 && self.choice[c][i - 1] == 0 {
                 i -= 1;
             }
             if i <= 1 || bvh2.nodes[c].prim_count > 0 {
@@ -652,7 +666,7 @@ impl SahCollapse {
                 len += 1;
                 continue;
             }
-            let k = self.choice[c * 8 + i - 1] as usize;
+            let k = self.choice[c][i - 1] as usize;
             let g = bvh2.nodes[c].first_index as usize;
             todo.push((g + 1, i - k));
             todo.push((g, k));
@@ -708,7 +722,7 @@ mod tests {
                     let sah = Bvh::<N>::from_bvh2(&bvh2, 1.0, max_leaf, Some(block));
                     let greedy = Bvh::<N>::from_bvh2(&bvh2, 1.0, max_leaf, None);
                     let (c_sah, c_greedy) = (sah.sah_cost_with(leaf), greedy.sah_cost_with(leaf));
-                    let expected = table.cost[0] / root_area;
+                    let expected = table.root_cost / root_area;
                     assert!(
                         (c_sah - expected).abs() <= 1e-5 * expected,
                         "width {} leaf {max_leaf} block {block}: tree {c_sah}, table {expected}",
