@@ -359,8 +359,8 @@ fn trace_once(accel: &Accel, rays: &[Ray]) -> (usize, usize) {
     (closest, any)
 }
 
-/// SAH cost, build time and traversal work (CWBVH nodes and primitives tested
-/// per closest-hit ray) of obvhs build presets: figures the machine's load
+/// SAH cost, build time and traversal work (wide nodes and primitives tested
+/// per closest-hit ray) of obvhs build presets and our collapses: figures the machine's load
 /// cannot move (but the build time).
 fn compare_presets(meshes: &[Mesh], sets: &[(&str, Vec<Ray>)]) {
     use gradtrace::accel::BuildPreset;
@@ -401,6 +401,13 @@ fn compare_presets(meshes: &[Mesh], sets: &[(&str, Vec<Ray>)]) {
                 search_depth_threshold: 0,
                 reinsertion_ratio: 1.0,
                 sort_precision: P::U128,
+                ..base
+            },
+        ),
+        (
+            "medium, greedy collapse",
+            BuildPreset {
+                leaf_cost: None,
                 ..base
             },
         ),
