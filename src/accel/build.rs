@@ -52,7 +52,7 @@ pub struct BuildPreset {
     /// `Some(c)`: the SAH-optimal collapse (`bvh4::SahCollapse`) with a leaf's
     /// triangle4 block costing `c` wide node tests; `None`: the greedy collapse
     /// (fill every slot, largest box first). `Some(1.0)` against greedy on the
-    /// bunny, 8-wide: +9 % / +22 % closest-hit and +11 % / +25 % any-hit rays/s
+    /// bunny, 8-wide: +10 % / +23 % closest-hit and +10 % / +25 % any-hit rays/s
     /// (coherent / incoherent); 0.5–1.0 alike (`benches/README.md`).
     pub leaf_cost: Option<f32>,
 }

@@ -8,8 +8,8 @@
 //!
 //! obvhs builds the tree (PLOC + reinsertion, `build.rs`); we collapse it into
 //! our own uncompressed wide BVH at least SAH cost (`bvh4::SahCollapse`, the
-//! collapse obvhs does only for its CWBVH) and traverse that: 8-wide with AVX2 where the
-//! CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
+//! collapse obvhs does only for its CWBVH) and traverse that: 8-wide with AVX2
+//! where the CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
 //! leaves hold triangle4 blocks ([`LeafBlock`]), and the 8-wide tree tests a
 //! leaf of two blocks as one eight-lane AVX block (`primitive::avx`). obvhs 0.4
 //! pitfalls and where they are handled:
@@ -1109,8 +1109,9 @@ mod tests {
     }
 
     /// The 8-wide and 4-wide trees (leaves of 1 to 8 primitives, so one or
-    /// two triangle4 blocks with sphere lanes; greedy and SAH collapse) find closest hits bit-identical in
-    /// distances and barycentrics and the same occlusion as brute force.
+    /// two triangle4 blocks with sphere lanes; greedy and SAH collapse) find
+    /// closest hits bit-identical in distances and barycentrics and the same
+    /// occlusion as brute force.
     #[test]
     fn node_widths_and_leaf_sizes_agree_with_brute_force() {
         let (meshes, spheres) = scene();
