@@ -153,8 +153,9 @@ fn bench_accel(c: &mut Criterion) {
     {
         preset.node_width = w;
     }
-    // GRADTRACE_ACCEL_LEAF / GRADTRACE_ACCEL_REINSERT: another leaf size or
-    // reinsertion ratio, for timing a preset (`GRADTRACE_ACCEL_TIME`).
+    // GRADTRACE_ACCEL_LEAF / GRADTRACE_ACCEL_REINSERT / GRADTRACE_ACCEL_LEAF_COST:
+    // another leaf size, reinsertion ratio or collapse leaf cost, for timing a
+    // preset (`GRADTRACE_ACCEL_TIME`).
     if let Some(n) = std::env::var("GRADTRACE_ACCEL_LEAF")
         .ok()
         .and_then(|n| n.parse().ok())
@@ -166,6 +167,16 @@ fn bench_accel(c: &mut Criterion) {
         .and_then(|r| r.parse().ok())
     {
         preset.reinsertion_ratio = r;
+    }
+    // GRADTRACE_ACCEL_SEARCH: PLOC's search distance (low, medium, high, very_high).
+    if let Ok(d) = std::env::var("GRADTRACE_ACCEL_SEARCH") {
+        use obvhs::ploc::PlocSearchDistance as D;
+        preset.search_distance = match d.as_str() {
+            "low" => D::Low,
+            "high" => D::High,
+            "very_high" => D::VeryHigh,
+            _ => D::Medium,
+        };
     }
     if let Some(c) = std::env::var("GRADTRACE_ACCEL_LEAF_COST")
         .ok()
