@@ -178,11 +178,9 @@ fn bench_accel(c: &mut Criterion) {
             _ => D::Medium,
         };
     }
-    if let Some(c) = std::env::var("GRADTRACE_ACCEL_LEAF_COST")
-        .ok()
-        .and_then(|c| c.parse().ok())
-    {
-        preset.leaf_cost = Some(c);
+    // GRADTRACE_ACCEL_LEAF_COST: a number, or `greedy` for the greedy collapse.
+    if let Ok(c) = std::env::var("GRADTRACE_ACCEL_LEAF_COST") {
+        preset.leaf_cost = c.parse().ok();
     }
     if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
         let accel = Accel::build_with_preset(&meshes, &[], &preset);
