@@ -81,6 +81,12 @@ impl PixelSampler {
         Vec2::new(a, b)
     }
 
+    /// Moves the cursor past `n` dimensions without drawing them.
+    #[inline]
+    pub fn skip(&mut self, n: u32) {
+        self.dim += n;
+    }
+
     /// The values of dimensions `dim` and `dim + 1`, without moving the cursor.
     #[inline]
     pub fn next_2d_at(&mut self, dim: u32) -> Vec2 {

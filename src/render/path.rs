@@ -204,9 +204,14 @@ impl PathTracer<'_> {
             // and divisions, which the CPU overlaps when they sit side by side
             // (bunny render −3 %, cornell within the noise; same bits).
             let u_lobe = sampler.next_1d();
-            // The slot is drawn either way: the dimensions after it stay fixed.
-            let slot_dir = sampler.next_2d();
-            let u_dir = first_dir.unwrap_or(slot_dir);
+            // The first vertex skips its slot, so the dimensions after it stay fixed.
+            let u_dir = match first_dir {
+                Some(u) => {
+                    sampler.skip(2);
+                    u
+                }
+                None => sampler.next_2d(),
+            };
             let bsdf_sample = material.sample(wo, u_lobe, u_dir);
             let capture = first_hit_capture(&mut visible, depth);
             // In line mode every line-coverable light is accounted for by the lines
