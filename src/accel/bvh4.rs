@@ -301,14 +301,8 @@ impl<N: WideNode> Bvh<N> {
     }
 
     /// Surface-area-heuristic cost relative to the root's box: 1 + Σ over child
-    /// boxes of area(child)/area(root) × (1 per inner child, the primitive
-    /// count per leaf).
-    pub(super) fn sah_cost(&self) -> f32 {
-        self.sah_cost_with(|count| count as f64) as f32
-    }
-
-    /// [`Self::sah_cost`] with a leaf of `count` primitives weighted
-    /// `leaf(count)` instead of `count`.
+    /// boxes of area(child)/area(root) × (1 per inner child, `leaf(count)` per
+    /// leaf of `count` primitives).
     pub(super) fn sah_cost_with(&self, leaf: impl Fn(u32) -> f64) -> f64 {
         if self.nodes.is_empty() {
             return 0.0;

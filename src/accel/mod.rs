@@ -274,11 +274,16 @@ impl Tree {
         }
     }
 
-    fn sah_cost(&self) -> f32 {
-        match self {
-            Tree::Four(t) => t.sah_cost(),
-            Tree::Eight(t) => t.sah_cost(),
-        }
+    /// The SAH cost under the collapse's own model (`bvh4::leaf_test_cost`, one
+    /// block of four primitives = `leaf_cost` node tests), so that trees built
+    /// with different collapses compare by the cost the builder minimised.
+    fn sah_cost(&self, leaf_cost: f32) -> f32 {
+        (match self {
+            Tree::Four(t) => t.sah_cost_with(|c| bvh4::leaf_test_cost::<bvh4::Node4>(leaf_cost, c)),
+            Tree::Eight(t) => {
+                t.sah_cost_with(|c| bvh4::leaf_test_cost::<bvh8::Node8>(leaf_cost, c))
+            }
+        }) as f32
     }
 
     /// Whether leaves of two blocks are tested as one eight-lane block
@@ -461,7 +466,7 @@ impl Accel {
             .iter()
             .map(|&pi| input_index[pi as usize])
             .collect();
-        let sah = bvh.sah_cost();
+        let sah = bvh.sah_cost(preset.leaf_cost.unwrap_or(1.0));
         let blocks = bvh.pack_leaves(&prims, &input_of_slot);
 
         Self {
@@ -540,7 +545,8 @@ impl Accel {
         self.bvh.depth()
     }
 
-    /// SAH cost of the tree relative to its root box (see `Bvh4::sah_cost`).
+    /// SAH cost of the tree relative to its root box, under the collapse's cost
+    /// model (see `Tree::sah_cost`).
     #[doc(hidden)]
     pub fn sah_cost(&self) -> f32 {
         self.sah
