@@ -342,6 +342,15 @@ impl<N: WideNode> Bvh<N> {
     }
 }
 
+impl<N: WideNode> Bvh<N> {
+    /// [`Self::sah_cost_with`] under the collapse's own model: a leaf priced by
+    /// [`leaf_test_cost`] with a triangle4 block costing `block` node tests, the
+    /// cost [`SahCollapse`] minimises.
+    pub(super) fn sah_cost(&self, block: f32) -> f64 {
+        self.sah_cost_with(|count| leaf_test_cost::<N>(block, count))
+    }
+}
+
 /// What testing a leaf of `count` primitives costs, in wide node tests, when
 /// one triangle4 block costs `block`: one test per block, except that the
 /// 8-wide tree tests two blocks as one eight-lane test (half again as dear).
@@ -715,7 +724,7 @@ mod tests {
                         SahCollapse::new(&bvh2, &subtree_counts(&bvh2), N::WIDTH, max_leaf, leaf);
                     let sah = Bvh::<N>::from_bvh2(&bvh2, 1.0, max_leaf, Some(block));
                     let greedy = Bvh::<N>::from_bvh2(&bvh2, 1.0, max_leaf, None);
-                    let (c_sah, c_greedy) = (sah.sah_cost_with(leaf), greedy.sah_cost_with(leaf));
+                    let (c_sah, c_greedy) = (sah.sah_cost(block), greedy.sah_cost(block));
                     let expected = table.root_cost / root_area;
                     assert!(
                         (c_sah - expected).abs() <= 1e-5 * expected,

@@ -279,10 +279,8 @@ impl Tree {
     /// with different collapses compare by the cost the builder minimised.
     fn sah_cost(&self, leaf_cost: f32) -> f32 {
         (match self {
-            Tree::Four(t) => t.sah_cost_with(|c| bvh4::leaf_test_cost::<bvh4::Node4>(leaf_cost, c)),
-            Tree::Eight(t) => {
-                t.sah_cost_with(|c| bvh4::leaf_test_cost::<bvh8::Node8>(leaf_cost, c))
-            }
+            Tree::Four(t) => t.sah_cost(leaf_cost),
+            Tree::Eight(t) => t.sah_cost(leaf_cost),
         }) as f32
     }
 

@@ -55,8 +55,8 @@ impl PixelSampler {
     pub fn next_1d(&mut self) -> f32 {
         let d = self.dim;
         self.dim += 1;
-        if d < SOBOL_DIMS.min(SOBOL_DIMS_USED) && self.index < (1 << 16) {
-            let set = d / 4;
+        let set = d / 4;
+        if self.sobol_serves(set) {
             if set != self.cached_set {
                 self.fill_cache(set);
             }
@@ -65,6 +65,14 @@ impl PixelSampler {
             let h = hash2(hash2(self.index, d), self.seed);
             (h >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
         }
+    }
+
+    /// Whether dimension set `set` (dimensions 4·set .. 4·set + 3) comes from
+    /// Sobol rather than the hashed stream: the first [`SOBOL_SETS`] sets, for
+    /// sample indices the 16 direction vectors cover.
+    #[inline]
+    fn sobol_serves(&self, set: u32) -> bool {
+        set < SOBOL_SETS as u32 && self.index < (1 << 16)
     }
 
     #[inline(never)]
@@ -101,7 +109,7 @@ impl PixelSampler {
         debug_assert!(dim.is_multiple_of(4));
         let set = dim / 4;
         let [a, b] = [set, set + 1].map(|s| {
-            if s < SOBOL_DIMS.min(SOBOL_DIMS_USED) / 4 && self.index < (1 << 16) {
+            if self.sobol_serves(s) {
                 self.sobol_4d(s)
             } else {
                 self.hashed_4d(4 * s)
@@ -190,6 +198,8 @@ fn nibble_tables() -> &'static NibbleTables {
 
 /// Dimension sets (of four) served by Sobol.
 const SOBOL_SETS: usize = (SOBOL_DIMS_USED as usize).div_ceil(4);
+// Whole sets, all within the crate's dimensions.
+const _: () = assert!(SOBOL_DIMS_USED.is_multiple_of(4) && SOBOL_DIMS_USED <= SOBOL_DIMS);
 
 /// `sobol_burley`'s (bit-reversed) direction vectors of the first [`SOBOL_SETS`]
 /// dimension sets, 16 per dimension (indices below 2^16). The crate keeps its table
