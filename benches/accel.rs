@@ -147,9 +147,20 @@ fn incoherent_rays(lo: Vec3, hi: Vec3) -> Vec<Ray> {
         .collect()
 }
 
-/// The environment variable `name` parsed as a `T`, if set and valid.
-fn env_parse<T: std::str::FromStr>(name: &str) -> Option<T> {
-    std::env::var(name).ok()?.parse().ok()
+/// The environment variable `name` parsed as a `T`, if set. A value that does
+/// not parse stops the bench with one line naming the variable and what was
+/// expected, rather than silently timing the default in its place.
+fn env_parse<T: std::str::FromStr>(name: &str, expected: &str) -> Option<T> {
+    let v = std::env::var(name).ok()?;
+    match v.parse() {
+        Ok(t) => Some(t),
+        Err(_) => bad_env(name, &v, expected),
+    }
+}
+
+fn bad_env(name: &str, value: &str, expected: &str) -> ! {
+    eprintln!("error: {name}={value:?}: expected {expected}");
+    std::process::exit(2)
 }
 
 fn bench_accel(c: &mut Criterion) {
@@ -158,16 +169,16 @@ fn bench_accel(c: &mut Criterion) {
     // GRADTRACE_ACCEL_WIDTH=4 times the 4-wide tree where the CPU would get the
     // 8-wide one (A/B on the same machine).
     let mut preset = gradtrace::accel::BuildPreset::default();
-    if let Some(w) = env_parse("GRADTRACE_ACCEL_WIDTH") {
+    if let Some(w) = env_parse("GRADTRACE_ACCEL_WIDTH", "4 or 8") {
         preset.node_width = w;
     }
     // GRADTRACE_ACCEL_LEAF / GRADTRACE_ACCEL_REINSERT / GRADTRACE_ACCEL_LEAF_COST:
     // another leaf size, reinsertion ratio or collapse leaf cost, for timing a
     // preset (`GRADTRACE_ACCEL_TIME`).
-    if let Some(n) = env_parse("GRADTRACE_ACCEL_LEAF") {
+    if let Some(n) = env_parse("GRADTRACE_ACCEL_LEAF", "a leaf size in primitives") {
         preset.max_prims_per_leaf = n;
     }
-    if let Some(r) = env_parse("GRADTRACE_ACCEL_REINSERT") {
+    if let Some(r) = env_parse("GRADTRACE_ACCEL_REINSERT", "a reinsertion ratio (a number)") {
         preset.reinsertion_ratio = r;
     }
     // GRADTRACE_ACCEL_SEARCH: PLOC's search distance (low, medium, high, very_high).
@@ -177,14 +188,31 @@ fn bench_accel(c: &mut Criterion) {
             "low" => D::Low,
             "high" => D::High,
             "very_high" => D::VeryHigh,
-            _ => D::Medium,
+            "medium" => D::Medium,
+            _ => bad_env(
+                "GRADTRACE_ACCEL_SEARCH",
+                &d,
+                "low, medium, high or very_high",
+            ),
         };
     }
     // GRADTRACE_ACCEL_LEAF_COST: a number, or `greedy` for the greedy collapse.
-    if std::env::var_os("GRADTRACE_ACCEL_LEAF_COST").is_some() {
-        preset.leaf_cost = env_parse("GRADTRACE_ACCEL_LEAF_COST");
+    if let Ok(c) = std::env::var("GRADTRACE_ACCEL_LEAF_COST") {
+        preset.leaf_cost = match c.as_str() {
+            "greedy" => None,
+            n => Some(n.parse().unwrap_or_else(|_| {
+                bad_env("GRADTRACE_ACCEL_LEAF_COST", n, "a number or `greedy`")
+            })),
+        };
     }
-    if let Some(only) = std::env::var_os("GRADTRACE_ACCEL_ONCE") {
+    if let Ok(only) = std::env::var("GRADTRACE_ACCEL_ONCE") {
+        if !["coherent", "incoherent", "cornell", "all"].contains(&only.as_str()) {
+            bad_env(
+                "GRADTRACE_ACCEL_ONCE",
+                &only,
+                "coherent, incoherent, cornell or all",
+            );
+        }
         let accel = Accel::build_with_preset(&meshes, &[], &preset);
         let (lo, hi) = accel.bounds().expect("bunny is not empty");
         let sets = [
