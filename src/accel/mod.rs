@@ -39,7 +39,8 @@ mod primitive;
 #[doc(hidden)]
 pub use build::BuildPreset;
 pub use offset::{
-    offset_ray_origin, offset_ray_origin_with_error, sphere_point, triangle_point, SurfacePoint,
+    offset_ray_origin, offset_ray_origin_with_error, sphere_point, triangle_normal, triangle_point,
+    triangle_point_with_normal, SurfacePoint,
 };
 
 use crate::math::{Ray, Vec2, Vec3};
@@ -67,8 +68,9 @@ pub struct Hit {
     pub bary: Vec2,
     /// Where the traversal found the triangle: leaf block × 4 + lane, or
     /// [`NO_SLOT`]. A hint, not part of the hit's identity (`==` ignores it):
-    /// [`Accel::hit_vertices`] reads the vertices from the block the leaf
-    /// test has just loaded instead of through the mesh's index buffer.
+    /// [`Accel::hit_triangle`] reads the vertices from the block the leaf
+    /// test has just loaded instead of through the mesh's index buffer, and
+    /// the unit normal from the lane's entry in the build-time normals.
     pub(crate) slot: u32,
 }
 
@@ -333,6 +335,11 @@ pub struct Accel {
     bvh: Tree,
     /// The leaves' primitives as the traversal tests them (see [`LeafBlock`]).
     blocks: Vec<LeafBlock>,
+    /// The unit geometric normal of each block lane's triangle (zero for an
+    /// empty lane or a sphere), index block × 4 + lane like [`Hit::slot`]: a hit
+    /// reads it instead of a cross product, square root and division on the
+    /// path's critical chain.
+    normals: Vec<Vec3>,
     /// Whether the traversal prefetches the leaves it pushes (`blocks` larger
     /// than [`PREFETCH_LEAVES_FROM`]).
     prefetch_leaves: bool,
@@ -466,11 +473,21 @@ impl Accel {
             .collect();
         let sah = bvh.sah_cost(preset.leaf_cost.unwrap_or(1.0));
         let blocks = bvh.pack_leaves(&prims, &input_of_slot);
+        let normals = blocks
+            .iter()
+            .flat_map(|b| {
+                (0..4).map(|lane| match b.ids[lane] {
+                    id if id >= *mesh_first.last().unwrap_or(&0) => Vec3::ZERO,
+                    _ => offset::triangle_normal(b.tris.lane(lane)),
+                })
+            })
+            .collect();
 
         Self {
             bvh,
             prefetch_leaves: std::mem::size_of_val(blocks.as_slice()) >= PREFETCH_LEAVES_FROM,
             blocks,
+            normals,
             sah,
             prims,
             slot_of_input,
@@ -692,12 +709,20 @@ impl Accel {
     /// hit whose slot holds another primitive (a hit from another `Accel`).
     #[inline]
     pub fn hit_vertices(&self, hit: &Hit) -> Option<[Vec3; 3]> {
+        self.hit_triangle(hit).map(|(v, _)| v)
+    }
+
+    /// [`Accel::hit_vertices`] and the triangle's unit geometric normal
+    /// ([`offset::triangle_normal`], computed at build time: the same bits).
+    #[inline]
+    pub fn hit_triangle(&self, hit: &Hit) -> Option<([Vec3; 3], Vec3)> {
         if !matches!(hit.prim, PrimRef::Triangle { .. }) {
             return None;
         }
         let block = self.blocks.get((hit.slot / 4) as usize)?;
         let lane = (hit.slot % 4) as usize;
-        (block.ids[lane] == self.checked_input_of(hit.prim)?).then(|| block.tris.lane(lane))
+        (block.ids[lane] == self.checked_input_of(hit.prim)?)
+            .then(|| (block.tris.lane(lane), self.normals[hit.slot as usize]))
     }
 
     /// The hit of `ray` with the one primitive `prim`, by the exact test

@@ -142,11 +142,24 @@ impl SurfacePoint {
 /// pbrt-v4 triangle hit point: `p = b0 p0 + b1 p1 + b2 p2` with error bound
 /// γ₇ · Σ|bᵢ pᵢ| (pbrt-v4 eq. 6.31).
 pub fn triangle_point(v: [Vec3; 3], bary: Vec2) -> SurfacePoint {
+    triangle_point_with_normal(v, bary, triangle_normal(v))
+}
+
+/// The unit geometric normal of a triangle (counter-clockwise winding), zero
+/// for a degenerate one: the one formula for it, so that a normal computed at
+/// build time ([`super::Accel::hit_triangle`]) has the bits of one computed per hit.
+#[inline]
+pub fn triangle_normal(v: [Vec3; 3]) -> Vec3 {
+    (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero()
+}
+
+/// [`triangle_point`] with the triangle's [`triangle_normal`] already known.
+#[inline]
+pub fn triangle_point_with_normal(v: [Vec3; 3], bary: Vec2, n: Vec3) -> SurfacePoint {
     let b0 = 1.0 - bary.x - bary.y;
     let (t0, t1, t2) = (v[0] * b0, v[1] * bary.x, v[2] * bary.y);
     let p = t0 + t1 + t2;
     let abs_sum = t0.abs() + t1.abs() + t2.abs();
-    let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
     SurfacePoint {
         p,
         p_error: gamma(7) * abs_sum,

@@ -2,7 +2,9 @@
 //! (u, v) and its tangents, material, emission. Bump maps perturb the shading normal
 //! here, and only on shapes that have one.
 
-use crate::accel::{sphere_point, triangle_point, Accel, Hit, PrimRef, SurfacePoint};
+use crate::accel::{
+    sphere_point, triangle_normal, triangle_point_with_normal, Accel, Hit, PrimRef, SurfacePoint,
+};
 use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::{PI, TAU};
@@ -54,14 +56,16 @@ fn triangle_interaction(
     // rather than through the index buffer: on a large mesh those were two
     // dependent cache misses per hit. The indices only for normals and uvs.
     let index = || m.triangles[tri as usize].map(|i| i as usize);
-    let [p0, p1, p2] = accel
-        .hit_vertices(hit)
-        .unwrap_or_else(|| index().map(|i| m.positions[i]));
+    // With the unit normal the accel computed at build time.
+    let ([p0, p1, p2], n) = accel.hit_triangle(hit).unwrap_or_else(|| {
+        let v = index().map(|i| m.positions[i]);
+        (v, triangle_normal(v))
+    });
     let (b1, b2) = (hit.bary.x, hit.bary.y);
     let b0 = 1.0 - b1 - b2;
     // Interpolating the vertices is more accurate than o + t·d far from the
     // origin; the accel's routine also bounds its error.
-    let sp = triangle_point([p0, p1, p2], hit.bary);
+    let sp = triangle_point_with_normal([p0, p1, p2], hit.bary, n);
     let e1 = p1 - p0;
     let e2 = p2 - p0;
     let ng_orig = sp.n_geo;
