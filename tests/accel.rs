@@ -187,17 +187,17 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
             if let PrimRef::Triangle { mesh, tri } = h.prim {
                 let m = &meshes[mesh as usize];
                 let want = m.triangles[tri as usize].map(|i| m.positions[i as usize]);
-                assert_eq!(accel.hit_vertices(&h), Some(want), "{ray:?}");
-                assert_eq!(accel.hit_vertices(&b.expect("brute force agrees")), None);
+                let (v, n) = accel.hit_triangle(&h).expect("a triangle hit in a block");
+                assert_eq!(v, want, "{ray:?}");
+                assert_eq!(accel.hit_triangle(&b.expect("brute force agrees")), None);
                 // Its normal, computed at build time, has the bits of the one
                 // computed per hit, and is this triangle's (checked at f64).
-                let (_, n) = accel.hit_triangle(&h).expect("a triangle hit in a block");
                 assert_eq!(n.to_array(), sp.n_geo.to_array(), "{ray:?}");
                 let [p0, p1, p2] = want.map(|p| p.as_dvec3());
                 let exact = (p1 - p0).cross(p2 - p0).normalize();
                 assert!(n.as_dvec3().dot(exact) > 1.0 - 1e-6, "{n} vs {exact}");
             } else {
-                assert_eq!(accel.hit_vertices(&h), None);
+                assert_eq!(accel.hit_triangle(&h), None);
             }
         }
         let occ = accel.occluded(&ray);

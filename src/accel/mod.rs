@@ -704,16 +704,11 @@ impl Accel {
     }
 
     /// The vertices of a triangle hit, from the leaf block where the traversal
-    /// found it (the same values as the mesh's, copied at build time); `None`
-    /// for spheres, for hits found outside the blocks ([`NO_SLOT`]) and for a
-    /// hit whose slot holds another primitive (a hit from another `Accel`).
-    #[inline]
-    pub fn hit_vertices(&self, hit: &Hit) -> Option<[Vec3; 3]> {
-        self.hit_triangle(hit).map(|(v, _)| v)
-    }
-
-    /// [`Accel::hit_vertices`] and the triangle's unit geometric normal
-    /// ([`offset::triangle_normal`], computed at build time: the same bits).
+    /// found it (the same values as the mesh's, copied at build time), and its
+    /// unit geometric normal ([`offset::triangle_normal`], computed at build
+    /// time: the same bits as per hit); `None` for spheres, for hits found
+    /// outside the blocks ([`NO_SLOT`]) and for a hit whose slot holds another
+    /// primitive (a hit from another `Accel`).
     #[inline]
     pub fn hit_triangle(&self, hit: &Hit) -> Option<([Vec3; 3], Vec3)> {
         if !matches!(hit.prim, PrimRef::Triangle { .. }) {
