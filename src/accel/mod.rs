@@ -75,28 +75,8 @@ pub struct Hit {
     pub(crate) slot: u32,
 }
 
-/// [`Accel::input_of`] inverted, by a binary search of each mesh's first
-/// input index (`mesh_first`, its last entry the first sphere's); `None` for
-/// an empty lane.
-fn prim_ref_of_input(mesh_first: &[u32], id: u32) -> Option<PrimRef> {
-    let first_sphere = *mesh_first.last()?;
-    if id == EMPTY_LANE {
-        return None;
-    }
-    if id >= first_sphere {
-        return Some(PrimRef::Sphere(id - first_sphere));
-    }
-    // The last mesh starting at or before `id` (empty meshes start where the
-    // next one does).
-    let mesh = mesh_first.partition_point(|&f| f <= id) - 1;
-    Some(PrimRef::Triangle {
-        mesh: mesh as u32,
-        tri: id - mesh_first[mesh],
-    })
-}
-
-/// The one mesh with triangles, if only one has any (`mesh_first` as in
-/// [`prim_ref_of_input`]).
+/// The one mesh with triangles, if only one has any (`mesh_first`: each
+/// mesh's first input index, then the first sphere's).
 fn only_mesh(mesh_first: &[u32]) -> Option<u32> {
     let mut with_triangles = mesh_first
         .windows(2)
@@ -539,9 +519,11 @@ impl Accel {
         let lanes = blocks
             .iter()
             .flat_map(|b| {
-                (0..4).map(|lane| match prim_ref_of_input(&mesh_first, b.ids[lane]) {
-                    Some(PrimRef::Triangle { mesh, .. }) => {
-                        LaneRecord::new(offset::triangle_normal(b.tris.lane(lane)), mesh)
+                // A lane's primitive as `prim_of_input` finds it (none for an empty lane).
+                let prim = |id: u32| prims.get(*slot_of_input.get(id as usize)? as usize);
+                b.ids.map(|id| match prim(id) {
+                    Some(&Prim::Triangle { v, mesh, .. }) => {
+                        LaneRecord::new(offset::triangle_normal(v), mesh)
                     }
                     _ => LaneRecord::new(Vec3::ZERO, 0),
                 })
