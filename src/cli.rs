@@ -190,6 +190,11 @@ pub(crate) struct RenderArgs {
     /// then holds only R, G, B.
     #[arg(long)]
     pub(crate) no_aovs: bool,
+    /// Shade every path one hit at a time, never eight hits in SIMD lanes (the
+    /// lanes take Lambertian meshes lit by area lights): the same image, slower;
+    /// for comparing the two.
+    #[arg(long)]
+    pub(crate) no_lanes: bool,
     /// Also compute the analytic image gradients (direct illumination, and the
     /// curvature/bump and camera terms of indirect light) and write them as `grad.*` layers (∂I/∂u, ∂I/∂v and the per-term magnitudes).
     #[arg(long)]
@@ -473,6 +478,7 @@ impl RenderArgs {
                 crop: sp.crop,
                 sample_range: sp.spp_range,
                 merge_planes: false,
+                no_lanes: self.no_lanes,
             },
             tile: sp.tile,
             passes,

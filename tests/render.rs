@@ -813,3 +813,54 @@ fn a_scene_far_from_the_origin_renders_as_it_does_at_the_origin() {
     println!("worst block difference: seed to seed {noise:.4}, origin to 1e4 away {shift:.4}");
     assert!(shift < 2.0 * noise + 0.01, "{shift} against noise {noise}");
 }
+
+/// A scene the lane shading takes (Lambertian meshes, a rectangle light): every
+/// plane of the image is `li`'s bit for bit (`--no-lanes`), at any thread count.
+#[test]
+fn lane_shading_renders_li_image() {
+    let s = gradtrace::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
+        .expect("bundled scene");
+    let accel = Accel::build(&s.meshes, &s.spheres);
+    let run = |threads: usize, no_lanes: bool| {
+        let opts = RenderOptions {
+            spp: Some(6),
+            resolution: Some((40, 36)),
+            aovs: true,
+            no_lanes,
+            ..Default::default()
+        };
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render(&s, &accel, &opts, &|_, _| {}).unwrap())
+    };
+    let planes = |o: &gradtrace::render::RenderOutput| -> Vec<[u32; 3]> {
+        [
+            Some(&o.beauty),
+            o.variance.as_ref(),
+            o.normal.as_ref(),
+            o.albedo.as_ref(),
+        ]
+        .into_iter()
+        .flat_map(|p| p.expect("planes asked for").iter())
+        .map(|v| v.to_array().map(f32::to_bits))
+        .collect()
+    };
+    let scalar = run(2, true);
+    assert!(scalar.beauty.iter().any(|v| v.x > 0.0), "the scene is lit");
+    for threads in [1, 3] {
+        let lanes = run(threads, false);
+        assert!(planes(&lanes) == planes(&scalar), "{threads} threads");
+        assert_eq!(
+            lanes
+                .depth
+                .as_ref()
+                .map(|d| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>()),
+            scalar
+                .depth
+                .as_ref()
+                .map(|d| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+        );
+    }
+}

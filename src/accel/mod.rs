@@ -43,6 +43,11 @@ pub use offset::{
     triangle_point_with_normal, SurfacePoint,
 };
 
+pub(crate) use offset::DEFAULT_REL_ERROR;
+/// pbrt's γ(n), the bound on n rounded f32 operations (the error bounds'
+/// constant, for the lane shading's copy of `triangle_point_with_normal`).
+pub(crate) use primitive::gamma as gamma_bound;
+
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};
 use bvh4::{BoxRay, Bvh, Bvh4, Entry, WideNode};

@@ -26,7 +26,7 @@ use super::primitive::gamma;
 /// bound: 2^-18 ≈ 64 ulps of the largest coordinate — covers a point interpolated
 /// from vertices (pbrt's γ₇) or computed as `ray.at(t)` from an origin of similar
 /// magnitude, with a wide margin.
-const DEFAULT_REL_ERROR: f32 = 1.0 / 262_144.0;
+pub(crate) const DEFAULT_REL_ERROR: f32 = 1.0 / 262_144.0;
 
 /// Offsets `p` along the geometric normal `n_geo` to the side `dir` points to, far
 /// enough that a ray from the result cannot re-hit the surface `p` lies on.
@@ -123,7 +123,7 @@ impl SurfacePoint {
         Self::segment(o, target)
     }
 
-    fn segment(o: Vec3, end: Vec3) -> Ray {
+    pub(crate) fn segment(o: Vec3, end: Vec3) -> Ray {
         let d = end - o;
         let len = d.length();
         if len.is_nan() || len <= 0.0 || len.is_infinite() {

@@ -41,6 +41,21 @@ enum Light {
     Environment,
 }
 
+/// One area light for the lane shading ([`LightSet::area_lights`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AreaLight {
+    pub a: Vec3,
+    pub b: Vec3,
+    pub c: Vec3,
+    pub n: Vec3,
+    pub area: f32,
+    pub emission: Vec3,
+    /// (u, v) ↦ a + u·b + v·c; otherwise a triangle sampled uniformly.
+    pub rect: bool,
+    /// The probability of picking it.
+    pub pick: f32,
+}
+
 /// A light whose whole angular domain the gradient stage can march (see
 /// `gradients::visibility`), with the probability of choosing it.
 #[derive(Clone, Copy, Debug)]
@@ -226,6 +241,48 @@ impl LightSet {
         };
         s.pdf *= pick;
         (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
+    }
+
+    /// Every light as the lane shading (`render::lanes`) reads it, or `None` when
+    /// one is not an area light (spheres and the environment stay with the
+    /// scalar path). The point a sample lands on is `a·w0 + b·w1 + c·w2`: the
+    /// corner and edges of a rectangle with weights (1, u, v), the vertices of
+    /// a triangle with its barycentrics, in the order [`Self::sample`] sums them.
+    pub(crate) fn area_lights(&self, scene: &Scene) -> Option<Vec<AreaLight>> {
+        let choose = self.choose.as_ref()?;
+        self.lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let (mesh, area, [a, b, c], n, rect) = match *l {
+                    Light::Triangle { mesh, area, v, n } => (mesh, area, v, n, false),
+                    Light::Rect {
+                        mesh,
+                        area,
+                        corner,
+                        edge_u,
+                        edge_v,
+                        n,
+                    } => (mesh, area, [corner, edge_u, edge_v], n, true),
+                    Light::Sphere(_) | Light::Environment => return None,
+                };
+                Some(AreaLight {
+                    a,
+                    b,
+                    c,
+                    n,
+                    area,
+                    emission: scene.meshes[mesh as usize].emission,
+                    rect,
+                    pick: choose.discrete_pmf(i),
+                })
+            })
+            .collect()
+    }
+
+    /// The index [`Self::sample`] picks with `u_pick` (the lights exist).
+    pub(crate) fn pick(&self, u_pick: f32) -> Option<usize> {
+        Some(self.choose.as_ref()?.sample_discrete(u_pick))
     }
 
     /// Picks a light as [`Self::sample`] does (same `u_pick`) and, when it is one

@@ -4,6 +4,7 @@
 
 pub mod gradients;
 pub mod interaction;
+mod lanes;
 pub mod lights;
 pub mod noise_adaptive;
 pub mod path;
@@ -61,6 +62,9 @@ pub struct RenderOptions {
     pub sample_range: Option<(u32, u32)>,
     /// Keep what an exact merge of sample ranges needs ([`MergePlanes`]).
     pub merge_planes: bool,
+    /// Trace every path through `PathTracer::li` alone, never the lane
+    /// shading (`render::lanes`): the same image, for comparing the two.
+    pub no_lanes: bool,
 }
 
 impl RenderOptions {
@@ -231,6 +235,7 @@ pub(crate) struct Setup {
     lights: LightSet,
     lines: Option<path::LineConfig>,
     far_light: Option<f32>,
+    lanes: Option<lanes::LaneScene>,
 }
 
 impl Setup {
@@ -261,13 +266,17 @@ impl Setup {
             }
             None => scene.camera.clone(),
         };
+        let lights = LightSet::build(scene);
         Ok(Self {
             spp,
             seed: opts.seed.unwrap_or(settings.seed),
             camera,
             max_depth,
             rr_depth: settings.rr_depth,
-            lights: LightSet::build(scene),
+            lanes: (!opts.gradients && !opts.no_lanes)
+                .then(|| lanes::LaneScene::build(scene, &lights))
+                .flatten(),
+            lights,
             // Lines exist to find visibility jumps: none where nothing casts shadows,
             // and none when asked for 0 rays per line (shading terms only).
             lines: (opts.gradients
@@ -279,6 +288,12 @@ impl Setup {
             }),
             far_light: opts.far_light,
         })
+    }
+
+    /// The lane shading's data, when the scene is one it takes and the render
+    /// asks for no gradients (`render::lanes`).
+    pub(crate) fn lanes(&self) -> Option<&lanes::LaneScene> {
+        self.lanes.as_ref().filter(|_| self.lines.is_none())
     }
 
     pub fn tracer<'a>(&'a self, scene: &'a Scene, accel: &'a Accel) -> PathTracer<'a> {
@@ -453,6 +468,7 @@ pub fn render_passes(
         seed: setup.seed,
         gradients: opts.gradients,
         first: range.start,
+        lanes: setup.lanes(),
     };
     let mut film = Film::new(crop, setup.camera.width as usize, ctx.gradients);
     let cancelled = || {
@@ -536,6 +552,8 @@ pub(crate) struct SampleContext<'a> {
     pub gradients: bool,
     /// The render's first sample index: its sample gives the object id.
     pub first: u32,
+    /// Paths traced together and shaded in lanes, where the scene allows.
+    pub lanes: Option<&'a lanes::LaneScene>,
 }
 
 /// The running sums of every pixel of a crop, tile by tile (tiles in a scrambled
@@ -610,9 +628,34 @@ impl Film {
             .map(|tile| {
                 let mut t = tile.clone();
                 let tw = t.x1 - t.x0;
+                let mut batch = lanes::LaneBatch::default();
+                let mut keys = Vec::new();
                 for y in t.y0..t.y1 {
                     if cancelled() {
                         return None;
+                    }
+                    if let Some(lanes) = ctx.lanes {
+                        // The row's samples traced together, at most
+                        // `LANE_BATCH` at a time, and added in the order the
+                        // loop below adds them.
+                        for x in t.x0..t.x1 {
+                            let pixel = y * w + x;
+                            let i = (y - t.y0) * tw + x - t.x0;
+                            for s in plan(pixel) {
+                                let corner = Vec2::new(x as f32, y as f32);
+                                let (ray, sampler) =
+                                    camera_ray(ctx.camera, corner, pixel as u32, s, ctx.seed);
+                                batch.push(ray, sampler);
+                                keys.push((i, s));
+                            }
+                            if batch.len() >= LANE_BATCH || x + 1 == t.x1 {
+                                lanes.trace(&ctx.tracer, &mut batch);
+                                for ((i, s), r) in keys.drain(..).zip(batch.results()) {
+                                    t.pixels[i].add(&r, s, s == ctx.first);
+                                }
+                            }
+                        }
+                        continue;
                     }
                     for x in t.x0..t.x1 {
                         let pixel = y * w + x;
@@ -745,15 +788,30 @@ pub fn camera_sample_at(
     seed: u32,
     gradients: bool,
 ) -> SampleResult {
-    let mut sampler = PixelSampler::new(key, sample, seed);
-    let jitter = sampler.next_2d();
-    let p = corner + jitter;
-    let ray = camera.generate_ray(p);
+    let (ray, mut sampler) = camera_ray(camera, corner, key, sample, seed);
     let dd = gradients.then(|| {
         let d_len = 1.0 / ray.dir.dot(camera.forward());
         unit_direction_derivatives(ray.dir, d_len, camera.direction_derivatives())
     });
     tracer.li(ray, &mut sampler, dd)
+}
+
+/// Paths the lane shading traces together: enough for full lanes at every
+/// bounce, few enough that their state stays in the L1 cache.
+const LANE_BATCH: usize = 64;
+
+/// A camera sample's ray and the sampler its path goes on drawing from: the
+/// pixel jitter is its first two dimensions.
+pub(crate) fn camera_ray(
+    camera: &crate::scene::Camera,
+    corner: Vec2,
+    key: u32,
+    sample: u32,
+    seed: u32,
+) -> (crate::math::Ray, PixelSampler) {
+    let mut sampler = PixelSampler::new(key, sample, seed);
+    let jitter = sampler.next_2d();
+    (camera.generate_ray(corner + jitter), sampler)
 }
 
 /// Running sums of one pixel's samples (f64, so thousands of samples add exactly

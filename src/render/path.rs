@@ -33,16 +33,16 @@ const FIRST_DIRECTION_DIM: u32 = 2;
 /// point of next-event estimation, the BSDF lobe and direction, Russian roulette
 /// (the eighth is unused). Fixed slots, so vertex k reads the same dimensions
 /// whatever happened at earlier vertices.
-struct VertexSamples {
-    pick: f32,
-    light: Vec2,
-    lobe: f32,
-    dir: Vec2,
-    rr: f32,
+pub(super) struct VertexSamples {
+    pub pick: f32,
+    pub light: Vec2,
+    pub lobe: f32,
+    pub dir: Vec2,
+    pub rr: f32,
 }
 
 impl VertexSamples {
-    fn draw(sampler: &mut PixelSampler, depth: u32) -> Self {
+    pub(super) fn draw(sampler: &mut PixelSampler, depth: u32) -> Self {
         let u = sampler.block8(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
         // The first vertex's direction from the camera set (its own slot unread).
         let dir = if depth == 1 {
