@@ -43,7 +43,7 @@ pub use offset::{
     triangle_point_with_normal, SurfacePoint,
 };
 
-pub(crate) use offset::DEFAULT_REL_ERROR;
+pub(crate) use offset::{DEFAULT_REL_ERROR, SHADOW_EPSILON};
 /// pbrt's γ(n), the bound on n rounded f32 operations (the error bounds'
 /// constant, for the lane shading's copy of `triangle_point_with_normal`).
 pub(crate) use primitive::gamma as gamma_bound;

@@ -73,7 +73,7 @@ pub struct SurfacePoint {
 
 /// Fraction of the distance cut from the end of a shadow ray (pbrt's
 /// `ShadowEpsilon`), on top of offsetting the target point itself.
-const SHADOW_EPSILON: f32 = 1.0e-4;
+pub(crate) const SHADOW_EPSILON: f32 = 1.0e-4;
 
 impl SurfacePoint {
     /// A ray leaving the surface in direction `dir` (normalised here), with

@@ -24,7 +24,10 @@ use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
 use crate::math::{warp, Ray, Vec3};
 use crate::scene::Scene;
-use wide::{f32x8, f64x4};
+use kernel::Shaded8;
+
+mod kernel;
+mod simd;
 
 /// Lanes per shading step: AVX's width (two SSE registers each on a build
 /// without it).
@@ -45,6 +48,8 @@ pub(crate) struct LaneScene {
     first: Vec<u32>,
     triangles: Vec<LaneTriangle>,
     lights: Vec<AreaLight>,
+    /// The kernel in AVX's registers (the CPU has AVX2), else in `wide`'s.
+    avx2: bool,
 }
 
 impl LaneScene {
@@ -80,6 +85,7 @@ impl LaneScene {
             first,
             triangles,
             lights,
+            avx2: avx2(),
         })
     }
 
@@ -110,7 +116,7 @@ impl LaneScene {
             shaded.clear();
             for chunk in live.chunks(LANES) {
                 self.shade(tracer, paths, chunk, depth, gathered);
-                shaded.push(shade8(gathered));
+                shaded.push(self.kernel(gathered));
             }
             let mut kept = 0;
             for k in 0..live.len() {
@@ -198,6 +204,17 @@ impl LaneScene {
         }
     }
 
+    /// The kernel over the gathered lanes, in the widest registers the CPU has.
+    fn kernel(&self, g: &Gathered) -> Shaded8 {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` was detected on this CPU (`LaneScene::build`).
+            #[allow(unsafe_code)]
+            return unsafe { kernel::shade8_avx2(g) };
+        }
+        kernel::shade8::<wide::f32x8>(g)
+    }
+
     /// Direct light through the shadow ray, then the continuation (throughput,
     /// MIS state, Russian roulette), as `li` does; `false` when the path ends.
     /// `s`'s lane `l` is this path's.
@@ -218,7 +235,7 @@ impl LaneScene {
                 unreachable!("a lane scene has triangles only");
             };
             let m = &tracer.scene.meshes[mesh as usize];
-            let normal = s.ng.lane(l);
+            let normal = lane(&s.ng, l);
             p.first_hit = Some(FirstHit {
                 normal,
                 depth: hit.t,
@@ -232,18 +249,18 @@ impl LaneScene {
         }
         if bit(s.direct) {
             p.rays += 1;
-            let shadow = segment(s.shadow_o.lane(l), s.shadow_end.lane(l));
+            let shadow = Ray::segment(lane(&s.shadow_o, l), lane(&s.shadow_d, l), s.shadow_t[l]);
             if !tracer.accel.occluded(&shadow) {
-                p.radiance += s.ld.lane(l);
+                p.radiance += lane(&s.ld, l);
             }
         }
         if !bit(s.next) {
             return false;
         }
-        p.beta *= s.weight.lane(l);
-        p.prev_pdf = s.pdf.as_array()[l];
-        p.prev_p = s.p.lane(l);
-        p.ray = Ray::new(s.next_o.lane(l), s.next_d.lane(l));
+        p.beta *= lane(&s.weight, l);
+        p.prev_pdf = s.pdf[l];
+        p.prev_p = lane(&s.p, l);
+        p.ray = Ray::new(lane(&s.next_o, l), lane(&s.next_d, l));
         if depth >= tracer.rr_depth {
             let q = p.beta.max_element().min(0.95);
             if q <= 0.0 || s.u_rr[l] >= q {
@@ -252,6 +269,23 @@ impl LaneScene {
             p.beta /= q;
         }
         p.beta != Vec3::ZERO
+    }
+}
+
+/// Lane `l` of three planes.
+fn lane(p: &kernel::Planes, l: usize) -> Vec3 {
+    Vec3::new(p[0][l], p[1][l], p[2][l])
+}
+
+/// Whether this CPU runs the kernel in AVX registers.
+fn avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }
 
@@ -413,336 +447,6 @@ impl Gathered {
     }
 }
 
-/// Three planes of lanes: eight vectors.
-#[derive(Clone, Copy)]
-struct V8 {
-    x: f32x8,
-    y: f32x8,
-    z: f32x8,
-}
-
-impl V8 {
-    fn load(p: &[[f32; LANES]; 3]) -> Self {
-        Self {
-            x: f32x8::new(p[0]),
-            y: f32x8::new(p[1]),
-            z: f32x8::new(p[2]),
-        }
-    }
-    /// glam's order: (x·x' + y·y') + z·z'.
-    fn dot(self, o: Self) -> f32x8 {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-    fn add(self, o: Self) -> Self {
-        Self {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-    fn sub(self, o: Self) -> Self {
-        Self {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-    fn mul(self, s: f32x8) -> Self {
-        Self {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-    fn mul_v(self, o: Self) -> Self {
-        Self {
-            x: self.x * o.x,
-            y: self.y * o.y,
-            z: self.z * o.z,
-        }
-    }
-    fn div(self, s: f32x8) -> Self {
-        Self {
-            x: self.x / s,
-            y: self.y / s,
-            z: self.z / s,
-        }
-    }
-    fn neg(self) -> Self {
-        Self {
-            x: -self.x,
-            y: -self.y,
-            z: -self.z,
-        }
-    }
-    fn abs(self) -> Self {
-        Self {
-            x: self.x.abs(),
-            y: self.y.abs(),
-            z: self.z.abs(),
-        }
-    }
-    fn is_finite(self) -> f32x8 {
-        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
-    }
-    fn lane(self, l: usize) -> Vec3 {
-        Vec3::new(
-            self.x.as_array()[l],
-            self.y.as_array()[l],
-            self.z.as_array()[l],
-        )
-    }
-}
-
-/// `Frame`'s basis in lanes.
-struct Frame8 {
-    s: V8,
-    t: V8,
-    n: V8,
-}
-
-impl Frame8 {
-    /// `Frame::from_normal` (Duff et al. 2017), operation for operation.
-    fn from_normal(n: V8) -> Self {
-        let one = f32x8::ONE;
-        let sign = n.z.is_sign_negative().select(-one, one);
-        let a = -one / (sign + n.z);
-        let b = n.x * n.y * a;
-        Self {
-            s: V8 {
-                x: one + sign * n.x * n.x * a,
-                y: sign * b,
-                z: -sign * n.x,
-            },
-            t: V8 {
-                x: b,
-                y: sign + n.y * n.y * a,
-                z: -n.y,
-            },
-            n,
-        }
-    }
-    fn to_local(&self, v: V8) -> V8 {
-        V8 {
-            x: v.dot(self.s),
-            y: v.dot(self.t),
-            z: v.dot(self.n),
-        }
-    }
-    fn to_world(&self, v: V8) -> V8 {
-        self.s.mul(v.x).add(self.t.mul(v.y)).add(self.n.mul(v.z))
-    }
-}
-
-/// `accel::offset_ray_origin_with_error` in lanes.
-fn offset8(p: V8, p_error: V8, n: V8, dir: V8) -> V8 {
-    let zero = f32x8::ZERO;
-    let d = n.abs().dot(p_error);
-    let offset = n.mul(d);
-    let offset = dir.dot(n).simd_lt(zero).select_v(offset.neg(), offset);
-    let po = p.add(offset);
-    let away = |o: f32x8| {
-        o.simd_eq(zero)
-            .select(zero, o.is_sign_negative().select(-f32x8::ONE, f32x8::ONE))
-    };
-    let step =
-        |po: f32x8| (po.abs() * f32x8::splat(f32::EPSILON)).max(f32x8::splat(f32::MIN_POSITIVE));
-    V8 {
-        x: po.x + away(offset.x) * step(po.x),
-        y: po.y + away(offset.y) * step(po.y),
-        z: po.z + away(offset.z) * step(po.z),
-    }
-}
-
-trait SelectV8 {
-    fn select_v(self, t: V8, f: V8) -> V8;
-}
-
-impl SelectV8 for f32x8 {
-    fn select_v(self, t: V8, f: V8) -> V8 {
-        V8 {
-            x: self.select(t.x, f.x),
-            y: self.select(t.y, f.y),
-            z: self.select(t.z, f.z),
-        }
-    }
-}
-
-/// The results of [`shade8`], per lane.
-struct Shaded8 {
-    alive: u32,
-    p: V8,
-    ng: V8,
-    direct: u32,
-    ld: V8,
-    shadow_o: V8,
-    shadow_end: V8,
-    next: u32,
-    next_o: V8,
-    next_d: V8,
-    weight: V8,
-    pdf: f32x8,
-    u_rr: [f32; LANES],
-}
-
-/// `SurfacePoint::spawn_ray_to`'s segment from its two offset ends.
-fn segment(o: Vec3, end: Vec3) -> Ray {
-    crate::accel::SurfacePoint::segment(o, end)
-}
-
-/// The shading of eight hits: `interaction`, the light sample, the
-/// Lambertian eval, pdf and sample, MIS and both rays' offsets, as `li` and
-/// the functions it calls compute them.
-fn shade8(g: &Gathered) -> Shaded8 {
-    let zero = f32x8::ZERO;
-    let one = f32x8::ONE;
-    let frac_1_pi = f32x8::splat(std::f32::consts::FRAC_1_PI);
-    let dir = V8::load(&g.dir);
-    let (b1, b2) = (f32x8::new(g.bary[0]), f32x8::new(g.bary[1]));
-    // `triangle_point_with_normal`: the vertices weighted, and the error bound.
-    let b0 = one - b1 - b2;
-    let t0 = V8::load(&g.v[0]).mul(b0);
-    let t1 = V8::load(&g.v[1]).mul(b1);
-    let t2 = V8::load(&g.v[2]).mul(b2);
-    let p = t0.add(t1).add(t2);
-    let gamma7 = f32x8::splat(crate::accel::gamma_bound(7));
-    let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
-    // `interaction::finish`: normals toward the ray, the frame.
-    let n = V8::load(&g.n);
-    let front = dir.dot(n).simd_lt(zero);
-    let ng = n.mul(front.select(one, -one));
-    let frame = Frame8::from_normal(ng);
-    let wo = frame.to_local(dir.neg());
-    let alive = wo.z.simd_gt(zero);
-    let albedo = V8::load(&g.albedo);
-    let beta = V8::load(&g.beta);
-
-    // The light sample (`LightSet::sample` → `sample_area_point`).
-    let w = V8::load(&g.light_w);
-    let q = V8::load(&g.light[0])
-        .mul(w.x)
-        .add(V8::load(&g.light[1]).mul(w.y))
-        .add(V8::load(&g.light[2]).mul(w.z));
-    let d = q.sub(p);
-    let dist2 = d.dot(d);
-    let area = f32x8::new(g.light_area);
-    let wi = d.div(dist2.sqrt());
-    let ln = V8::load(&g.light_n);
-    let cos_l = -ln.dot(wi);
-    let light_pdf = dist2 / (area * cos_l) * f32x8::new(g.light_pick);
-    let sampled = f32x8::new(g.has_light).simd_gt(zero)
-        & dist2.simd_gt(zero)
-        & area.simd_gt(zero)
-        & cos_l.simd_gt(zero)
-        & light_pdf.simd_gt(zero)
-        & light_pdf.is_finite();
-    // `Material::eval` (Lambert) and the checks of `sample_ld`.
-    let wil = frame.to_local(wi);
-    let upper = wo.is_finite() & wil.is_finite() & wo.z.simd_gt(zero) & wil.z.simd_gt(zero);
-    let f = albedo.mul(frac_1_pi);
-    let f_nonzero = f.x.simd_ne(zero) | f.y.simd_ne(zero) | f.z.simd_ne(zero);
-    let direct = alive & sampled & upper & wi.dot(ng).simd_gt(zero) & f_nonzero;
-    // `Material::pdf` (Lambert): wi's z normalised at f64, as `unit_z` does.
-    let bsdf_pdf = lambert_pdf8(wil);
-    let weight_mis = power_heuristic8(light_pdf, bsdf_pdf);
-    let le = V8::load(&g.light_le);
-    let ld = beta
-        .mul_v(f)
-        .mul(wil.z)
-        .mul_v(le)
-        .mul(weight_mis / light_pdf);
-    // `spawn_ray_to`: both ends offset.
-    let shadow_o = offset8(p, p_error, ng, d);
-    let q_error = {
-        let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
-        let e = m * f32x8::splat(crate::accel::DEFAULT_REL_ERROR) + f32x8::splat(1.0e-30);
-        V8 { x: e, y: e, z: e }
-    };
-    let shadow_end = offset8(q, q_error, ln, d.neg());
-
-    // The BSDF sample (`lambert::sample`: the concentric map, z from its radius).
-    let ox = f32x8::splat(2.0) * f32x8::new(g.u_dir[0]) - one;
-    let oy = f32x8::splat(2.0) * f32x8::new(g.u_dir[1]) - one;
-    let centre = ox.simd_eq(zero) & oy.simd_eq(zero);
-    let x_major = ox.abs().simd_gt(oy.abs());
-    let r = x_major.select(ox, oy);
-    let other = x_major.select(oy, ox);
-    let (s, c) = sin_cos_quarter8(f32x8::splat(std::f32::consts::FRAC_PI_4) * (other / r));
-    let (cos, sin) = (x_major.select(c, s), x_major.select(s, c));
-    let r = centre.select(zero, r);
-    let lx = centre.select(zero, r * cos);
-    let ly = centre.select(zero, r * sin);
-    let rr = r.abs();
-    let lz = (one - rr * rr).max(zero).sqrt();
-    let pdf = lz.simd_gt(zero).select(lz * frac_1_pi, zero);
-    let wi_next = frame.to_world(V8 {
-        x: lx,
-        y: ly,
-        z: lz,
-    });
-    let next = alive & pdf.simd_gt(zero) & wi_next.dot(ng).simd_gt(zero) & albedo.is_finite();
-    let next_o = offset8(p, p_error, ng, wi_next);
-    Shaded8 {
-        alive: alive.to_bitmask(),
-        p,
-        ng,
-        direct: direct.to_bitmask(),
-        ld,
-        shadow_o,
-        shadow_end,
-        next: next.to_bitmask(),
-        next_o,
-        next_d: wi_next,
-        weight: albedo,
-        pdf,
-        u_rr: g.u_rr,
-    }
-}
-
-/// `warp::sin_cos_quarter` in lanes, operation for operation.
-fn sin_cos_quarter8(x: f32x8) -> (f32x8, f32x8) {
-    let z = x * x;
-    let s = ((f32x8::splat(-1.951_529_6e-4) * z + f32x8::splat(8.332_161e-3)) * z
-        - f32x8::splat(1.666_665_5e-1))
-        * z
-        * x
-        + x;
-    let c = ((f32x8::splat(2.443_315_7e-5) * z - f32x8::splat(1.388_731_6e-3)) * z
-        + f32x8::splat(4.166_664_6e-2))
-        * z
-        * z
-        - f32x8::splat(0.5) * z
-        + f32x8::ONE;
-    (s, c)
-}
-
-/// `path::power_heuristic` in lanes.
-fn power_heuristic8(f: f32x8, g: f32x8) -> f32x8 {
-    let (f2, g2) = (f * f, g * g);
-    let sum = f2 + g2;
-    f2.is_inf().select(
-        f32x8::ONE,
-        sum.simd_le(f32x8::ZERO).select(f32x8::ZERO, f2 / sum),
-    )
-}
-
-/// `Material::pdf` of a Lambertian for a direction above the horizon (the
-/// caller masks the rest): cos θ normalised at f64, over π, made finite.
-fn lambert_pdf8(v: V8) -> f32x8 {
-    let half = |k: usize| {
-        let f = |a: f32x8| f64x4::new(std::array::from_fn(|i| f64::from(a.as_array()[4 * k + i])));
-        let (x, y, z) = (f(v.x), f(v.y), f(v.z));
-        let len2 = x * x + y * y + z * z;
-        z / len2.sqrt() * f64x4::splat(std::f64::consts::FRAC_1_PI)
-    };
-    let (lo, hi) = (half(0), half(1));
-    let p = f32x8::new(std::array::from_fn(|i| {
-        let h = if i < 4 { lo } else { hi };
-        h.as_array()[i % 4] as f32
-    }));
-    (p.simd_gt(f32x8::ZERO) & p.is_finite()).select(p, f32x8::ZERO)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -759,7 +463,21 @@ mod tests {
         let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
         let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
         let tracer = setup.tracer(&scene, &accel);
-        let lanes = setup.lanes().expect("cornell is a lane scene");
+        assert!(setup.lanes().is_some(), "cornell is a lane scene");
+        let mut compared = 0;
+        // Both kernels: `wide`'s, and AVX's where this CPU has it.
+        for avx2 in [false, avx2()] {
+            let lights = crate::render::lights::LightSet::build(&scene);
+            let mut lanes = LaneScene::build(&scene, &lights).expect("a lane scene");
+            lanes.avx2 = avx2;
+            compared += compare_with_li(&setup, &tracer, &lanes);
+        }
+        assert!(compared > 16_000, "{compared}");
+    }
+
+    /// Samples of every 97th pixel through `li` and through `lanes`: how many
+    /// agreed (all of them, or it panics).
+    fn compare_with_li(setup: &Setup, tracer: &PathTracer, lanes: &LaneScene) -> usize {
         let (w, h) = (setup.camera.width, setup.camera.height);
         let mut compared = 0;
         for pixel in (0..w * h).step_by(97) {
@@ -768,7 +486,7 @@ mod tests {
             let mut expected = Vec::new();
             for s in 0..13 {
                 expected.push(camera_sample_at(
-                    &tracer,
+                    tracer,
                     &setup.camera,
                     corner,
                     pixel,
@@ -779,7 +497,7 @@ mod tests {
                 let (ray, sampler) = camera_ray(&setup.camera, corner, pixel, s, 5);
                 batch.push(ray, sampler);
             }
-            lanes.trace(&tracer, &mut batch);
+            lanes.trace(tracer, &mut batch);
             let got: Vec<SampleResult> = batch.results().collect();
             for (e, g) in expected.iter().zip(&got) {
                 assert_eq!(
@@ -797,7 +515,7 @@ mod tests {
                 compared += 1;
             }
         }
-        assert!(compared > 8000, "{compared}");
+        compared
     }
 
     /// Only what the lanes shade exactly as `li` does gets them.
