@@ -4,10 +4,7 @@
 //! their order (so a lane's bits are the scalar code's), over any [`Lanes`].
 
 use super::simd::Lanes;
-use super::{Gathered, LANES};
-
-/// A lane's three planes as arrays, as the kernel returns them.
-pub(super) type Planes = [[f32; LANES]; 3];
+use super::{Gathered, Rows, LANES};
 
 /// Three planes of lanes: eight vectors.
 #[derive(Clone, Copy)]
@@ -19,16 +16,13 @@ struct V8<L> {
 
 impl<L: Lanes> V8<L> {
     #[inline(always)]
-    fn load(p: &[[f32; LANES]; 3]) -> Self {
-        Self {
-            x: L::load(p[0]),
-            y: L::load(p[1]),
-            z: L::load(p[2]),
-        }
+    fn load(rows: &Rows) -> Self {
+        let [x, y, z] = L::from_rows(rows);
+        Self { x, y, z }
     }
     #[inline(always)]
-    fn store(self) -> [[f32; LANES]; 3] {
-        [self.x.store(), self.y.store(), self.z.store()]
+    fn store(self) -> Rows {
+        L::to_rows([self.x, self.y, self.z])
     }
     /// glam's order: (x·x' + y·y') + z·z'.
     #[inline(always)]
@@ -182,20 +176,20 @@ fn select_v<L: Lanes>(m: L, t: V8<L>, f: V8<L>) -> V8<L> {
 pub(super) struct Shaded8 {
     /// Bit l: lane l's path goes on from this hit (ω_o above the surface).
     pub alive: u32,
-    pub p: Planes,
-    pub ng: Planes,
+    pub p: Rows,
+    pub ng: Rows,
     /// Bit l: lane l has direct light to test, `ld` along the shadow segment
     /// from `shadow_o` in `shadow_d`, up to `shadow_t`.
     pub direct: u32,
-    pub ld: Planes,
-    pub shadow_o: Planes,
-    pub shadow_d: Planes,
+    pub ld: Rows,
+    pub shadow_o: Rows,
+    pub shadow_d: Rows,
     pub shadow_t: [f32; LANES],
     /// Bit l: lane l's BSDF sample continues the path.
     pub next: u32,
-    pub next_o: Planes,
-    pub next_d: Planes,
-    pub weight: Planes,
+    pub next_o: Rows,
+    pub next_d: Rows,
+    pub weight: Rows,
     pub pdf: [f32; LANES],
     /// Russian roulette's number, passed through.
     pub u_rr: [f32; LANES],
@@ -265,7 +259,7 @@ pub(super) fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let f_nonzero = f.x.ne(zero) | f.y.ne(zero) | f.z.ne(zero);
     let direct = alive & sampled & upper & wi.dot(ng).gt(zero) & f_nonzero;
     // `Material::pdf` (Lambert): wi's z normalised at f64, as `unit_z` does.
-    let bsdf_pdf = L::load(lambert_pdf8(wil.store()));
+    let bsdf_pdf = L::load(lambert_pdf8([wil.x.store(), wil.y.store(), wil.z.store()]));
     let weight_mis = power_heuristic8(light_pdf, bsdf_pdf);
     let le = V8::load(&g.light_le);
     let ld = beta
@@ -368,7 +362,7 @@ fn power_heuristic8<L: Lanes>(f: L, g: L) -> L {
 /// `Material::pdf` of a Lambertian for a direction above the horizon (the
 /// caller masks the rest): cos θ normalised at f64, over π, made finite.
 #[inline(always)]
-fn lambert_pdf8(v: Planes) -> [f32; LANES] {
+fn lambert_pdf8(v: [[f32; LANES]; 3]) -> [f32; LANES] {
     std::array::from_fn(|l| {
         let (x, y, z) = (f64::from(v[0][l]), f64::from(v[1][l]), f64::from(v[2][l]));
         let len2 = x * x + y * y + z * z;

@@ -235,7 +235,7 @@ impl LaneScene {
                 unreachable!("a lane scene has triangles only");
             };
             let m = &tracer.scene.meshes[mesh as usize];
-            let normal = lane(&s.ng, l);
+            let normal = s.ng[l];
             p.first_hit = Some(FirstHit {
                 normal,
                 depth: hit.t,
@@ -249,18 +249,18 @@ impl LaneScene {
         }
         if bit(s.direct) {
             p.rays += 1;
-            let shadow = Ray::segment(lane(&s.shadow_o, l), lane(&s.shadow_d, l), s.shadow_t[l]);
+            let shadow = Ray::segment(s.shadow_o[l], s.shadow_d[l], s.shadow_t[l]);
             if !tracer.accel.occluded(&shadow) {
-                p.radiance += lane(&s.ld, l);
+                p.radiance += s.ld[l];
             }
         }
         if !bit(s.next) {
             return false;
         }
-        p.beta *= lane(&s.weight, l);
+        p.beta *= s.weight[l];
         p.prev_pdf = s.pdf[l];
-        p.prev_p = lane(&s.p, l);
-        p.ray = Ray::new(lane(&s.next_o, l), lane(&s.next_d, l));
+        p.prev_p = s.p[l];
+        p.ray = Ray::new(s.next_o[l], s.next_d[l]);
         if depth >= tracer.rr_depth {
             let q = p.beta.max_element().min(0.95);
             if q <= 0.0 || s.u_rr[l] >= q {
@@ -270,11 +270,6 @@ impl LaneScene {
         }
         p.beta != Vec3::ZERO
     }
-}
-
-/// Lane `l` of three planes.
-fn lane(p: &kernel::Planes, l: usize) -> Vec3 {
-    Vec3::new(p[0][l], p[1][l], p[2][l])
 }
 
 /// Whether this CPU runs the kernel in AVX registers.
@@ -344,27 +339,31 @@ struct LanePath {
     rays: u32,
 }
 
-/// The inputs of [`shade8`], one array per scalar, one entry per lane.
+/// The inputs of the kernel: a vector per lane (`Rows`, transposed into
+/// lanes by the kernel: a row is one 16-byte copy here), a plane per scalar.
 #[derive(Default)]
 struct Gathered {
-    dir: [[f32; LANES]; 3],
+    dir: Rows,
+    v: [Rows; 3],
+    n: Rows,
+    albedo: Rows,
+    beta: Rows,
+    /// The picked light: its point's three terms and their weights, its normal
+    /// and emission; area, pick probability and `has_light` (0: none) below.
+    light: [Rows; 3],
+    light_w: Rows,
+    light_n: Rows,
+    light_le: Rows,
     bary: [[f32; LANES]; 2],
-    v: [[[f32; LANES]; 3]; 3],
-    n: [[f32; LANES]; 3],
-    albedo: [[f32; LANES]; 3],
-    beta: [[f32; LANES]; 3],
     u_dir: [[f32; LANES]; 2],
     u_rr: [f32; LANES],
-    /// The picked light: its point's three terms and weights, its normal, area,
-    /// pick probability and emission; `has_light` 0 without one.
-    light: [[[f32; LANES]; 3]; 3],
-    light_w: [[f32; LANES]; 3],
-    light_n: [[f32; LANES]; 3],
     light_area: [f32; LANES],
     light_pick: [f32; LANES],
-    light_le: [[f32; LANES]; 3],
     has_light: [f32; LANES],
 }
+
+/// One vector per lane.
+type Rows = [Vec3; LANES];
 
 impl Gathered {
     fn set(
@@ -376,14 +375,12 @@ impl Gathered {
         u: &VertexSamples,
         light: Option<&AreaLight>,
     ) {
-        for c in 0..3 {
-            self.dir[c][l] = p.ray.dir[c];
-            self.n[c][l] = t.n[c];
-            self.albedo[c][l] = t.albedo[c];
-            self.beta[c][l] = p.beta[c];
-            for k in 0..3 {
-                self.v[k][c][l] = t.v[k][c];
-            }
+        self.dir[l] = p.ray.dir;
+        self.n[l] = t.n;
+        self.albedo[l] = t.albedo;
+        self.beta[l] = p.beta;
+        for k in 0..3 {
+            self.v[k][l] = t.v[k];
         }
         self.bary[0][l] = hit.bary.x;
         self.bary[1][l] = hit.bary.y;
@@ -397,46 +394,44 @@ impl Gathered {
         self.has_light[l] = 1.0;
         // `LightSet::sample`'s point: corner + u·edge_u + v·edge_v, or the
         // triangle's vertices weighted by a uniform barycentric sample.
-        let w = if a.rect {
-            [1.0, u.light.x, u.light.y]
+        self.light_w[l] = if a.rect {
+            Vec3::new(1.0, u.light.x, u.light.y)
         } else {
             let b = warp::square_to_uniform_triangle(u.light);
-            [1.0 - b.x - b.y, b.x, b.y]
+            Vec3::new(1.0 - b.x - b.y, b.x, b.y)
         };
-        for (c, w) in w.into_iter().enumerate() {
-            self.light[0][c][l] = a.a[c];
-            self.light[1][c][l] = a.b[c];
-            self.light[2][c][l] = a.c[c];
-            self.light_w[c][l] = w;
-            self.light_n[c][l] = a.n[c];
-            self.light_le[c][l] = a.emission[c];
-        }
+        self.light[0][l] = a.a;
+        self.light[1][l] = a.b;
+        self.light[2][l] = a.c;
+        self.light_n[l] = a.n;
+        self.light_le[l] = a.emission;
         self.light_area[l] = a.area;
         self.light_pick[l] = a.pick;
     }
 
     fn copy_lane(&mut self, from: usize, to: usize) {
-        fn lane<const N: usize>(planes: &mut [[f32; LANES]; N], from: usize, to: usize) {
-            for p in planes {
-                p[to] = p[from];
-            }
+        for r in [
+            &mut self.dir,
+            &mut self.n,
+            &mut self.albedo,
+            &mut self.beta,
+            &mut self.light_w,
+            &mut self.light_n,
+            &mut self.light_le,
+        ]
+        .into_iter()
+        .chain(&mut self.v)
+        .chain(&mut self.light)
+        {
+            r[to] = r[from];
         }
-        lane(&mut self.dir, from, to);
-        lane(&mut self.bary, from, to);
-        for v in &mut self.v {
-            lane(v, from, to);
-        }
-        lane(&mut self.n, from, to);
-        lane(&mut self.albedo, from, to);
-        lane(&mut self.beta, from, to);
-        lane(&mut self.u_dir, from, to);
-        for v in &mut self.light {
-            lane(v, from, to);
-        }
-        lane(&mut self.light_w, from, to);
-        lane(&mut self.light_n, from, to);
-        lane(&mut self.light_le, from, to);
+        let [b1, b2] = &mut self.bary;
+        let [u1, u2] = &mut self.u_dir;
         for p in [
+            b1,
+            b2,
+            u1,
+            u2,
             &mut self.u_rr,
             &mut self.light_area,
             &mut self.light_pick,
@@ -473,6 +468,57 @@ mod tests {
             compared += compare_with_li(&setup, &tracer, &lanes);
         }
         assert!(compared > 16_000, "{compared}");
+    }
+
+    /// Paths cut short: no bounce shaded (the first hit's AOVs from the
+    /// scalar set-up), one bounce, and Russian roulette from the second.
+    #[test]
+    fn lanes_stop_where_li_stops() {
+        let mut scene =
+            crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
+                .expect("bundled scene");
+        scene.settings.rr_depth = 2;
+        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+        for max_depth in [1, 2, 6] {
+            let opts = RenderOptions {
+                max_depth: Some(max_depth),
+                ..Default::default()
+            };
+            let setup = Setup::new(&scene, &opts).expect("setup");
+            let tracer = setup.tracer(&scene, &accel);
+            let lanes = setup.lanes().expect("a lane scene");
+            assert!(
+                compare_with_li(&setup, &tracer, lanes) > 8000,
+                "{max_depth}"
+            );
+        }
+    }
+
+    /// Emitting triangles (the light's rectangle dropped, so it is two
+    /// triangle lights) and a second emitter, a wall, picked by power: the
+    /// triangle map, the pick and the MIS weights of emitter hits, bit for bit.
+    #[test]
+    fn lanes_trace_triangle_lights_as_li_does() {
+        let mut scene =
+            crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
+                .expect("bundled scene");
+        let light = scene
+            .meshes
+            .iter()
+            .position(|m| m.emission != Vec3::ZERO)
+            .expect("an emitter");
+        scene.meshes[light].rect = None;
+        let wall = (0..scene.meshes.len())
+            .find(|&i| i != light)
+            .expect("a wall");
+        scene.meshes[wall].emission = Vec3::new(0.4, 0.2, 0.1);
+        scene.meshes[wall].rect = None;
+        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+        let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
+        let tracer = setup.tracer(&scene, &accel);
+        let lanes = setup.lanes().expect("still a lane scene");
+        assert!(lanes.lights.len() > 3 && lanes.lights.iter().all(|l| !l.rect));
+        assert!(compare_with_li(&setup, &tracer, lanes) > 8000);
     }
 
     /// Samples of every 97th pixel through `li` and through `lanes`: how many

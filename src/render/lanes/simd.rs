@@ -3,6 +3,7 @@
 //! time as the 8-wide BVH is. Both do IEEE-exact operations, so the kernel's
 //! results are the same bits either way.
 
+use crate::math::Vec3;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Sub};
 
 /// What the lane kernel asks of eight f32s. Comparisons return masks (all
@@ -37,6 +38,10 @@ pub(super) trait Lanes:
     fn is_sign_negative(self) -> Self;
     /// Bit l: lane l's mask is set.
     fn bitmask(self) -> u32;
+    /// The x, y and z planes of eight vectors (a transpose).
+    fn from_rows(rows: &[Vec3; 8]) -> [Self; 3];
+    /// Eight vectors from their x, y and z planes (the hidden lane zero).
+    fn to_rows(planes: [Self; 3]) -> [Vec3; 8];
 }
 
 impl Lanes for wide::f32x8 {
@@ -104,6 +109,15 @@ impl Lanes for wide::f32x8 {
     fn bitmask(self) -> u32 {
         self.to_bitmask()
     }
+    #[inline(always)]
+    fn from_rows(rows: &[Vec3; 8]) -> [Self; 3] {
+        [0, 1, 2].map(|c| wide::f32x8::new(std::array::from_fn(|l| rows[l][c])))
+    }
+    #[inline(always)]
+    fn to_rows(planes: [Self; 3]) -> [Vec3; 8] {
+        let [x, y, z] = planes.map(|p| p.to_array());
+        std::array::from_fn(|l| Vec3::new(x[l], y[l], z[l]))
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -116,6 +130,7 @@ mod avx {
     //! enables AVX2 and is itself called only where the CPU has it.
     #![allow(unsafe_code)]
     use super::Lanes;
+    use crate::math::Vec3;
     use std::arch::x86_64::*;
     use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Sub};
 
@@ -224,6 +239,58 @@ mod avx {
         #[inline(always)]
         fn bitmask(self) -> u32 {
             unsafe { _mm256_movemask_ps(self.0) as u32 }
+        }
+        /// Rows l and l + 4 side by side, then the 4×4 transposes of both
+        /// halves at once.
+        #[inline(always)]
+        fn from_rows(rows: &[Vec3; 8]) -> [Self; 3] {
+            let r = rows.map(__m128::from);
+            unsafe {
+                let pair =
+                    |a: __m128, b: __m128| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(a), b);
+                let (a0, a1, a2, a3) = (
+                    pair(r[0], r[4]),
+                    pair(r[1], r[5]),
+                    pair(r[2], r[6]),
+                    pair(r[3], r[7]),
+                );
+                let t0 = _mm256_unpacklo_ps(a0, a1);
+                let t1 = _mm256_unpackhi_ps(a0, a1);
+                let t2 = _mm256_unpacklo_ps(a2, a3);
+                let t3 = _mm256_unpackhi_ps(a2, a3);
+                [
+                    Avx(_mm256_shuffle_ps::<0x44>(t0, t2)),
+                    Avx(_mm256_shuffle_ps::<0xee>(t0, t2)),
+                    Avx(_mm256_shuffle_ps::<0x44>(t1, t3)),
+                ]
+            }
+        }
+        #[inline(always)]
+        fn to_rows(planes: [Self; 3]) -> [Vec3; 8] {
+            let [x, y, z] = planes.map(|p| p.0);
+            unsafe {
+                let zero = _mm256_setzero_ps();
+                let t0 = _mm256_unpacklo_ps(x, y);
+                let t1 = _mm256_unpackhi_ps(x, y);
+                let t2 = _mm256_unpacklo_ps(z, zero);
+                let t3 = _mm256_unpackhi_ps(z, zero);
+                let r04 = _mm256_shuffle_ps::<0x44>(t0, t2);
+                let r15 = _mm256_shuffle_ps::<0xee>(t0, t2);
+                let r26 = _mm256_shuffle_ps::<0x44>(t1, t3);
+                let r37 = _mm256_shuffle_ps::<0xee>(t1, t3);
+                let lo = |v: __m256| Vec3::from(_mm256_castps256_ps128(v));
+                let hi = |v: __m256| Vec3::from(_mm256_extractf128_ps::<1>(v));
+                [
+                    lo(r04),
+                    lo(r15),
+                    lo(r26),
+                    lo(r37),
+                    hi(r04),
+                    hi(r15),
+                    hi(r26),
+                    hi(r37),
+                ]
+            }
         }
     }
 }
