@@ -218,8 +218,13 @@ pub fn describe(scene: &Scene) -> String {
     } else {
         "skipped (nothing can cast a shadow)"
     };
+    let shading = match lanes::refusal(scene) {
+        None if lanes::avx2() => "eight hits at a time (AVX2 lanes)".to_string(),
+        None => "eight hits at a time (SSE lanes)".to_string(),
+        Some(why) => format!("one hit at a time ({why})"),
+    };
     format!(
-        "light sampling: {rects} rectangle lights, {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}; with --gradients, visibility term: {shadows}",
+        "light sampling: {rects} rectangle lights, {tris} emitting triangles, {spheres} sphere lights{}; environment sampler: {env_sampler}; bump-mapped shapes: {bumped}; with --gradients, visibility term: {shadows}; path shading without --gradients: {shading}",
         if env { ", environment" } else { "" }
     )
 }

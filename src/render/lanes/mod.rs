@@ -54,9 +54,9 @@ pub(crate) struct LaneScene {
 
 impl LaneScene {
     /// `None` unless every shape is a Lambertian triangle mesh without shading
-    /// normals or a bump map and every light an area light.
+    /// normals or a bump map and every light an area light ([`refusal`]).
     pub(crate) fn build(scene: &Scene, lights: &super::lights::LightSet) -> Option<Self> {
-        if !scene.spheres.is_empty() || scene.environment.is_some() {
+        if refusal(scene).is_some() {
             return None;
         }
         let lights = lights.area_lights(scene)?;
@@ -66,9 +66,6 @@ impl LaneScene {
             let Material::Lambert { albedo } = scene.materials.get(m.material as usize)? else {
                 return None;
             };
-            if !m.normals.is_empty() || m.bump.is_some() {
-                return None;
-            }
             first.push(u32::try_from(triangles.len()).ok()?);
             let keep = albedo.cmpgt(Vec3::ZERO) & albedo.cmplt(Vec3::INFINITY);
             let albedo = Vec3::select(keep, *albedo, Vec3::ZERO);
@@ -272,8 +269,32 @@ impl LaneScene {
     }
 }
 
+/// Why the lanes do not take `scene` (what `li` handles and they do not), or
+/// `None` when they do.
+pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
+    let lambert = |m: u32| {
+        matches!(
+            scene.materials.get(m as usize),
+            Some(Material::Lambert { .. })
+        )
+    };
+    if !scene.spheres.is_empty() {
+        Some("spheres")
+    } else if scene.environment.is_some() {
+        Some("an environment light")
+    } else if !scene.meshes.iter().all(|m| lambert(m.material)) {
+        Some("a glossy or mirror material")
+    } else if scene.meshes.iter().any(|m| !m.normals.is_empty()) {
+        Some("shading normals")
+    } else if scene.meshes.iter().any(|m| m.bump.is_some()) {
+        Some("bump maps")
+    } else {
+        None
+    }
+}
+
 /// Whether this CPU runs the kernel in AVX registers.
-fn avx2() -> bool {
+pub(crate) fn avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx2")
