@@ -249,7 +249,8 @@ impl LightSet {
     /// corner and edges of a rectangle with weights (1, u, v), the vertices of
     /// a triangle with its barycentrics, in the order [`Self::sample`] sums them.
     pub(crate) fn area_lights(&self, scene: &Scene) -> Option<Vec<AreaLight>> {
-        let choose = self.choose.as_ref()?;
+        // Without a distribution (no light has power) nothing is ever picked.
+        let pick = |i: usize| self.choose.as_ref().map_or(0.0, |c| c.discrete_pmf(i));
         self.lights
             .iter()
             .enumerate()
@@ -274,7 +275,7 @@ impl LightSet {
                     area,
                     emission: scene.meshes[mesh as usize].emission,
                     rect,
-                    pick: choose.discrete_pmf(i),
+                    pick: pick(i),
                 })
             })
             .collect()

@@ -298,7 +298,7 @@ impl Setup {
     /// The lane shading's data, when the scene is one it takes and the render
     /// asks for no gradients (`render::lanes`).
     pub(crate) fn lanes(&self) -> Option<&lanes::LaneScene> {
-        self.lanes.as_ref().filter(|_| self.lines.is_none())
+        self.lanes.as_ref()
     }
 
     pub fn tracer<'a>(&'a self, scene: &'a Scene, accel: &'a Accel) -> PathTracer<'a> {
@@ -640,26 +640,30 @@ impl Film {
                         return None;
                     }
                     if let Some(lanes) = ctx.lanes {
-                        // The row's samples traced together, at most
-                        // `LANE_BATCH` at a time, and added in the order the
-                        // loop below adds them.
+                        // The row's samples traced together, `LANE_BATCH` at
+                        // a time, and added in the order the loop below adds them.
+                        let mut flush =
+                            |batch: &mut lanes::LaneBatch, keys: &mut Vec<(usize, u32)>| {
+                                lanes.trace(&ctx.tracer, batch);
+                                for ((i, s), r) in keys.drain(..).zip(batch.results()) {
+                                    t.pixels[i].add(&r, s, s == ctx.first);
+                                }
+                            };
                         for x in t.x0..t.x1 {
                             let pixel = y * w + x;
                             let i = (y - t.y0) * tw + x - t.x0;
+                            let corner = Vec2::new(x as f32, y as f32);
                             for s in plan(pixel) {
-                                let corner = Vec2::new(x as f32, y as f32);
                                 let (ray, sampler) =
                                     camera_ray(ctx.camera, corner, pixel as u32, s, ctx.seed);
                                 batch.push(ray, sampler);
                                 keys.push((i, s));
-                            }
-                            if batch.len() >= LANE_BATCH || x + 1 == t.x1 {
-                                lanes.trace(&ctx.tracer, &mut batch);
-                                for ((i, s), r) in keys.drain(..).zip(batch.results()) {
-                                    t.pixels[i].add(&r, s, s == ctx.first);
+                                if batch.len() == LANE_BATCH {
+                                    flush(&mut batch, &mut keys);
                                 }
                             }
                         }
+                        flush(&mut batch, &mut keys);
                         continue;
                     }
                     for x in t.x0..t.x1 {

@@ -105,6 +105,27 @@ pub struct FirstHit {
     pub back_facing: bool,
 }
 
+impl FirstHit {
+    /// The AOVs of a camera ray's hit: the shading `normal`, the distance `t`,
+    /// the material's albedo and the object id; `dir` is the ray's direction.
+    pub(super) fn new(
+        scene: &Scene,
+        normal: Vec3,
+        t: f32,
+        material: u32,
+        object_id: u32,
+        dir: Vec3,
+    ) -> Self {
+        Self {
+            normal,
+            depth: t,
+            albedo: scene.materials[material as usize].albedo(),
+            object_id,
+            back_facing: normal.dot(dir) >= 0.0,
+        }
+    }
+}
+
 /// Power heuristic with β = 2 (Veach 1997), written to stay finite when one
 /// density is infinite or both are zero.
 pub fn power_heuristic(f: f32, g: f32) -> f32 {
@@ -288,13 +309,14 @@ impl PathTracer<'_> {
             })
         });
         VisibleSurface {
-            aovs: FirstHit {
-                normal: si.frame.n,
-                depth: t,
-                albedo: self.scene.materials[si.material as usize].albedo(),
-                object_id: si.object_id,
-                back_facing: si.frame.n.dot(ray.dir) >= 0.0,
-            },
+            aovs: FirstHit::new(
+                self.scene,
+                si.frame.n,
+                t,
+                si.material,
+                si.object_id,
+                ray.dir,
+            ),
             gradient,
         }
     }
@@ -327,15 +349,23 @@ impl PathTracer<'_> {
         }
         let w = if st.prev_line && self.lights.is_line_light(self.scene, si.prim) {
             0.0
-        } else if st.prev_pdf.is_infinite() {
-            1.0
         } else {
-            let light_pdf = self
-                .lights
-                .pdf_emitter(self.scene, si.prim, st.prev_p, si.p, si.ng);
-            power_heuristic(st.prev_pdf, light_pdf)
+            self.emitter_weight(si, st.prev_pdf, st.prev_p)
         };
         st.beta * si.emission * w
+    }
+
+    /// The MIS weight of an emitter the path hit at `si`, against the light
+    /// sample that could have found it from `prev_p` (`prev_pdf`: the BSDF
+    /// sample's density, infinite for camera rays and delta lobes).
+    pub(super) fn emitter_weight(&self, si: &Interaction, prev_pdf: f32, prev_p: Vec3) -> f32 {
+        if prev_pdf.is_infinite() {
+            return 1.0;
+        }
+        let light_pdf = self
+            .lights
+            .pdf_emitter(self.scene, si.prim, prev_p, si.p, si.ng);
+        power_heuristic(prev_pdf, light_pdf)
     }
 
     /// Direct light at a vertex from one light sample (pbrt's `SampleLd`), and the
@@ -437,15 +467,21 @@ impl PathTracer<'_> {
         st.prev_p = si.p;
         st.prev_n = si.frame.n;
         let ray = si.spawn_ray(wi);
-        // Russian roulette on the throughput, once paths are long enough.
+        self.survives(&mut st.beta, u_rr, depth).then_some(ray)
+    }
+
+    /// Russian roulette on the throughput `beta` at `depth`, once paths are long
+    /// enough (the survivor's `beta` divided by its probability); `false`
+    /// when the path ends here, by the roulette or with zero throughput.
+    pub(super) fn survives(&self, beta: &mut Vec3, u_rr: f32, depth: u32) -> bool {
         if depth >= self.rr_depth {
-            let q = st.beta.max_element().min(0.95);
+            let q = beta.max_element().min(0.95);
             if q <= 0.0 || u_rr >= q {
-                return None;
+                return false;
             }
-            st.beta /= q;
+            *beta /= q;
         }
-        (st.beta != Vec3::ZERO).then_some(ray)
+        *beta != Vec3::ZERO
     }
 
     /// Direct light at the first hit from one light, by one φ-line of shadow rays

@@ -16,6 +16,10 @@ struct V8<L> {
 
 impl<L: Lanes> V8<L> {
     #[inline(always)]
+    fn splat(v: L) -> Self {
+        Self { x: v, y: v, z: v }
+    }
+    #[inline(always)]
     fn load(rows: &Rows) -> Self {
         let [x, y, z] = L::from_rows(rows);
         Self { x, y, z }
@@ -177,7 +181,8 @@ pub(super) struct Shaded8 {
     /// Bit l: lane l's path goes on from this hit (ω_o above the surface).
     pub alive: u32,
     pub p: Rows,
-    pub ng: Rows,
+    /// The shading frame's normal (the first hit's AOV).
+    pub normal: Rows,
     /// Bit l: lane l has direct light to test, `ld` along the shadow segment
     /// from `shadow_o` in `shadow_d`, up to `shadow_t`.
     pub direct: u32,
@@ -191,8 +196,6 @@ pub(super) struct Shaded8 {
     pub next_d: Rows,
     pub weight: Rows,
     pub pdf: [f32; LANES],
-    /// Russian roulette's number, passed through.
-    pub u_rr: [f32; LANES],
 }
 
 /// [`shade8`] in AVX's 256-bit registers.
@@ -202,14 +205,25 @@ pub(super) struct Shaded8 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn shade8_avx2(g: &Gathered) -> Shaded8 {
-    shade8::<super::simd::Avx>(g)
+    // SAFETY: this function runs only where the CPU has AVX2 (its contract).
+    unsafe { shade8::<super::simd::Avx>(g) }
+}
+
+/// [`shade8`] in `wide`'s lanes, which any build's CPU runs.
+pub(super) fn shade8_wide(g: &Gathered) -> Shaded8 {
+    // SAFETY: `wide` uses only what the build targets.
+    unsafe { shade8::<wide::f32x8>(g) }
 }
 
 /// The shading of eight hits: `interaction`, the light sample, the
 /// Lambertian eval, pdf and sample, MIS and both rays' offsets, as `li` and
 /// the functions it calls compute them.
+///
+/// # Safety
+/// The CPU must run `L`'s instructions (AVX2 for `simd::Avx`): the lane
+/// types' methods are safe functions that do not check.
 #[inline(always)]
-pub(super) fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
+unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let zero = L::splat(0.0);
     let one = L::splat(1.0);
     let frac_1_pi = L::splat(std::f32::consts::FRAC_1_PI);
@@ -223,11 +237,27 @@ pub(super) fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let p = t0.add(t1).add(t2);
     let gamma7 = L::splat(crate::accel::gamma_bound(7));
     let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
-    // `interaction::finish`: normals toward the ray, the frame.
+    // `triangle_interaction`'s shading normal: the vertices' normals
+    // interpolated and normalised, the geometric one where that gives zero.
     let n = V8::load(&g.n);
+    let ns = if g.smooth {
+        let [n0, n1, n2] = [0, 1, 2].map(|k| V8::<L>::load(&g.vn[k]));
+        let s = n0.mul(b0).add(n1.mul(b1)).add(n2.mul(b2));
+        // `normalize_or_zero`: times 1/|s| where that is finite and positive.
+        let rcp = one / s.dot(s).sqrt();
+        let s = select_v(rcp.is_finite() & rcp.gt(zero), s.mul(rcp), V8::splat(zero));
+        select_v(s.x.eq(zero) & s.y.eq(zero) & s.z.eq(zero), n, s)
+    } else {
+        n
+    };
+    // `interaction::finish`: normals toward the ray, the shading normal folded
+    // back where it is not above the surface, the frame.
     let front = dir.dot(n).lt(zero);
-    let ng = n.mul(front.select(one, -one));
-    let frame = Frame8::from_normal(ng);
+    let sign = front.select(one, -one);
+    let ng = n.mul(sign);
+    let ns = ns.mul(sign);
+    let ns = select_v(ns.dot(ng).le(L::splat(1e-4)), ng, ns);
+    let frame = Frame8::from_normal(ns);
     let wo = frame.to_local(dir.neg());
     let alive = wo.z.gt(zero);
     let albedo = V8::load(&g.albedo);
@@ -310,12 +340,14 @@ pub(super) fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         y: ly,
         z: lz,
     });
-    let next = alive & pdf.gt(zero) & wi_next.dot(ng).gt(zero) & albedo.is_finite();
+    // (`continue_path` also asks for a finite weight: the albedo was
+    // sanitised when the lane scene was built.)
+    let next = alive & pdf.gt(zero) & wi_next.dot(ng).gt(zero);
     let next_o = offset8(p, p_error, ng, wi_next);
     Shaded8 {
         alive: alive.bitmask(),
         p: p.store(),
-        ng: ng.store(),
+        normal: frame.n.store(),
         direct: direct.bitmask(),
         ld: ld.store(),
         shadow_o: shadow_o.store(),
@@ -326,7 +358,6 @@ pub(super) fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         next_d: wi_next.store(),
         weight: albedo.store(),
         pdf: pdf.store(),
-        u_rr: g.u_rr,
     }
 }
 

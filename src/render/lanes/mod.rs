@@ -4,7 +4,8 @@
 //! and three-wide vector work per vertex, at an IPC near the core's limit, so
 //! only fewer instructions make it faster. Here a batch of paths (a tile row's
 //! samples) advances bounce by bounce: every live path's ray is traced with the
-//! same single-ray queries, then the hits are shaded in `wide::f32x8` lanes —
+//! same single-ray queries, then the hits are shaded eight at a time in SIMD
+//! lanes (`kernel`: AVX registers where the CPU has AVX2, `wide::f32x8` else) —
 //! the surface point and its error bound, the frame, the light sample, the
 //! Lambertian eval, pdf and sample, MIS, both rays' offsets — then the shadow
 //! rays are traced and the paths go on. Same estimator, same random numbers
@@ -18,7 +19,7 @@
 
 use super::interaction::interaction;
 use super::lights::AreaLight;
-use super::path::{power_heuristic, FirstHit, PathTracer, SampleResult, VertexSamples};
+use super::path::{FirstHit, PathTracer, SampleResult, VertexSamples};
 use crate::accel::{triangle_normal, Hit, PrimRef};
 use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
@@ -49,7 +50,13 @@ pub(crate) struct LaneScene {
     triangles: Vec<LaneTriangle>,
     lights: Vec<AreaLight>,
     /// The kernel in AVX's registers (the CPU has AVX2), else in `wide`'s.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx2: bool,
+    /// Each triangle's vertex normals, when some mesh has shading normals
+    /// (empty otherwise); zero on a mesh without them, which the interpolation
+    /// turns into the geometric normal, as `interaction` does.
+    vertex_normals: Vec<[Vec3; 3]>,
+    smooth: bool,
 }
 
 impl LaneScene {
@@ -62,6 +69,8 @@ impl LaneScene {
         let lights = lights.area_lights(scene)?;
         let mut first = Vec::with_capacity(scene.meshes.len());
         let mut triangles = Vec::new();
+        let smooth = scene.meshes.iter().any(|m| !m.normals.is_empty());
+        let mut vertex_normals = Vec::new();
         for m in &scene.meshes {
             let Material::Lambert { albedo } = scene.materials.get(m.material as usize)? else {
                 return None;
@@ -77,12 +86,21 @@ impl LaneScene {
                     albedo,
                 }
             }));
+            if smooth {
+                vertex_normals.extend(
+                    m.triangles.iter().map(|t| {
+                        t.map(|i| m.normals.get(i as usize).copied().unwrap_or(Vec3::ZERO))
+                    }),
+                );
+            }
         }
         Some(Self {
             first,
             triangles,
             lights,
             avx2: avx2(),
+            vertex_normals,
+            smooth,
         })
     }
 
@@ -112,7 +130,7 @@ impl LaneScene {
             }
             shaded.clear();
             for chunk in live.chunks(LANES) {
-                self.shade(tracer, paths, chunk, depth, gathered);
+                self.gather(tracer, paths, chunk, depth, gathered);
                 shaded.push(self.kernel(gathered));
             }
             let mut kept = 0;
@@ -138,10 +156,7 @@ impl LaneScene {
         let Some(hit) = tracer.accel.intersect(&p.ray) else {
             return false;
         };
-        let PrimRef::Triangle { mesh, .. } = hit.prim else {
-            unreachable!("a lane scene has triangles only");
-        };
-        let m = &tracer.scene.meshes[mesh as usize];
+        let m = &tracer.scene.meshes[mesh_of(&hit) as usize];
         // The first hit's AOVs come from the lanes (`finish`), unless no
         // bounce is shaded at all.
         let aovs = depth == 1 && tracer.max_depth == 1;
@@ -149,24 +164,17 @@ impl LaneScene {
             // Rare: the scalar set-up, which gives the same point and normals.
             let si = interaction(tracer.scene, tracer.accel, &p.ray, &hit);
             if aovs {
-                p.first_hit = Some(FirstHit {
-                    normal: si.frame.n,
-                    depth: hit.t,
-                    albedo: tracer.scene.materials[si.material as usize].albedo(),
-                    object_id: si.object_id,
-                    back_facing: si.frame.n.dot(p.ray.dir) >= 0.0,
-                });
+                p.first_hit = Some(FirstHit::new(
+                    tracer.scene,
+                    si.frame.n,
+                    hit.t,
+                    si.material,
+                    si.object_id,
+                    p.ray.dir,
+                ));
             }
             if si.emission != Vec3::ZERO {
-                let w = if p.prev_pdf.is_infinite() {
-                    1.0
-                } else {
-                    let light_pdf =
-                        tracer
-                            .lights
-                            .pdf_emitter(tracer.scene, si.prim, p.prev_p, si.p, si.ng);
-                    power_heuristic(p.prev_pdf, light_pdf)
-                };
+                let w = tracer.emitter_weight(&si, p.prev_pdf, p.prev_p);
                 p.radiance += p.beta * si.emission * w;
             }
         }
@@ -176,7 +184,7 @@ impl LaneScene {
 
     /// Gathers the hits of the paths `chunk` (at most [`LANES`]) and their
     /// random numbers into lanes.
-    fn shade(
+    fn gather(
         &self,
         tracer: &PathTracer,
         paths: &mut [LanePath],
@@ -184,6 +192,7 @@ impl LaneScene {
         depth: u32,
         g: &mut Gathered,
     ) {
+        g.smooth = self.smooth;
         for (l, &i) in chunk.iter().enumerate() {
             let p = &mut paths[i];
             let u = VertexSamples::draw(&mut p.sampler, depth);
@@ -191,7 +200,14 @@ impl LaneScene {
             let PrimRef::Triangle { mesh, tri } = hit.prim else {
                 unreachable!("a lane scene has triangles only");
             };
-            let t = &self.triangles[(self.first[mesh as usize] + tri) as usize];
+            p.u_rr = u.rr;
+            let index = (self.first[mesh as usize] + tri) as usize;
+            let t = &self.triangles[index];
+            if self.smooth {
+                for (k, n) in self.vertex_normals[index].into_iter().enumerate() {
+                    g.vn[k][l] = n;
+                }
+            }
             let light = tracer.lights.pick(u.pick).map(|k| &self.lights[k]);
             g.set(l, p, &hit, t, &u, light);
         }
@@ -205,11 +221,11 @@ impl LaneScene {
     fn kernel(&self, g: &Gathered) -> Shaded8 {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
-            // SAFETY: `avx2` was detected on this CPU (`LaneScene::build`).
-            #[allow(unsafe_code)]
+            // SAFETY: `avx2` is true only where AVX2 was detected on this CPU
+            // (`LaneScene::build`).
             return unsafe { kernel::shade8_avx2(g) };
         }
-        kernel::shade8::<wide::f32x8>(g)
+        kernel::shade8_wide(g)
     }
 
     /// Direct light through the shadow ray, then the continuation (throughput,
@@ -225,21 +241,17 @@ impl LaneScene {
     ) -> bool {
         let bit = |m: u32| m & (1 << l) != 0;
         if depth == 1 {
-            // `li`'s `visible_surface`: the frame's normal is the flipped
-            // geometric one here.
+            // `li`'s `visible_surface`, with the lanes' shading normal.
             let hit = p.hit.expect("a shaded path has a hit");
-            let PrimRef::Triangle { mesh, .. } = hit.prim else {
-                unreachable!("a lane scene has triangles only");
-            };
-            let m = &tracer.scene.meshes[mesh as usize];
-            let normal = s.ng[l];
-            p.first_hit = Some(FirstHit {
-                normal,
-                depth: hit.t,
-                albedo: tracer.scene.materials[m.material as usize].albedo(),
-                object_id: m.object_id,
-                back_facing: normal.dot(p.ray.dir) >= 0.0,
-            });
+            let m = &tracer.scene.meshes[mesh_of(&hit) as usize];
+            p.first_hit = Some(FirstHit::new(
+                tracer.scene,
+                s.normal[l],
+                hit.t,
+                m.material,
+                m.object_id,
+                p.ray.dir,
+            ));
         }
         if !bit(s.alive) {
             return false;
@@ -258,14 +270,7 @@ impl LaneScene {
         p.prev_pdf = s.pdf[l];
         p.prev_p = s.p[l];
         p.ray = Ray::new(s.next_o[l], s.next_d[l]);
-        if depth >= tracer.rr_depth {
-            let q = p.beta.max_element().min(0.95);
-            if q <= 0.0 || s.u_rr[l] >= q {
-                return false;
-            }
-            p.beta /= q;
-        }
-        p.beta != Vec3::ZERO
+        tracer.survives(&mut p.beta, p.u_rr, depth)
     }
 }
 
@@ -284,12 +289,18 @@ pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
         Some("an environment light")
     } else if !scene.meshes.iter().all(|m| lambert(m.material)) {
         Some("a glossy or mirror material")
-    } else if scene.meshes.iter().any(|m| !m.normals.is_empty()) {
-        Some("shading normals")
     } else if scene.meshes.iter().any(|m| m.bump.is_some()) {
         Some("bump maps")
     } else {
         None
+    }
+}
+
+/// The mesh of a hit in a lane scene (triangles only).
+fn mesh_of(hit: &Hit) -> u32 {
+    match hit.prim {
+        PrimRef::Triangle { mesh, .. } => mesh,
+        PrimRef::Sphere(_) => unreachable!("a lane scene has triangles only"),
     }
 }
 
@@ -329,6 +340,7 @@ impl LaneBatch {
             hit: None,
             first_hit: None,
             rays: 0,
+            u_rr: 0.0,
         });
     }
 
@@ -358,6 +370,8 @@ struct LanePath {
     hit: Option<Hit>,
     first_hit: Option<FirstHit>,
     rays: u32,
+    /// This vertex's Russian roulette number.
+    u_rr: f32,
 }
 
 /// The inputs of the kernel: a vector per lane (`Rows`, transposed into
@@ -367,6 +381,9 @@ struct Gathered {
     dir: Rows,
     v: [Rows; 3],
     n: Rows,
+    /// The vertices' shading normals, read only when `smooth`.
+    vn: [Rows; 3],
+    smooth: bool,
     albedo: Rows,
     beta: Rows,
     /// The picked light: its point's three terms and their weights, its normal
@@ -377,7 +394,6 @@ struct Gathered {
     light_le: Rows,
     bary: [[f32; LANES]; 2],
     u_dir: [[f32; LANES]; 2],
-    u_rr: [f32; LANES],
     light_area: [f32; LANES],
     light_pick: [f32; LANES],
     has_light: [f32; LANES],
@@ -407,7 +423,6 @@ impl Gathered {
         self.bary[1][l] = hit.bary.y;
         self.u_dir[0][l] = u.dir.x;
         self.u_dir[1][l] = u.dir.y;
-        self.u_rr[l] = u.rr;
         let Some(a) = light else {
             self.has_light[l] = 0.0;
             return;
@@ -442,6 +457,7 @@ impl Gathered {
         ]
         .into_iter()
         .chain(&mut self.v)
+        .chain(&mut self.vn)
         .chain(&mut self.light)
         {
             r[to] = r[from];
@@ -453,7 +469,6 @@ impl Gathered {
             b2,
             u1,
             u2,
-            &mut self.u_rr,
             &mut self.light_area,
             &mut self.light_pick,
             &mut self.has_light,
@@ -513,6 +528,30 @@ mod tests {
                 "{max_depth}"
             );
         }
+    }
+
+    /// Shading normals: interpolated, one of zero length (the geometric
+    /// normal instead) and some below the surface (folded back), bit for bit.
+    #[test]
+    fn lanes_interpolate_shading_normals_as_li_does() {
+        let mut scene =
+            crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
+                .expect("bundled scene");
+        for (k, m) in scene.meshes.iter_mut().enumerate() {
+            m.normals = (0..m.positions.len())
+                .map(|i| match (k + i) % 5 {
+                    0 => Vec3::ZERO,
+                    1 => Vec3::new(0.3, -0.8, 0.5).normalize(),
+                    _ => Vec3::new(0.2 * i as f32, 1.0, -0.1 * k as f32).normalize(),
+                })
+                .collect();
+        }
+        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+        let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
+        let tracer = setup.tracer(&scene, &accel);
+        let lanes = setup.lanes().expect("a lane scene");
+        assert!(lanes.smooth);
+        assert!(compare_with_li(&setup, &tracer, lanes) > 8000);
     }
 
     /// Emitting triangles (the light's rectangle dropped, so it is two
@@ -603,9 +642,16 @@ mod tests {
         ] {
             assert!(!lanes(&load(scene)), "{scene}: {why}");
         }
-        // Shading normals on one mesh.
-        let m = &mut cornell.meshes[0];
-        m.normals = vec![Vec3::Y; m.positions.len()];
+        // No light at all: still the lanes' (every light pick comes back empty).
+        let mut dark = cornell.clone();
+        for m in &mut dark.meshes {
+            m.emission = Vec3::ZERO;
+        }
+        assert!(lanes(&dark));
+        // A glossy material on one mesh.
+        cornell.materials[cornell.meshes[0].material as usize] = Material::Mirror {
+            reflectance: Vec3::ONE,
+        };
         assert!(!lanes(&cornell));
     }
 }

@@ -40,7 +40,8 @@ pub(super) trait Lanes:
     fn bitmask(self) -> u32;
     /// The x, y and z planes of eight vectors (a transpose).
     fn from_rows(rows: &[Vec3; 8]) -> [Self; 3];
-    /// Eight vectors from their x, y and z planes (the hidden lane zero).
+    /// Eight vectors from their x, y and z planes (the hidden lane, which no
+    /// operation reads, zero for `Avx` and z for `wide`).
     fn to_rows(planes: [Self; 3]) -> [Vec3; 8];
 }
 
@@ -126,9 +127,10 @@ pub(super) use avx::Avx;
 #[cfg(target_arch = "x86_64")]
 mod avx {
     //! The intrinsics are `unsafe` outside an AVX function; every method is
-    //! `#[inline(always)]` and called only from `kernel::shade8_avx2`, which
-    //! enables AVX2 and is itself called only where the CPU has it.
-    #![allow(unsafe_code)]
+    //! `#[inline(always)]` and called only through `kernel::shade8_avx2`,
+    //! which enables AVX2 and whose contract is a CPU that has it (the
+    //! generic `kernel::shade8` is `unsafe` for that reason). SAFETY of each
+    //! block below: that contract.
     use super::Lanes;
     use crate::math::Vec3;
     use std::arch::x86_64::*;
