@@ -13,9 +13,9 @@
 //! lane by lane: a path's radiance is `li`'s, whichever paths share its lanes
 //! and whatever the thread count (`tests`: sample for sample).
 //!
-//! It takes Lambertian triangle meshes without shading normals or bump maps,
-//! lit by area lights (rectangles, emitting triangles), without gradients or
-//! line sampling ([`LaneScene::build`]); everything else goes through `li`.
+//! It takes Lambertian triangle meshes (with or without shading normals, no
+//! bump maps) lit by area lights (rectangles, emitting triangles), without
+//! gradients or line sampling ([`refusal`]); everything else goes through `li`.
 
 use super::interaction::interaction;
 use super::lights::AreaLight;
