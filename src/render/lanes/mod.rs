@@ -2,8 +2,8 @@
 //!
 //! [`PathTracer::li`] shades one hit at a time: ~1,200 instructions of scalar
 //! and three-wide vector work per vertex, at an IPC near the core's limit, so
-//! only fewer instructions make it faster. Here a batch of paths (a tile row's
-//! samples) advances bounce by bounce: every live path's ray is traced with the
+//! only fewer instructions make it faster. Here a batch of paths (up to
+//! `render::LANE_BATCH` of a tile row's samples) advances bounce by bounce: every live path's ray is traced with the
 //! same single-ray queries, then the hits are shaded eight at a time in SIMD
 //! lanes (`kernel`: AVX registers where the CPU has AVX2, `wide::f32x8` else) —
 //! the surface point and its error bound, the frame, the light sample, the
@@ -60,8 +60,8 @@ pub(crate) struct LaneScene {
 }
 
 impl LaneScene {
-    /// `None` unless every shape is a Lambertian triangle mesh without shading
-    /// normals or a bump map and every light an area light ([`refusal`]).
+    /// `None` unless every shape is a Lambertian triangle mesh without a bump
+    /// map and every light an area light ([`refusal`]).
     pub(crate) fn build(scene: &Scene, lights: &super::lights::LightSet) -> Option<Self> {
         if refusal(scene).is_some() {
             return None;
