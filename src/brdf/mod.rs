@@ -318,7 +318,7 @@ fn upper_pair(wo: Vec3, wi: Vec3) -> Option<(DVec3, DVec3)> {
 }
 
 /// A colour parameter made usable: NaN, infinite and negative components become 0.
-fn sanitize(c: Vec3) -> Vec3 {
+pub(crate) fn sanitize(c: Vec3) -> Vec3 {
     // Lane-wise compares (NaN fails both): no branch per channel; this runs on
     // every Lambertian sample and evaluation.
     let keep = c.cmpgt(Vec3::ZERO) & c.cmplt(Vec3::INFINITY);
