@@ -814,12 +814,23 @@ fn a_scene_far_from_the_origin_renders_as_it_does_at_the_origin() {
     assert!(shift < 2.0 * noise + 0.01, "{shift} against noise {noise}");
 }
 
-/// A scene the lane shading takes (Lambertian meshes, a rectangle light): every
-/// plane of the image is `li`'s bit for bit (`--no-lanes`), at any thread count.
+/// Scenes the lane shading takes (Lambertian meshes under a rectangle light,
+/// under an image environment): every plane of the image is `li`'s bit for
+/// bit (`--no-lanes`), at any thread count.
 #[test]
 fn lane_shading_renders_li_image() {
-    let s = gradtrace::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
-        .expect("bundled scene");
+    for path in [
+        "scenes/validation/cornell_256.toml",
+        "scenes/validation/env_image.toml",
+    ] {
+        let mut s = gradtrace::scene::load(std::path::Path::new(path)).expect("bundled scene");
+        // The lanes take no spheres.
+        s.spheres.clear();
+        lane_image_is_li_image(&s);
+    }
+}
+
+fn lane_image_is_li_image(s: &gradtrace::scene::Scene) {
     let accel = Accel::build(&s.meshes, &s.spheres);
     let run = |threads: usize, no_lanes: bool| {
         let opts = RenderOptions {
@@ -833,7 +844,7 @@ fn lane_shading_renders_li_image() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render(&s, &accel, &opts, &|_, _| {}).unwrap())
+            .install(|| render(s, &accel, &opts, &|_, _| {}).unwrap())
     };
     let planes = |o: &gradtrace::render::RenderOutput| -> Vec<[u32; 3]> {
         [

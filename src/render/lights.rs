@@ -41,7 +41,17 @@ enum Light {
     Environment,
 }
 
-/// One area light for the lane shading ([`LightSet::area_lights`]).
+/// One light as the lane shading reads it ([`LightSet::lane_lights`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum LaneLight {
+    Area(AreaLight),
+    /// The environment, picked with probability `pick`.
+    Environment {
+        pick: f32,
+    },
+}
+
+/// An area light for the lane shading.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct AreaLight {
     pub a: Vec3,
@@ -243,12 +253,12 @@ impl LightSet {
         (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
     }
 
-    /// Every light as the lane shading (`render::lanes`) reads it, or `None` when
-    /// one is not an area light (spheres and the environment stay with the
-    /// scalar path). The point a sample lands on is `a·w0 + b·w1 + c·w2`: the
-    /// corner and edges of a rectangle with weights (1, u, v), the vertices of
-    /// a triangle with its barycentrics, in the order [`Self::sample`] sums them.
-    pub(crate) fn area_lights(&self, scene: &Scene) -> Option<Vec<AreaLight>> {
+    /// Every light as the lane shading (`render::lanes`) reads it, or `None`
+    /// when one is a sphere (spheres stay with the scalar path). An area
+    /// light's sample lands on `a·w0 + b·w1 + c·w2`: the corner and edges of a
+    /// rectangle with weights (1, u, v), the vertices of a triangle with its
+    /// barycentrics, in the order [`Self::sample`] sums them.
+    pub(crate) fn lane_lights(&self, scene: &Scene) -> Option<Vec<LaneLight>> {
         // Without a distribution (no light has power) nothing is ever picked.
         let pick = |i: usize| self.choose.as_ref().map_or(0.0, |c| c.discrete_pmf(i));
         self.lights
@@ -265,9 +275,10 @@ impl LightSet {
                         edge_v,
                         n,
                     } => (mesh, area, [corner, edge_u, edge_v], n, true),
-                    Light::Sphere(_) | Light::Environment => return None,
+                    Light::Environment => return Some(LaneLight::Environment { pick: pick(i) }),
+                    Light::Sphere(_) => return None,
                 };
-                Some(AreaLight {
+                Some(LaneLight::Area(AreaLight {
                     a,
                     b,
                     c,
@@ -276,9 +287,30 @@ impl LightSet {
                     emission: scene.meshes[mesh as usize].emission,
                     rect,
                     pick: pick(i),
-                })
+                }))
             })
             .collect()
+    }
+
+    /// Whether the environment's sample direction depends on the receiving
+    /// point's frame (the cosine-weighted sampler of a constant sky): the lane
+    /// kernel then maps it itself; the other samplers' are drawn before it
+    /// ([`Self::sample_env_frame_free`]).
+    pub(crate) fn env_sample_in_frame(&self) -> bool {
+        matches!(self.env_sampler, Some(EnvSampler::CosineAboutNormal))
+    }
+
+    /// [`Self::sample`] where `u_pick` picks the environment and its sampler
+    /// reads neither the receiving point nor its frame (not
+    /// [`Self::env_sample_in_frame`]): the same sample, bit for bit.
+    pub(crate) fn sample_env_frame_free(
+        &self,
+        scene: &Scene,
+        u_pick: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        debug_assert!(!self.env_sample_in_frame());
+        self.sample(scene, Vec3::ZERO, &Frame::from_normal(Vec3::Z), u_pick, u)
     }
 
     /// The index [`Self::sample`] picks with `u_pick` (the lights exist).

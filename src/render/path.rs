@@ -140,19 +140,34 @@ pub fn power_heuristic(f: f32, g: f32) -> f32 {
 }
 
 /// The state a path carries from bounce to bounce.
-struct PathState {
-    radiance: Vec3,
-    beta: Vec3,
+pub(super) struct PathState {
+    pub radiance: Vec3,
+    pub beta: Vec3,
     /// Density of the BSDF sample that produced the current ray; infinite for
     /// camera rays and delta lobes (emitters they hit count with full weight).
-    prev_pdf: f32,
-    prev_p: Vec3,
+    pub prev_pdf: f32,
+    pub prev_p: Vec3,
     /// The previous vertex's shading normal: the environment's light-sampling
     /// density depends on it (`LightSet::pdf_env`).
-    prev_n: Vec3,
+    pub prev_n: Vec3,
     /// The previous vertex sampled its direct light by lines: emitters that
     /// lines cover are not counted again when the path hits them.
-    prev_line: bool,
+    pub prev_line: bool,
+}
+
+impl PathState {
+    /// A camera ray's state: no radiance yet, unit throughput, and an infinite
+    /// density, so that what it hits counts with full weight.
+    pub(super) fn camera(origin: Vec3) -> Self {
+        Self {
+            radiance: Vec3::ZERO,
+            beta: Vec3::ONE,
+            prev_pdf: f32::INFINITY,
+            prev_p: origin,
+            prev_n: Vec3::ZERO,
+            prev_line: false,
+        }
+    }
 }
 
 /// What the first hit records besides radiance (pbrt-v4's `VisibleSurface`): the
@@ -214,14 +229,7 @@ impl PathTracer<'_> {
         let scene = self.scene;
         let mut out = SampleResult::default();
         let mut visible: Option<VisibleSurface> = None;
-        let mut st = PathState {
-            radiance: Vec3::ZERO,
-            beta: Vec3::ONE,
-            prev_pdf: f32::INFINITY,
-            prev_p: ray.origin,
-            prev_n: Vec3::ZERO,
-            prev_line: false,
-        };
+        let mut st = PathState::camera(ray.origin);
         for depth in 1..=self.max_depth {
             out.rays += 1;
             let Some(hit) = self.accel.intersect(&ray) else {
@@ -323,7 +331,7 @@ impl PathTracer<'_> {
 
     /// The environment's contribution to a ray that leaves the scene, MIS-weighted
     /// against the light sample that could have produced its direction.
-    fn escaped(&self, ray: &Ray, st: &PathState) -> Vec3 {
+    pub(super) fn escaped(&self, ray: &Ray, st: &PathState) -> Vec3 {
         let Some(env) = &self.scene.environment else {
             return Vec3::ZERO;
         };

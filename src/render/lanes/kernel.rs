@@ -4,7 +4,7 @@
 //! their order (so a lane's bits are the scalar code's), over any [`Lanes`].
 
 use super::simd::Lanes;
-use super::{Gathered, Rows, LANES};
+use super::{Gathered, LightKind, Rows, LANES};
 
 /// Three planes of lanes: eight vectors.
 #[derive(Clone, Copy)]
@@ -264,6 +264,7 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let beta = V8::load(&g.beta);
 
     // The light sample (`LightSet::sample` → `sample_area_point`).
+    let kind = L::load(g.kind);
     let w = V8::load(&g.light_w);
     let q = V8::load(&g.light[0])
         .mul(w.x)
@@ -276,12 +277,35 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let ln = V8::load(&g.light_n);
     let cos_l = -ln.dot(wi);
     let light_pdf = dist2 / (area * cos_l) * L::load(g.light_pick);
-    let sampled = L::load(g.has_light).gt(zero)
+    let sampled = kind.eq(L::splat(LightKind::Area as u32 as f32))
         & dist2.gt(zero)
         & area.gt(zero)
         & cos_l.gt(zero)
         & light_pdf.gt(zero)
         & light_pdf.is_finite();
+    // The environment's lanes (`LightSet::sample_env`): a direction drawn
+    // before the kernel, or the cosine-weighted one in this frame.
+    let (env, wi, light_pdf, sampled) = if g.env {
+        let drawn = kind.eq(L::splat(LightKind::EnvDrawn as u32 as f32));
+        let in_frame = kind.eq(L::splat(LightKind::EnvInFrame as u32 as f32));
+        let wi_frame = frame.to_world(cosine_hemisphere8(
+            L::load(g.u_light[0]),
+            L::load(g.u_light[1]),
+        ));
+        // `env_pdf`'s cosine density, then the pick.
+        let pdf_frame = wi_frame.dot(frame.n).max(zero) * frac_1_pi * L::load(g.light_pick);
+        let env = drawn | in_frame;
+        let wi_env = select_v(drawn, V8::load(&g.env_wi), wi_frame);
+        let pdf_env = drawn.select(L::load(g.env_pdf), pdf_frame);
+        (
+            env,
+            select_v(env, wi_env, wi),
+            env.select(pdf_env, light_pdf),
+            drawn | in_frame & pdf_frame.gt(zero) & pdf_frame.is_finite() | sampled,
+        )
+    } else {
+        (zero.ne(zero), wi, light_pdf, sampled)
+    };
     // `Material::eval` (Lambert) and the checks of `sample_ld`.
     let wil = frame.to_local(wi);
     let upper = wo.is_finite() & wil.is_finite() & wo.z.gt(zero) & wil.z.gt(zero);
@@ -297,8 +321,9 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         .mul(wil.z)
         .mul_v(le)
         .mul(weight_mis / light_pdf);
-    // `spawn_ray_to`: both ends offset, then `SurfacePoint::segment`.
-    let shadow_o = offset8(p, p_error, ng, d);
+    // `spawn_ray_to`: both ends offset, then `SurfacePoint::segment`; toward
+    // the environment `spawn_ray`, unbounded.
+    let shadow_o = offset8(p, p_error, ng, select_v(env, wi, d));
     let q_error = {
         let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
         let e = m * L::splat(crate::accel::DEFAULT_REL_ERROR) + L::splat(1.0e-30);
@@ -319,27 +344,13 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         span.div(len),
     );
     let shadow_t = degenerate.select(zero, len * L::splat(1.0 - crate::accel::SHADOW_EPSILON));
+    let shadow_d = select_v(env, wi, shadow_d);
+    let shadow_t = env.select(L::splat(f32::INFINITY), shadow_t);
 
-    // The BSDF sample (`lambert::sample`: the concentric map, z from its radius).
-    let ox = L::splat(2.0) * L::load(g.u_dir[0]) - one;
-    let oy = L::splat(2.0) * L::load(g.u_dir[1]) - one;
-    let centre = ox.eq(zero) & oy.eq(zero);
-    let x_major = ox.abs().gt(oy.abs());
-    let r = x_major.select(ox, oy);
-    let other = x_major.select(oy, ox);
-    let (s, c) = sin_cos_quarter8(L::splat(std::f32::consts::FRAC_PI_4) * (other / r));
-    let (cos, sin) = (x_major.select(c, s), x_major.select(s, c));
-    let r = centre.select(zero, r);
-    let lx = centre.select(zero, r * cos);
-    let ly = centre.select(zero, r * sin);
-    let rr = r.abs();
-    let lz = (one - rr * rr).max(zero).sqrt();
-    let pdf = lz.gt(zero).select(lz * frac_1_pi, zero);
-    let wi_next = frame.to_world(V8 {
-        x: lx,
-        y: ly,
-        z: lz,
-    });
+    // The BSDF sample (`lambert::sample`).
+    let local = cosine_hemisphere8(L::load(g.u_dir[0]), L::load(g.u_dir[1]));
+    let pdf = local.z.gt(zero).select(local.z * frac_1_pi, zero);
+    let wi_next = frame.to_world(local);
     // (`continue_path` also asks for a finite weight: the albedo was
     // sanitised when the lane scene was built.)
     let next = alive & pdf.gt(zero) & wi_next.dot(ng).gt(zero);
@@ -358,6 +369,29 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         next_d: wi_next.store(),
         weight: albedo.store(),
         pdf: pdf.store(),
+    }
+}
+
+/// `warp::square_to_cosine_hemisphere` in lanes: the concentric map, z from
+/// its radius.
+#[inline(always)]
+fn cosine_hemisphere8<L: Lanes>(u0: L, u1: L) -> V8<L> {
+    let zero = L::splat(0.0);
+    let one = L::splat(1.0);
+    let ox = L::splat(2.0) * u0 - one;
+    let oy = L::splat(2.0) * u1 - one;
+    let centre = ox.eq(zero) & oy.eq(zero);
+    let x_major = ox.abs().gt(oy.abs());
+    let r = x_major.select(ox, oy);
+    let other = x_major.select(oy, ox);
+    let (s, c) = sin_cos_quarter8(L::splat(std::f32::consts::FRAC_PI_4) * (other / r));
+    let (cos, sin) = (x_major.select(c, s), x_major.select(s, c));
+    let r = centre.select(zero, r);
+    let rr = r.abs();
+    V8 {
+        x: centre.select(zero, r * cos),
+        y: centre.select(zero, r * sin),
+        z: (one - rr * rr).max(zero).sqrt(),
     }
 }
 

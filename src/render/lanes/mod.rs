@@ -3,8 +3,8 @@
 //! [`PathTracer::li`] shades one hit at a time: ~1,200 instructions of scalar
 //! and three-wide vector work per vertex, at an IPC near the core's limit, so
 //! only fewer instructions make it faster. Here a batch of paths (up to
-//! `render::LANE_BATCH` of a tile row's samples) advances bounce by bounce: every live path's ray is traced with the
-//! same single-ray queries, then the hits are shaded eight at a time in SIMD
+//! `render::LANE_BATCH` of a tile row's samples) advances bounce by bounce:
+//! every live path's ray is traced with the same single-ray queries, then the hits are shaded eight at a time in SIMD
 //! lanes (`kernel`: AVX registers where the CPU has AVX2, `wide::f32x8` else) —
 //! the surface point and its error bound, the frame, the light sample, the
 //! Lambertian eval, pdf and sample, MIS, both rays' offsets — then the shadow
@@ -14,12 +14,16 @@
 //! and whatever the thread count (`tests`: sample for sample).
 //!
 //! It takes Lambertian triangle meshes (with or without shading normals, no
-//! bump maps) lit by area lights (rectangles, emitting triangles), without
-//! gradients or line sampling ([`refusal`]); everything else goes through `li`.
+//! bump maps) lit by area lights (rectangles, emitting triangles) and
+//! environments, without gradients or line sampling ([`refusal`]); everything
+//! else goes through `li`. A constant sky's cosine-weighted sample needs the
+//! shading frame, so the kernel maps it; an image's or a Gaussian sky's is
+//! drawn from its distribution (`LightSet::sample_env_frame_free`) while the
+//! lanes are gathered.
 
 use super::interaction::interaction;
-use super::lights::AreaLight;
-use super::path::{FirstHit, PathTracer, SampleResult, VertexSamples};
+use super::lights::{AreaLight, LaneLight};
+use super::path::{FirstHit, PathState, PathTracer, SampleResult, VertexSamples};
 use crate::accel::{triangle_normal, Hit, PrimRef};
 use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
@@ -51,7 +55,9 @@ struct LaneTriangle {
 pub(crate) struct LaneScene {
     first: Vec<u32>,
     triangles: Vec<LaneTriangle>,
-    lights: Vec<AreaLight>,
+    lights: Vec<LaneLight>,
+    /// How an environment sample is drawn, when the scene has one.
+    env: Option<EnvLanes>,
     /// The kernel in AVX's registers (the CPU has AVX2), else in `wide`'s.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx2: bool,
@@ -64,12 +70,23 @@ pub(crate) struct LaneScene {
 
 impl LaneScene {
     /// `None` unless every shape is a Lambertian triangle mesh without a bump
-    /// map and every light an area light ([`refusal`]).
-    pub(crate) fn build(scene: &Scene, lights: &super::lights::LightSet) -> Option<Self> {
+    /// map ([`refusal`]).
+    pub(crate) fn build(scene: &Scene, light_set: &super::lights::LightSet) -> Option<Self> {
         if refusal(scene).is_some() {
             return None;
         }
-        let lights = lights.area_lights(scene)?;
+        let lights = light_set.lane_lights(scene)?;
+        let env = scene.environment.as_ref().map(|env| {
+            if light_set.env_sample_in_frame() {
+                // The cosine-weighted sampler is built for a constant sky
+                // only: its radiance is the same in every direction.
+                EnvLanes::InFrame {
+                    radiance: env.eval(Vec3::Z),
+                }
+            } else {
+                EnvLanes::Drawn
+            }
+        });
         let mut first = Vec::with_capacity(scene.meshes.len());
         let mut triangles = Vec::new();
         let smooth = scene.meshes.iter().any(|m| !m.normals.is_empty());
@@ -101,6 +118,7 @@ impl LaneScene {
             first,
             triangles,
             lights,
+            env,
             avx2: avx2(),
             vertex_normals,
             smooth,
@@ -153,10 +171,12 @@ impl LaneScene {
     }
 
     /// The path's closest hit and the emission found there (MIS-weighted as
-    /// `li` weighs it); `false` when the ray leaves the scene.
+    /// `li` weighs it); `false` when the ray leaves the scene, with the
+    /// environment's light.
     fn intersect(&self, tracer: &PathTracer, p: &mut LanePath, depth: u32) -> bool {
         p.rays += 1;
         let Some(hit) = tracer.accel.intersect(&p.ray) else {
+            p.st.radiance += tracer.escaped(&p.ray, &p.st);
             return false;
         };
         let m = &tracer.scene.meshes[mesh_of(&hit) as usize];
@@ -177,8 +197,8 @@ impl LaneScene {
                 ));
             }
             if si.emission != Vec3::ZERO {
-                let w = tracer.emitter_weight(&si, p.prev_pdf, p.prev_p);
-                p.radiance += p.beta * si.emission * w;
+                let w = tracer.emitter_weight(&si, p.st.prev_pdf, p.st.prev_p);
+                p.st.radiance += p.st.beta * si.emission * w;
             }
         }
         p.hit = Some(hit);
@@ -211,9 +231,32 @@ impl LaneScene {
                     g.vn[k][l] = n;
                 }
             }
-            let light = tracer.lights.pick(u.pick).map(|k| &self.lights[k]);
-            g.set(l, p, &hit, t, &u, light);
+            g.set(l, p, &hit, t, &u);
+            g.kind[l] = match tracer.lights.pick(u.pick).map(|k| self.lights[k]) {
+                None => LightKind::None,
+                Some(LaneLight::Area(a)) => g.set_area_light(l, &a, &u),
+                Some(LaneLight::Environment { pick }) => match self.env {
+                    Some(EnvLanes::InFrame { radiance }) => {
+                        g.light_pick[l] = pick;
+                        g.light_le[l] = radiance;
+                        LightKind::EnvInFrame
+                    }
+                    _ => match tracer
+                        .lights
+                        .sample_env_frame_free(tracer.scene, u.pick, u.light)
+                    {
+                        None => LightKind::None,
+                        Some(ls) => {
+                            g.env_wi[l] = ls.wi;
+                            g.env_pdf[l] = ls.pdf;
+                            g.light_le[l] = ls.radiance;
+                            LightKind::EnvDrawn
+                        }
+                    },
+                },
+            } as u32 as f32;
         }
+        g.env = self.env.is_some();
         // Unused lanes repeat lane 0: finite inputs, results dropped.
         for l in chunk.len()..LANES {
             g.copy_lane(0, l);
@@ -263,17 +306,18 @@ impl LaneScene {
             p.rays += 1;
             let shadow = Ray::segment(s.shadow_o[l], s.shadow_d[l], s.shadow_t[l]);
             if !tracer.accel.occluded(&shadow) {
-                p.radiance += s.ld[l];
+                p.st.radiance += s.ld[l];
             }
         }
         if !bit(s.next) {
             return false;
         }
-        p.beta *= s.weight[l];
-        p.prev_pdf = s.pdf[l];
-        p.prev_p = s.p[l];
+        p.st.beta *= s.weight[l];
+        p.st.prev_pdf = s.pdf[l];
+        p.st.prev_p = s.p[l];
+        p.st.prev_n = s.normal[l];
         p.ray = Ray::new(s.next_o[l], s.next_d[l]);
-        tracer.survives(&mut p.beta, p.u_rr, depth)
+        tracer.survives(&mut p.st.beta, p.u_rr, depth)
     }
 }
 
@@ -288,8 +332,6 @@ pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
     };
     if !scene.spheres.is_empty() {
         Some("spheres")
-    } else if scene.environment.is_some() {
-        Some("an environment light")
     } else if !scene.meshes.iter().all(|m| lambert(m.material)) {
         Some("a glossy or mirror material")
     } else if scene.meshes.iter().any(|m| m.bump.is_some()) {
@@ -336,10 +378,7 @@ impl LaneBatch {
         self.paths.push(LanePath {
             ray,
             sampler,
-            beta: Vec3::ONE,
-            radiance: Vec3::ZERO,
-            prev_pdf: f32::INFINITY,
-            prev_p: ray.origin,
+            st: PathState::camera(ray.origin),
             hit: None,
             first_hit: None,
             rays: 0,
@@ -354,7 +393,7 @@ impl LaneBatch {
     /// Each path's result, in the order they were pushed; the batch is then empty.
     pub(crate) fn results(&mut self) -> impl Iterator<Item = SampleResult> + '_ {
         self.paths.drain(..).map(|p| SampleResult {
-            radiance: p.radiance,
+            radiance: p.st.radiance,
             first_hit: p.first_hit,
             gradient: None,
             rays: p.rays,
@@ -366,15 +405,36 @@ impl LaneBatch {
 struct LanePath {
     ray: Ray,
     sampler: PixelSampler,
-    beta: Vec3,
-    radiance: Vec3,
-    prev_pdf: f32,
-    prev_p: Vec3,
+    st: PathState,
     hit: Option<Hit>,
     first_hit: Option<FirstHit>,
     rays: u32,
     /// This vertex's Russian roulette number.
     u_rr: f32,
+}
+
+/// How the lanes get an environment sample.
+#[derive(Clone, Copy, Debug)]
+enum EnvLanes {
+    /// Cosine-weighted about the shading frame (a constant sky of this
+    /// radiance): the kernel maps the square once it has the frame.
+    InFrame { radiance: Vec3 },
+    /// From the sampler's own distribution, which no frame enters:
+    /// `LightSet::sample_env_frame_free` draws it before the kernel.
+    Drawn,
+}
+
+/// What a lane's light sample is, in the kernel's `kind` plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+enum LightKind {
+    /// No light picked, or its sample came back empty.
+    None = 0,
+    Area = 1,
+    /// The environment, its direction from the kernel's cosine map.
+    EnvInFrame = 2,
+    /// The environment, its direction, density and radiance drawn already.
+    EnvDrawn = 3,
 }
 
 /// The inputs of the kernel: a vector per lane (`Rows`, transposed into
@@ -389,36 +449,39 @@ struct Gathered {
     smooth: bool,
     albedo: Rows,
     beta: Rows,
-    /// The picked light: its point's three terms and their weights, its normal
-    /// and emission; area, pick probability and `has_light` (0: none) below.
+    /// Each lane's [`LightKind`].
+    kind: [f32; LANES],
+    /// An area light: its point's three terms and their weights, its normal,
+    /// area and pick probability.
     light: [Rows; 3],
     light_w: Rows,
     light_n: Rows,
-    light_le: Rows,
-    bary: [[f32; LANES]; 2],
-    u_dir: [[f32; LANES]; 2],
     light_area: [f32; LANES],
     light_pick: [f32; LANES],
-    has_light: [f32; LANES],
+    /// The picked light's radiance (the environment's included).
+    light_le: Rows,
+    /// Whether the scene has an environment: the kernel's environment lanes,
+    /// and the planes below, are read only then.
+    env: bool,
+    /// The light sample's square, for [`LightKind::EnvInFrame`].
+    u_light: [[f32; LANES]; 2],
+    /// [`LightKind::EnvDrawn`]'s direction and density (the pick's included).
+    env_wi: Rows,
+    env_pdf: [f32; LANES],
+    bary: [[f32; LANES]; 2],
+    u_dir: [[f32; LANES]; 2],
 }
 
 /// One vector per lane.
 type Rows = [Vec3; LANES];
 
 impl Gathered {
-    fn set(
-        &mut self,
-        l: usize,
-        p: &LanePath,
-        hit: &Hit,
-        t: &LaneTriangle,
-        u: &VertexSamples,
-        light: Option<&AreaLight>,
-    ) {
+    /// Lane `l`'s hit, path state and random numbers.
+    fn set(&mut self, l: usize, p: &LanePath, hit: &Hit, t: &LaneTriangle, u: &VertexSamples) {
         self.dir[l] = p.ray.dir;
         self.n[l] = t.n;
         self.albedo[l] = t.albedo;
-        self.beta[l] = p.beta;
+        self.beta[l] = p.st.beta;
         for k in 0..3 {
             self.v[k][l] = t.v[k];
         }
@@ -426,11 +489,12 @@ impl Gathered {
         self.bary[1][l] = hit.bary.y;
         self.u_dir[0][l] = u.dir.x;
         self.u_dir[1][l] = u.dir.y;
-        let Some(a) = light else {
-            self.has_light[l] = 0.0;
-            return;
-        };
-        self.has_light[l] = 1.0;
+        self.u_light[0][l] = u.light.x;
+        self.u_light[1][l] = u.light.y;
+    }
+
+    /// Lane `l`'s picked area light `a`.
+    fn set_area_light(&mut self, l: usize, a: &AreaLight, u: &VertexSamples) -> LightKind {
         // `LightSet::sample`'s point: corner + u·edge_u + v·edge_v, or the
         // triangle's vertices weighted by a uniform barycentric sample.
         self.light_w[l] = if a.rect {
@@ -446,6 +510,7 @@ impl Gathered {
         self.light_le[l] = a.emission;
         self.light_area[l] = a.area;
         self.light_pick[l] = a.pick;
+        LightKind::Area
     }
 
     fn copy_lane(&mut self, from: usize, to: usize) {
@@ -457,6 +522,7 @@ impl Gathered {
             &mut self.light_w,
             &mut self.light_n,
             &mut self.light_le,
+            &mut self.env_wi,
         ]
         .into_iter()
         .chain(&mut self.v)
@@ -465,17 +531,17 @@ impl Gathered {
         {
             r[to] = r[from];
         }
-        let [b1, b2] = &mut self.bary;
-        let [u1, u2] = &mut self.u_dir;
         for p in [
-            b1,
-            b2,
-            u1,
-            u2,
+            &mut self.kind,
             &mut self.light_area,
             &mut self.light_pick,
-            &mut self.has_light,
-        ] {
+            &mut self.env_pdf,
+        ]
+        .into_iter()
+        .chain(&mut self.bary)
+        .chain(&mut self.u_dir)
+        .chain(&mut self.u_light)
+        {
             p[to] = p[from];
         }
     }
@@ -580,8 +646,66 @@ mod tests {
         let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
         let tracer = setup.tracer(&scene, &accel);
         let lanes = setup.lanes().expect("still a lane scene");
-        assert!(lanes.lights.len() > 3 && lanes.lights.iter().all(|l| !l.rect));
+        assert!(
+            lanes.lights.len() > 3
+                && lanes
+                    .lights
+                    .iter()
+                    .all(|l| matches!(l, LaneLight::Area(a) if !a.rect))
+        );
         assert!(compare_with_li(&setup, &tracer, lanes) > 8000);
+    }
+
+    /// Environments: the constant sky's cosine map in the kernel, the image's
+    /// and the Gaussian sky's directions drawn before it, alone and beside an
+    /// area light (the pick between them), with rays that leave the scene
+    /// (the escaped light's MIS weight), bit for bit.
+    #[test]
+    fn lanes_trace_environments_as_li_does() {
+        use crate::scene::Environment;
+        let load = |p: &str| {
+            let mut s = crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
+            s.spheres.clear();
+            s
+        };
+        let sky = Environment::GaussianSky {
+            direction: Vec3::new(0.3, 0.8, -0.2).normalize(),
+            sharpness: 12.0,
+            peak: Vec3::new(4.0, 3.0, 2.0),
+            ambient: Vec3::new(0.1, 0.2, 0.3),
+        };
+        let mut cornell = load("scenes/validation/cornell_256.toml");
+        cornell.environment = Some(Environment::Constant {
+            radiance: Vec3::new(0.5, 0.6, 0.7),
+        });
+        // The Cornell box's open side faces the camera: escaped rays, and a
+        // pick between the sky and the rectangle light.
+        let mut cornell_sky = cornell.clone();
+        cornell_sky.environment = Some(sky.clone());
+        let mut floor_sky = load("scenes/validation/env_constant.toml");
+        floor_sky.environment = Some(sky);
+        for (name, scene, in_frame) in [
+            (
+                "constant",
+                load("scenes/validation/env_constant.toml"),
+                true,
+            ),
+            ("image", load("scenes/validation/env_image.toml"), false),
+            ("gaussian sky", floor_sky, false),
+            ("cornell + constant", cornell, true),
+            ("cornell + gaussian sky", cornell_sky, false),
+        ] {
+            let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+            let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
+            let tracer = setup.tracer(&scene, &accel);
+            let lanes = setup.lanes().expect("a lane scene");
+            assert_eq!(
+                matches!(lanes.env, Some(EnvLanes::InFrame { .. })),
+                in_frame,
+                "{name}"
+            );
+            assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
+        }
     }
 
     /// Samples of every 97th pixel through `li` and through `lanes`: how many
@@ -629,7 +753,7 @@ mod tests {
 
     /// Only what the lanes shade exactly as `li` does gets them.
     #[test]
-    fn lane_scenes_are_lambertian_meshes_under_area_lights() {
+    fn lane_scenes_are_lambertian_meshes_without_spheres() {
         let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
         let lanes = |s: &Scene| {
             let lights = crate::render::lights::LightSet::build(s);
@@ -640,7 +764,7 @@ mod tests {
         for (scene, why) in [
             ("scenes/spheres_table.toml", "spheres"),
             ("scenes/glossy_teapot.toml", "a glossy material"),
-            ("scenes/validation/env_constant.toml", "an environment"),
+            ("scenes/validation/env_constant.toml", "spheres"),
             ("scenes/objects_bumpy.toml", "bump maps"),
         ] {
             assert!(!lanes(&load(scene)), "{scene}: {why}");
