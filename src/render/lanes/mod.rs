@@ -232,34 +232,48 @@ impl LaneScene {
                 }
             }
             g.set(l, p, &hit, t, &u);
-            g.kind[l] = match tracer.lights.pick(u.pick).map(|k| self.lights[k]) {
+            let kind = match tracer.lights.pick(u.pick).map(|k| &self.lights[k]) {
                 None => LightKind::None,
-                Some(LaneLight::Area(a)) => g.set_area_light(l, &a, &u),
-                Some(LaneLight::Environment { pick }) => match self.env {
-                    Some(EnvLanes::InFrame { radiance }) => {
-                        g.light_pick[l] = pick;
-                        g.light_le[l] = radiance;
-                        LightKind::EnvInFrame
-                    }
-                    _ => match tracer
-                        .lights
-                        .sample_env_frame_free(tracer.scene, u.pick, u.light)
-                    {
-                        None => LightKind::None,
-                        Some(ls) => {
-                            g.env_wi[l] = ls.wi;
-                            g.env_pdf[l] = ls.pdf;
-                            g.light_le[l] = ls.radiance;
-                            LightKind::EnvDrawn
-                        }
-                    },
-                },
-            } as u32 as f32;
+                Some(LaneLight::Area(a)) => g.set_area_light(l, a, &u),
+                Some(&LaneLight::Environment { pick }) => {
+                    self.set_env_light(tracer, g, l, pick, &u)
+                }
+            };
+            g.kind[l] = kind as u32 as f32;
         }
         g.env = self.env.is_some();
         // Unused lanes repeat lane 0: finite inputs, results dropped.
         for l in chunk.len()..LANES {
             g.copy_lane(0, l);
+        }
+    }
+
+    /// Lane `l`'s environment sample, the environment picked with probability
+    /// `pick`.
+    fn set_env_light(
+        &self,
+        tracer: &PathTracer,
+        g: &mut Gathered,
+        l: usize,
+        pick: f32,
+        u: &VertexSamples,
+    ) -> LightKind {
+        if let Some(EnvLanes::InFrame { radiance }) = self.env {
+            g.light_pick[l] = pick;
+            g.light_le[l] = radiance;
+            return LightKind::EnvInFrame;
+        }
+        match tracer
+            .lights
+            .sample_env_frame_free(tracer.scene, u.pick, u.light)
+        {
+            None => LightKind::None,
+            Some(ls) => {
+                g.env_wi[l] = ls.wi;
+                g.env_pdf[l] = ls.pdf;
+                g.light_le[l] = ls.radiance;
+                LightKind::EnvDrawn
+            }
         }
     }
 
