@@ -49,6 +49,9 @@ pub(crate) enum LaneLight {
     Environment {
         pick: f32,
     },
+    /// A sphere: its sample depends on the receiving point alone
+    /// ([`LightSet::sample_without_frame`]).
+    Sphere,
 }
 
 /// An area light for the lane shading.
@@ -253,12 +256,11 @@ impl LightSet {
         (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
     }
 
-    /// Every light as the lane shading (`render::lanes`) reads it, or `None`
-    /// when one is a sphere (spheres stay with the scalar path). An area
+    /// Every light as the lane shading (`render::lanes`) reads it. An area
     /// light's sample lands on `a·w0 + b·w1 + c·w2`: the corner and edges of a
     /// rectangle with weights (1, u, v), the vertices of a triangle with its
     /// barycentrics, in the order [`Self::sample`] sums them.
-    pub(crate) fn lane_lights(&self, scene: &Scene) -> Option<Vec<LaneLight>> {
+    pub(crate) fn lane_lights(&self, scene: &Scene) -> Vec<LaneLight> {
         // Without a distribution (no light has power) nothing is ever picked.
         let pick = |i: usize| self.choose.as_ref().map_or(0.0, |c| c.discrete_pmf(i));
         self.lights
@@ -275,10 +277,10 @@ impl LightSet {
                         edge_v,
                         n,
                     } => (mesh, area, [corner, edge_u, edge_v], n, true),
-                    Light::Environment => return Some(LaneLight::Environment { pick: pick(i) }),
-                    Light::Sphere(_) => return None,
+                    Light::Environment => return LaneLight::Environment { pick: pick(i) },
+                    Light::Sphere(_) => return LaneLight::Sphere,
                 };
-                Some(LaneLight::Area(AreaLight {
+                LaneLight::Area(AreaLight {
                     a,
                     b,
                     c,
@@ -287,7 +289,7 @@ impl LightSet {
                     emission: scene.meshes[mesh as usize].emission,
                     rect,
                     pick: pick(i),
-                }))
+                })
             })
             .collect()
     }
@@ -295,22 +297,22 @@ impl LightSet {
     /// Whether the environment's sample direction depends on the receiving
     /// point's frame (the cosine-weighted sampler of a constant sky): the lane
     /// kernel then maps it itself; the other samplers' are drawn before it
-    /// ([`Self::sample_env_frame_free`]).
+    /// ([`Self::sample_without_frame`]).
     pub(crate) fn env_sample_in_frame(&self) -> bool {
         matches!(self.env_sampler, Some(EnvSampler::CosineAboutNormal))
     }
 
-    /// [`Self::sample`] where `u_pick` picks the environment and its sampler
-    /// reads neither the receiving point nor its frame (not
-    /// [`Self::env_sample_in_frame`]): the same sample, bit for bit.
-    pub(crate) fn sample_env_frame_free(
+    /// [`Self::sample`] from `p` where `u_pick` picks a light whose sample
+    /// does not read the receiving point's frame (a sphere, or the environment
+    /// unless [`Self::env_sample_in_frame`]): the same sample, bit for bit.
+    pub(crate) fn sample_without_frame(
         &self,
         scene: &Scene,
+        p: Vec3,
         u_pick: f32,
         u: Vec2,
     ) -> Option<LightSample> {
-        debug_assert!(!self.env_sample_in_frame());
-        self.sample(scene, Vec3::ZERO, &Frame::from_normal(Vec3::Z), u_pick, u)
+        self.sample(scene, p, &Frame::from_normal(Vec3::Z), u_pick, u)
     }
 
     /// The index [`Self::sample`] picks with `u_pick` (the lights exist).

@@ -237,6 +237,16 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let p = t0.add(t1).add(t2);
     let gamma7 = L::splat(crate::accel::gamma_bound(7));
     let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
+    // A sphere's lanes: `sphere_point`'s, computed while gathering.
+    let (p, p_error) = if g.spheres {
+        let sphere = L::load(g.sphere).gt(zero);
+        (
+            select_v(sphere, V8::load(&g.sphere_p), p),
+            select_v(sphere, V8::load(&g.sphere_error), p_error),
+        )
+    } else {
+        (p, p_error)
+    };
     // `triangle_interaction`'s shading normal: the vertices' normals
     // interpolated and normalised, the geometric one where that gives zero.
     let n = V8::load(&g.n);
@@ -270,6 +280,13 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         .mul(w.x)
         .add(V8::load(&g.light[1]).mul(w.y))
         .add(V8::load(&g.light[2]).mul(w.z));
+    let kind_is = |k: LightKind| kind.eq(L::splat(k as u32 as f32));
+    // A drawn point's lanes (a sphere light's sample).
+    let q = if g.other_lights {
+        select_v(kind_is(LightKind::DrawnPoint), V8::load(&g.drawn_q), q)
+    } else {
+        q
+    };
     let d = q.sub(p);
     let dist2 = d.dot(d);
     let area = L::load(g.light_area);
@@ -277,30 +294,31 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let ln = V8::load(&g.light_n);
     let cos_l = -ln.dot(wi);
     let light_pdf = dist2 / (area * cos_l) * L::load(g.light_pick);
-    let sampled = kind.eq(L::splat(LightKind::Area as u32 as f32))
+    let sampled = kind_is(LightKind::Area)
         & dist2.gt(zero)
         & area.gt(zero)
         & cos_l.gt(zero)
         & light_pdf.gt(zero)
         & light_pdf.is_finite();
-    // The environment's lanes (`LightSet::sample_env`): a direction drawn
-    // before the kernel, or the cosine-weighted one in this frame.
-    let (env, wi, light_pdf, sampled) = if g.env {
-        let drawn = kind.eq(L::splat(LightKind::EnvDrawn as u32 as f32));
-        let in_frame = kind.eq(L::splat(LightKind::EnvInFrame as u32 as f32));
+    // The other lights' lanes: a sample drawn before the kernel (its
+    // density checked there), or a constant sky's cosine-weighted direction
+    // in this frame (`LightSet::sample_env`).
+    let (unbounded, wi, light_pdf, sampled) = if g.other_lights {
+        let drawn = kind_is(LightKind::Drawn) | kind_is(LightKind::DrawnPoint);
+        let in_frame = kind_is(LightKind::EnvInFrame);
         let wi_frame = frame.to_world(cosine_hemisphere8(
             L::load(g.u_light[0]),
             L::load(g.u_light[1]),
         ));
         // `env_pdf`'s cosine density, then the pick.
         let pdf_frame = wi_frame.dot(frame.n).max(zero) * frac_1_pi * L::load(g.light_pick);
-        let env = drawn | in_frame;
-        let wi_env = select_v(drawn, V8::load(&g.env_wi), wi_frame);
-        let pdf_env = drawn.select(L::load(g.env_pdf), pdf_frame);
+        let other = drawn | in_frame;
+        let wi_other = select_v(drawn, V8::load(&g.drawn_wi), wi_frame);
+        let pdf_other = drawn.select(L::load(g.drawn_pdf), pdf_frame);
         (
-            env,
-            select_v(env, wi_env, wi),
-            env.select(pdf_env, light_pdf),
+            kind_is(LightKind::Drawn) | in_frame,
+            select_v(other, wi_other, wi),
+            other.select(pdf_other, light_pdf),
             drawn | in_frame & pdf_frame.gt(zero) & pdf_frame.is_finite() | sampled,
         )
     } else {
@@ -323,7 +341,7 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         .mul(weight_mis / light_pdf);
     // `spawn_ray_to`: both ends offset, then `SurfacePoint::segment`; toward
     // the environment `spawn_ray`, unbounded.
-    let shadow_o = offset8(p, p_error, ng, select_v(env, wi, d));
+    let shadow_o = offset8(p, p_error, ng, select_v(unbounded, wi, d));
     let q_error = {
         let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
         let e = m * L::splat(crate::accel::DEFAULT_REL_ERROR) + L::splat(1.0e-30);
@@ -344,8 +362,8 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
         span.div(len),
     );
     let shadow_t = degenerate.select(zero, len * L::splat(1.0 - crate::accel::SHADOW_EPSILON));
-    let shadow_d = select_v(env, wi, shadow_d);
-    let shadow_t = env.select(L::splat(f32::INFINITY), shadow_t);
+    let shadow_d = select_v(unbounded, wi, shadow_d);
+    let shadow_t = unbounded.select(L::splat(f32::INFINITY), shadow_t);
 
     // The BSDF sample (`lambert::sample`).
     let local = cosine_hemisphere8(L::load(g.u_dir[0]), L::load(g.u_dir[1]));

@@ -13,21 +13,24 @@
 //! lane by lane: a path's radiance is `li`'s, whichever paths share its lanes
 //! and whatever the thread count (`tests`: sample for sample).
 //!
-//! It takes Lambertian triangle meshes (with or without shading normals, no
-//! bump maps) lit by area lights (rectangles, emitting triangles) and
-//! environments, without gradients or line sampling ([`refusal`]); everything
-//! else goes through `li`. A constant sky's cosine-weighted sample needs the
-//! shading frame, so the kernel maps it; an image's or a Gaussian sky's is
-//! drawn from its distribution (`LightSet::sample_env_frame_free`) while the
-//! lanes are gathered.
+//! It takes Lambertian triangle meshes (with or without shading normals) and
+//! spheres, without bump maps, under any light, without gradients or line
+//! sampling ([`refusal`]); everything else goes through `li`. A sphere hit's
+//! surface point is computed while the lanes are gathered (`sphere_point`,
+//! as `interaction` does), a triangle's in the kernel. A constant sky's
+//! cosine-weighted sample needs the shading frame, so the kernel maps it; an
+//! image's or a Gaussian sky's, and a sphere light's (from the hit point),
+//! are drawn while gathering (`LightSet::sample_without_frame`).
 
 use super::interaction::interaction;
-use super::lights::{AreaLight, LaneLight};
+use super::lights::{AreaLight, LaneLight, LightSample};
 use super::path::{FirstHit, PathState, PathTracer, SampleResult, VertexSamples};
-use crate::accel::{triangle_normal, Hit, PrimRef};
+use crate::accel::{
+    sphere_point, triangle_normal, triangle_point_with_normal, Hit, PrimRef, SurfacePoint,
+};
 use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
-use crate::math::{warp, Ray, Vec3};
+use crate::math::{warp, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use kernel::Shaded8;
 
@@ -58,6 +61,11 @@ pub(crate) struct LaneScene {
     lights: Vec<LaneLight>,
     /// How an environment sample is drawn, when the scene has one.
     env: Option<EnvLanes>,
+    /// Some light's sample is drawn before the kernel (a sphere's, or an
+    /// environment's), or mapped in it (a constant sky's).
+    other_lights: bool,
+    /// Each sphere's sanitised albedo.
+    sphere_albedo: Vec<Vec3>,
     /// The kernel in AVX's registers (the CPU has AVX2), else in `wide`'s.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx2: bool,
@@ -69,13 +77,24 @@ pub(crate) struct LaneScene {
 }
 
 impl LaneScene {
-    /// `None` unless every shape is a Lambertian triangle mesh without a bump
-    /// map ([`refusal`]).
+    /// `None` unless every shape is Lambertian without a bump map
+    /// ([`refusal`]).
     pub(crate) fn build(scene: &Scene, light_set: &super::lights::LightSet) -> Option<Self> {
         if refusal(scene).is_some() {
             return None;
         }
-        let lights = light_set.lane_lights(scene)?;
+        let lights = light_set.lane_lights(scene);
+        let other_lights = lights.iter().any(|l| !matches!(l, LaneLight::Area(_)));
+        // As a Lambertian sample's weight is.
+        let albedo = |m: u32| match scene.materials.get(m as usize) {
+            Some(Material::Lambert { albedo }) => Some(crate::brdf::sanitize(*albedo)),
+            _ => None,
+        };
+        let sphere_albedo = scene
+            .spheres
+            .iter()
+            .map(|s| albedo(s.material))
+            .collect::<Option<_>>()?;
         let env = scene.environment.as_ref().map(|env| {
             if light_set.env_sample_in_frame() {
                 // The cosine-weighted sampler is built for a constant sky
@@ -92,12 +111,8 @@ impl LaneScene {
         let smooth = scene.meshes.iter().any(|m| !m.normals.is_empty());
         let mut vertex_normals = Vec::new();
         for m in &scene.meshes {
-            let Material::Lambert { albedo } = scene.materials.get(m.material as usize)? else {
-                return None;
-            };
+            let albedo = albedo(m.material)?;
             first.push(u32::try_from(triangles.len()).ok()?);
-            // As a Lambertian sample's weight is.
-            let albedo = crate::brdf::sanitize(*albedo);
             triangles.extend(m.triangles.iter().map(|t| {
                 let v = t.map(|i| m.positions[i as usize]);
                 LaneTriangle {
@@ -119,6 +134,8 @@ impl LaneScene {
             triangles,
             lights,
             env,
+            other_lights,
+            sphere_albedo,
             avx2: avx2(),
             vertex_normals,
             smooth,
@@ -179,11 +196,11 @@ impl LaneScene {
             p.st.radiance += tracer.escaped(&p.ray, &p.st);
             return false;
         };
-        let m = &tracer.scene.meshes[mesh_of(&hit) as usize];
+        let surface = Surface::of(tracer.scene, &hit);
         // The first hit's AOVs come from the lanes (`finish`), unless no
         // bounce is shaded at all.
         let aovs = depth == 1 && tracer.max_depth == 1;
-        if m.emission != Vec3::ZERO || aovs {
+        if surface.emission != Vec3::ZERO || aovs {
             // Rare: the scalar set-up, which gives the same point and normals.
             let si = interaction(tracer.scene, tracer.accel, &p.ray, &hit);
             if aovs {
@@ -230,61 +247,58 @@ impl LaneScene {
             let p = &mut paths[i];
             let u = VertexSamples::draw(&mut p.sampler, depth);
             let hit = p.hit.expect("a live path has a hit");
-            let PrimRef::Triangle { mesh, tri } = hit.prim else {
-                unreachable!("a lane scene has triangles only");
-            };
             p.u_rr = u.rr;
-            let index = (self.first[mesh as usize] + tri) as usize;
-            let t = &self.triangles[index];
-            if self.smooth {
-                for (k, n) in self.vertex_normals[index].into_iter().enumerate() {
-                    g.vn[k][l] = n;
+            // The hit point, computed here only where a light's sample needs it
+            // before the kernel (a sphere light's), the kernel's bits.
+            let point = match hit.prim {
+                PrimRef::Triangle { mesh, tri } => {
+                    let index = (self.first[mesh as usize] + tri) as usize;
+                    let t = &self.triangles[index];
+                    if self.smooth {
+                        for (k, n) in self.vertex_normals[index].into_iter().enumerate() {
+                            g.vn[k][l] = n;
+                        }
+                    }
+                    g.set_triangle(l, &hit, t);
+                    Point::Triangle(t, hit.bary)
                 }
-            }
-            g.set(l, p, &hit, t, &u);
+                PrimRef::Sphere(k) => {
+                    let s = &tracer.scene.spheres[k as usize];
+                    let sp = sphere_point(s.center, s.radius, p.ray.at(hit.t));
+                    g.set_sphere(l, &sp, self.sphere_albedo[k as usize]);
+                    Point::Known(sp.p)
+                }
+            };
+            g.set(l, p, &u);
             let kind = match tracer.lights.pick(u.pick).map(|k| &self.lights[k]) {
                 None => LightKind::None,
                 Some(LaneLight::Area(a)) => g.set_area_light(l, a, &u),
-                Some(&LaneLight::Environment { pick }) => {
-                    self.set_env_light(tracer, g, l, pick, &u)
+                Some(&LaneLight::Environment { pick }) if self.env_in_frame() => {
+                    g.set_env_in_frame(l, pick, self.env)
+                }
+                Some(LaneLight::Environment { .. } | LaneLight::Sphere) => {
+                    let ls = tracer.lights.sample_without_frame(
+                        tracer.scene,
+                        point.at(),
+                        u.pick,
+                        u.light,
+                    );
+                    g.set_drawn_light(l, ls)
                 }
             };
             g.kind[l] = kind as u32 as f32;
         }
-        g.env = self.env.is_some();
+        g.other_lights = self.other_lights;
+        g.spheres = !self.sphere_albedo.is_empty();
         // Unused lanes repeat lane 0: finite inputs, results dropped.
         for l in chunk.len()..LANES {
             g.copy_lane(0, l);
         }
     }
 
-    /// Lane `l`'s environment sample, the environment picked with probability
-    /// `pick`.
-    fn set_env_light(
-        &self,
-        tracer: &PathTracer,
-        g: &mut Gathered,
-        l: usize,
-        pick: f32,
-        u: &VertexSamples,
-    ) -> LightKind {
-        if let Some(EnvLanes::InFrame { radiance }) = self.env {
-            g.light_pick[l] = pick;
-            g.light_le[l] = radiance;
-            return LightKind::EnvInFrame;
-        }
-        match tracer
-            .lights
-            .sample_env_frame_free(tracer.scene, u.pick, u.light)
-        {
-            None => LightKind::None,
-            Some(ls) => {
-                g.env_wi[l] = ls.wi;
-                g.env_pdf[l] = ls.pdf;
-                g.light_le[l] = ls.radiance;
-                LightKind::EnvDrawn
-            }
-        }
+    /// Whether the kernel maps the environment's sample (a constant sky).
+    fn env_in_frame(&self) -> bool {
+        matches!(self.env, Some(EnvLanes::InFrame { .. }))
     }
 
     /// The kernel over the gathered lanes, in the widest registers the CPU has.
@@ -313,13 +327,13 @@ impl LaneScene {
         if depth == 1 {
             // `li`'s `visible_surface`, with the lanes' shading normal.
             let hit = p.hit.expect("a shaded path has a hit");
-            let m = &tracer.scene.meshes[mesh_of(&hit) as usize];
+            let surface = Surface::of(tracer.scene, &hit);
             p.first_hit = Some(FirstHit::new(
                 tracer.scene,
                 s.normal[l],
                 hit.t,
-                m.material,
-                m.object_id,
+                surface.material,
+                surface.object_id,
                 p.ray.dir,
             ));
         }
@@ -354,22 +368,64 @@ pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
             Some(Material::Lambert { .. })
         )
     };
-    if !scene.spheres.is_empty() {
-        Some("spheres")
-    } else if !scene.meshes.iter().all(|m| lambert(m.material)) {
+    let materials = scene.meshes.iter().map(|m| m.material);
+    let bumps = scene.meshes.iter().map(|m| m.bump);
+    if !materials
+        .chain(scene.spheres.iter().map(|s| s.material))
+        .all(lambert)
+    {
         Some("a glossy or mirror material")
-    } else if scene.meshes.iter().any(|m| m.bump.is_some()) {
+    } else if bumps
+        .chain(scene.spheres.iter().map(|s| s.bump))
+        .any(|b| b.is_some())
+    {
         Some("bump maps")
     } else {
         None
     }
 }
 
-/// The mesh of a hit in a lane scene (triangles only).
-fn mesh_of(hit: &Hit) -> u32 {
-    match hit.prim {
-        PrimRef::Triangle { mesh, .. } => mesh,
-        PrimRef::Sphere(_) => unreachable!("a lane scene has triangles only"),
+/// What a hit's surface is, beside its geometry.
+struct Surface {
+    material: u32,
+    emission: Vec3,
+    object_id: u32,
+}
+
+impl Surface {
+    fn of(scene: &Scene, hit: &Hit) -> Self {
+        let (material, emission, object_id) = match hit.prim {
+            PrimRef::Triangle { mesh, .. } => {
+                let m = &scene.meshes[mesh as usize];
+                (m.material, m.emission, m.object_id)
+            }
+            PrimRef::Sphere(i) => {
+                let s = &scene.spheres[i as usize];
+                (s.material, s.emission, s.object_id)
+            }
+        };
+        Self {
+            material,
+            emission,
+            object_id,
+        }
+    }
+}
+
+/// A lane's hit point, for a light sample drawn before the kernel: a
+/// sphere's is known, a triangle's is computed on demand as the kernel
+/// computes it (`triangle_point_with_normal`).
+enum Point<'a> {
+    Known(Vec3),
+    Triangle(&'a LaneTriangle, Vec2),
+}
+
+impl Point<'_> {
+    fn at(&self) -> Vec3 {
+        match *self {
+            Point::Known(p) => p,
+            Point::Triangle(t, bary) => triangle_point_with_normal(t.v, bary, t.n).p,
+        }
     }
 }
 
@@ -467,7 +523,7 @@ enum EnvLanes {
     /// radiance): the kernel maps the square once it has the frame.
     InFrame { radiance: Vec3 },
     /// From the sampler's own distribution, which no frame enters:
-    /// `LightSet::sample_env_frame_free` draws it before the kernel.
+    /// `LightSet::sample_without_frame` draws it before the kernel.
     Drawn,
 }
 
@@ -480,8 +536,12 @@ enum LightKind {
     Area = 1,
     /// The environment, its direction from the kernel's cosine map.
     EnvInFrame = 2,
-    /// The environment, its direction, density and radiance drawn already.
-    EnvDrawn = 3,
+    /// A direction with no point (the environment's), its density and
+    /// radiance drawn already: an unbounded shadow ray.
+    Drawn = 3,
+    /// The same toward a drawn point and its normal (a sphere light's): a
+    /// shadow segment.
+    DrawnPoint = 4,
 }
 
 /// The inputs of the kernel: a vector per lane (`Rows`, transposed into
@@ -494,6 +554,12 @@ struct Gathered {
     /// The vertices' shading normals, read only when `smooth`.
     vn: [Rows; 3],
     smooth: bool,
+    /// Whether the scene has spheres: the planes below, a sphere's surface
+    /// point where `sphere` is 1, are read only then.
+    spheres: bool,
+    sphere: [f32; LANES],
+    sphere_p: Rows,
+    sphere_error: Rows,
     albedo: Rows,
     beta: Rows,
     /// Each lane's [`LightKind`].
@@ -505,16 +571,18 @@ struct Gathered {
     light_n: Rows,
     light_area: [f32; LANES],
     light_pick: [f32; LANES],
-    /// The picked light's radiance (the environment's included).
+    /// The picked light's radiance (every kind's).
     light_le: Rows,
-    /// Whether the scene has an environment: the kernel's environment lanes,
-    /// and the planes below, are read only then.
-    env: bool,
+    /// Whether some lane may hold a light other than an area light: the
+    /// kernel's lanes for those, and the planes below, are read only then.
+    other_lights: bool,
     /// The light sample's square, for [`LightKind::EnvInFrame`].
     u_light: [[f32; LANES]; 2],
-    /// [`LightKind::EnvDrawn`]'s direction and density (the pick's included).
-    env_wi: Rows,
-    env_pdf: [f32; LANES],
+    /// A drawn sample's direction and density (the pick's included), and
+    /// for [`LightKind::DrawnPoint`] its point (its normal in `light_n`).
+    drawn_wi: Rows,
+    drawn_pdf: [f32; LANES],
+    drawn_q: Rows,
     bary: [[f32; LANES]; 2],
     u_dir: [[f32; LANES]; 2],
 }
@@ -523,21 +591,43 @@ struct Gathered {
 type Rows = [Vec3; LANES];
 
 impl Gathered {
-    /// Lane `l`'s hit, path state and random numbers.
-    fn set(&mut self, l: usize, p: &LanePath, hit: &Hit, t: &LaneTriangle, u: &VertexSamples) {
+    /// Lane `l`'s path state and random numbers.
+    fn set(&mut self, l: usize, p: &LanePath, u: &VertexSamples) {
         self.dir[l] = p.ray.dir;
+        self.beta[l] = p.st.beta;
+        self.u_dir[0][l] = u.dir.x;
+        self.u_dir[1][l] = u.dir.y;
+        self.u_light[0][l] = u.light.x;
+        self.u_light[1][l] = u.light.y;
+    }
+
+    /// Lane `l`'s triangle hit: the kernel computes its point.
+    fn set_triangle(&mut self, l: usize, hit: &Hit, t: &LaneTriangle) {
         self.n[l] = t.n;
         self.albedo[l] = t.albedo;
-        self.beta[l] = p.st.beta;
         for k in 0..3 {
             self.v[k][l] = t.v[k];
         }
         self.bary[0][l] = hit.bary.x;
         self.bary[1][l] = hit.bary.y;
-        self.u_dir[0][l] = u.dir.x;
-        self.u_dir[1][l] = u.dir.y;
-        self.u_light[0][l] = u.light.x;
-        self.u_light[1][l] = u.light.y;
+        self.sphere[l] = 0.0;
+    }
+
+    /// Lane `l`'s sphere hit, its surface point `sp` computed already
+    /// (`sphere_point`, as `interaction` does).
+    fn set_sphere(&mut self, l: usize, sp: &SurfacePoint, albedo: Vec3) {
+        self.n[l] = sp.n_geo;
+        self.albedo[l] = albedo;
+        self.sphere_p[l] = sp.p;
+        self.sphere_error[l] = sp.p_error;
+        self.sphere[l] = 1.0;
+        self.bary[0][l] = 0.0;
+        self.bary[1][l] = 0.0;
+        // Zero vertex normals: the kernel's interpolation falls back to the
+        // geometric normal, a sphere's shading normal.
+        for vn in &mut self.vn {
+            vn[l] = Vec3::ZERO;
+        }
     }
 
     /// Lane `l`'s picked area light `a`.
@@ -560,16 +650,48 @@ impl Gathered {
         LightKind::Area
     }
 
+    /// Lane `l`'s constant sky, picked with probability `pick`: the kernel
+    /// maps its direction.
+    fn set_env_in_frame(&mut self, l: usize, pick: f32, env: Option<EnvLanes>) -> LightKind {
+        let Some(EnvLanes::InFrame { radiance }) = env else {
+            unreachable!("a sky sampled in the frame");
+        };
+        self.light_pick[l] = pick;
+        self.light_le[l] = radiance;
+        LightKind::EnvInFrame
+    }
+
+    /// Lane `l`'s light sample drawn before the kernel.
+    fn set_drawn_light(&mut self, l: usize, ls: Option<LightSample>) -> LightKind {
+        let Some(ls) = ls else {
+            return LightKind::None;
+        };
+        self.drawn_wi[l] = ls.wi;
+        self.drawn_pdf[l] = ls.pdf;
+        self.light_le[l] = ls.radiance;
+        match ls.point {
+            None => LightKind::Drawn,
+            Some((q, nq)) => {
+                self.drawn_q[l] = q;
+                self.light_n[l] = nq;
+                LightKind::DrawnPoint
+            }
+        }
+    }
+
     fn copy_lane(&mut self, from: usize, to: usize) {
         for r in [
             &mut self.dir,
             &mut self.n,
+            &mut self.sphere_p,
+            &mut self.sphere_error,
             &mut self.albedo,
             &mut self.beta,
             &mut self.light_w,
             &mut self.light_n,
             &mut self.light_le,
-            &mut self.env_wi,
+            &mut self.drawn_wi,
+            &mut self.drawn_q,
         ]
         .into_iter()
         .chain(&mut self.v)
@@ -580,9 +702,10 @@ impl Gathered {
         }
         for p in [
             &mut self.kind,
+            &mut self.sphere,
             &mut self.light_area,
             &mut self.light_pick,
-            &mut self.env_pdf,
+            &mut self.drawn_pdf,
         ]
         .into_iter()
         .chain(&mut self.bary)
@@ -755,6 +878,56 @@ mod tests {
         }
     }
 
+    /// Spheres: hit (their surface point from `sphere_point`), and lights
+    /// (their samples drawn from the hit point), beside triangles with and
+    /// without shading normals, a rectangle light and environments, bit for
+    /// bit.
+    #[test]
+    fn lanes_trace_spheres_as_li_does() {
+        use crate::scene::Sphere;
+        let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
+        let mut cornell = load("scenes/validation/cornell_256.toml");
+        let white = cornell.meshes[0].material;
+        let ball = |center: Vec3, radius: f32, emission: Vec3, object_id: u32| Sphere {
+            name: "ball".into(),
+            center,
+            radius,
+            material: white,
+            emission,
+            bump: None,
+            object_id,
+        };
+        cornell.spheres = vec![
+            ball(Vec3::new(-0.4, -0.6, 0.3), 0.35, Vec3::ZERO, 90),
+            ball(Vec3::new(0.5, 0.4, -0.2), 0.2, Vec3::new(3.0, 2.0, 1.0), 91),
+        ];
+        let mut smooth = cornell.clone();
+        for m in &mut smooth.meshes {
+            m.normals = (0..m.positions.len())
+                .map(|i| Vec3::new(0.1 * i as f32, 1.0, 0.3).normalize())
+                .collect();
+        }
+        for (name, scene) in [
+            ("cornell + a ball and a sphere light", cornell),
+            ("the same with shading normals", smooth),
+            (
+                "three spheres, Gaussian sky",
+                load("scenes/three_spheres_env.toml"),
+            ),
+            (
+                "bunny, sphere light, constant sky",
+                load("scenes/shadowfield_bunny.toml"),
+            ),
+        ] {
+            let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+            let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
+            let tracer = setup.tracer(&scene, &accel);
+            let lanes = setup.lanes().expect("a lane scene");
+            assert!(!lanes.sphere_albedo.is_empty(), "{name}");
+            assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
+        }
+    }
+
     /// Samples of every 97th pixel through `li` and through `lanes`: how many
     /// agreed (all of them, or it panics).
     fn compare_with_li(setup: &Setup, tracer: &PathTracer, lanes: &LaneScene) -> usize {
@@ -800,7 +973,7 @@ mod tests {
 
     /// Only what the lanes shade exactly as `li` does gets them.
     #[test]
-    fn lane_scenes_are_lambertian_meshes_without_spheres() {
+    fn lane_scenes_are_lambertian_without_bump_maps() {
         let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
         let lanes = |s: &Scene| {
             let lights = crate::render::lights::LightSet::build(s);
@@ -808,14 +981,26 @@ mod tests {
         };
         let mut cornell = load("scenes/cornell.toml");
         assert!(lanes(&cornell));
+        for scene in [
+            "scenes/three_spheres_env.toml",
+            "scenes/shadowfield_bunny.toml",
+        ] {
+            assert!(lanes(&load(scene)), "{scene}");
+        }
         for (scene, why) in [
-            ("scenes/spheres_table.toml", "spheres"),
+            ("scenes/spheres_table.toml", "a glossy material"),
             ("scenes/glossy_teapot.toml", "a glossy material"),
-            ("scenes/validation/env_constant.toml", "spheres"),
+            ("scenes/validation/env_constant.toml", "a mirror"),
             ("scenes/objects_bumpy.toml", "bump maps"),
         ] {
             assert!(!lanes(&load(scene)), "{scene}: {why}");
         }
+        // A bump map on a sphere alone.
+        let mut bumpy = load("scenes/three_spheres_env.toml");
+        let bumped = load("scenes/objects_bumpy.toml");
+        bumpy.spheres[0].bump = Some(0);
+        bumpy.bumps = bumped.bumps.clone();
+        assert!(!lanes(&bumpy));
         // No light at all: still the lanes' (every light pick comes back empty).
         let mut dark = cornell.clone();
         for m in &mut dark.meshes {
