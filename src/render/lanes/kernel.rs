@@ -93,6 +93,18 @@ impl<L: Lanes> V8<L> {
     fn is_finite(self) -> L {
         self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
     }
+    /// glam's `normalize_or_zero`: times 1/|v| where that is finite and
+    /// positive, else zero.
+    #[inline(always)]
+    fn normalize_or_zero(self) -> Self {
+        let zero = L::splat(0.0);
+        let rcp = L::splat(1.0) / self.dot(self).sqrt();
+        select_v(
+            rcp.is_finite() & rcp.gt(zero),
+            self.mul(rcp),
+            V8::splat(zero),
+        )
+    }
 }
 
 /// `Frame`'s basis in lanes.
@@ -253,9 +265,7 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     let ns = if g.smooth {
         let [n0, n1, n2] = [0, 1, 2].map(|k| V8::<L>::load(&g.vn[k]));
         let s = n0.mul(b0).add(n1.mul(b1)).add(n2.mul(b2));
-        // `normalize_or_zero`: times 1/|s| where that is finite and positive.
-        let rcp = one / s.dot(s).sqrt();
-        let s = select_v(rcp.is_finite() & rcp.gt(zero), s.mul(rcp), V8::splat(zero));
+        let s = s.normalize_or_zero();
         select_v(s.x.eq(zero) & s.y.eq(zero) & s.z.eq(zero), n, s)
     } else {
         n
@@ -368,10 +378,30 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     // The BSDF sample (`lambert::sample`).
     let local = cosine_hemisphere8(L::load(g.u_dir[0]), L::load(g.u_dir[1]));
     let pdf = local.z.gt(zero).select(local.z * frac_1_pi, zero);
+    let (direct, local, pdf, sampled_dir) = if g.mirrors {
+        // A mirror's lanes (`mirror::sample`): no light sample (a delta
+        // lobe), the reflection about the normal, an infinite density (the
+        // next emitter counts in full).
+        let mirror = L::load(g.mirror).gt(zero);
+        let reflected = V8 {
+            x: -wo.x,
+            y: -wo.y,
+            z: wo.z,
+        }
+        .normalize_or_zero();
+        (
+            mirror.select(zero.ne(zero), direct),
+            select_v(mirror, reflected, local),
+            mirror.select(L::splat(f32::INFINITY), pdf),
+            mirror.select(reflected.z.gt(zero), pdf.gt(zero)),
+        )
+    } else {
+        (direct, local, pdf, pdf.gt(zero))
+    };
     let wi_next = frame.to_world(local);
     // (`continue_path` also asks for a finite weight: the albedo was
     // sanitised when the lane scene was built.)
-    let next = alive & pdf.gt(zero) & wi_next.dot(ng).gt(zero);
+    let next = alive & sampled_dir & wi_next.dot(ng).gt(zero);
     let next_o = offset8(p, p_error, ng, wi_next);
     Shaded8 {
         alive: alive.bitmask(),

@@ -13,9 +13,10 @@
 //! lane by lane: a path's radiance is `li`'s, whichever paths share its lanes
 //! and whatever the thread count (`tests`: sample for sample).
 //!
-//! It takes Lambertian triangle meshes (with or without shading normals) and
-//! spheres, without bump maps, under any light, without gradients or line
-//! sampling ([`refusal`]); everything else goes through `li`. A sphere hit's
+//! It takes triangle meshes (with or without shading normals) and spheres,
+//! Lambertian or mirrors, without bump maps, under any light, without
+//! gradients or line sampling ([`refusal`]); everything else (glossy
+//! materials, bump maps) goes through `li`. A sphere hit's
 //! surface point is computed while the lanes are gathered (`sphere_point`,
 //! as `interaction` does), a triangle's in the kernel. A constant sky's
 //! cosine-weighted sample needs the shading frame, so the kernel maps it; an
@@ -64,8 +65,11 @@ pub(crate) struct LaneScene {
     /// Some light's sample is drawn before the kernel (a sphere's, or an
     /// environment's), or mapped in it (a constant sky's).
     other_lights: bool,
-    /// Each sphere's sanitised albedo.
+    /// Each sphere's sanitised albedo (a mirror's reflectance).
     sphere_albedo: Vec<Vec3>,
+    /// Whether each mesh, each sphere is a mirror (else Lambertian).
+    mesh_mirror: Vec<bool>,
+    sphere_mirror: Vec<bool>,
     /// The kernel in AVX's registers (the CPU has AVX2), else in `wide`'s.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx2: bool,
@@ -77,24 +81,31 @@ pub(crate) struct LaneScene {
 }
 
 impl LaneScene {
-    /// `None` unless every shape is Lambertian without a bump map
-    /// ([`refusal`]).
+    /// `None` unless every shape is Lambertian or a mirror, without a bump
+    /// map ([`refusal`]).
     pub(crate) fn build(scene: &Scene, light_set: &super::lights::LightSet) -> Option<Self> {
         if refusal(scene).is_some() {
             return None;
         }
         let lights = light_set.lane_lights(scene);
         let other_lights = lights.iter().any(|l| !matches!(l, LaneLight::Area(_)));
-        // As a Lambertian sample's weight is.
-        let albedo = |m: u32| match scene.materials.get(m as usize) {
-            Some(Material::Lambert { albedo }) => Some(crate::brdf::sanitize(*albedo)),
+        // As a Lambertian or mirror sample's weight is; whether a mirror.
+        let material = |m: u32| match scene.materials.get(m as usize) {
+            Some(Material::Lambert { albedo }) => Some((crate::brdf::sanitize(*albedo), false)),
+            Some(Material::Mirror { reflectance }) => {
+                Some((crate::brdf::sanitize(*reflectance), true))
+            }
             _ => None,
         };
+        let albedo = |m: u32| material(m).map(|(a, _)| a);
+        let mirror = |m: u32| material(m).is_some_and(|(_, mirror)| mirror);
         let sphere_albedo = scene
             .spheres
             .iter()
             .map(|s| albedo(s.material))
             .collect::<Option<_>>()?;
+        let sphere_mirror = scene.spheres.iter().map(|s| mirror(s.material)).collect();
+        let mesh_mirror = scene.meshes.iter().map(|m| mirror(m.material)).collect();
         let env = scene.environment.as_ref().map(|env| {
             if light_set.env_sample_in_frame() {
                 // The cosine-weighted sampler is built for a constant sky
@@ -136,6 +147,8 @@ impl LaneScene {
             env,
             other_lights,
             sphere_albedo,
+            mesh_mirror,
+            sphere_mirror,
             avx2: avx2(),
             vertex_normals,
             smooth,
@@ -260,12 +273,14 @@ impl LaneScene {
                         }
                     }
                     g.set_triangle(l, &hit, t);
+                    g.mirror[l] = f32::from(u8::from(self.mesh_mirror[mesh as usize]));
                     Point::Triangle(t, hit.bary)
                 }
                 PrimRef::Sphere(k) => {
                     let s = &tracer.scene.spheres[k as usize];
                     let sp = sphere_point(s.center, s.radius, p.ray.at(hit.t));
                     g.set_sphere(l, &sp, self.sphere_albedo[k as usize]);
+                    g.mirror[l] = f32::from(u8::from(self.sphere_mirror[k as usize]));
                     Point::Known(sp.p)
                 }
             };
@@ -290,6 +305,11 @@ impl LaneScene {
         }
         g.other_lights = self.other_lights;
         g.spheres = !self.sphere_albedo.is_empty();
+        g.mirrors = self
+            .mesh_mirror
+            .iter()
+            .chain(&self.sphere_mirror)
+            .any(|&m| m);
         // Unused lanes repeat lane 0: finite inputs, results dropped.
         for l in chunk.len()..LANES {
             g.copy_lane(0, l);
@@ -365,7 +385,7 @@ pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
     let lambert = |m: u32| {
         matches!(
             scene.materials.get(m as usize),
-            Some(Material::Lambert { .. })
+            Some(Material::Lambert { .. } | Material::Mirror { .. })
         )
     };
     let materials = scene.meshes.iter().map(|m| m.material);
@@ -374,7 +394,7 @@ pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
         .chain(scene.spheres.iter().map(|s| s.material))
         .all(lambert)
     {
-        Some("a glossy or mirror material")
+        Some("a glossy material")
     } else if bumps
         .chain(scene.spheres.iter().map(|s| s.bump))
         .any(|b| b.is_some())
@@ -560,6 +580,11 @@ struct Gathered {
     sphere: [f32; LANES],
     sphere_p: Rows,
     sphere_error: Rows,
+    /// Whether the scene has mirrors: `mirror` (1 on a mirror's lanes) is
+    /// read only then.
+    mirrors: bool,
+    mirror: [f32; LANES],
+    /// The Lambertian albedo, or the mirror's reflectance.
     albedo: Rows,
     beta: Rows,
     /// Each lane's [`LightKind`].
@@ -703,6 +728,7 @@ impl Gathered {
         for p in [
             &mut self.kind,
             &mut self.sphere,
+            &mut self.mirror,
             &mut self.light_area,
             &mut self.light_pick,
             &mut self.drawn_pdf,
@@ -928,6 +954,42 @@ mod tests {
         }
     }
 
+    /// Mirrors: no light sample, the reflection, an infinite density for the
+    /// next hit's MIS; on a sphere (the Mitsuba validation scenes, under a
+    /// sphere light, a constant sky, an image) and on a wall of the Cornell
+    /// box, bit for bit.
+    #[test]
+    fn lanes_trace_mirrors_as_li_does() {
+        let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
+        let mut cornell = load("scenes/validation/cornell_256.toml");
+        let back = cornell.meshes.len() - 1;
+        let mirror = cornell.materials.len() as u32;
+        cornell.materials.push(Material::Mirror {
+            reflectance: Vec3::new(0.9, 0.8, 0.7),
+        });
+        cornell.meshes[back].material = mirror;
+        for (name, scene) in [
+            ("spheres", load("scenes/validation/spheres.toml")),
+            ("constant sky", load("scenes/validation/env_constant.toml")),
+            ("image sky", load("scenes/validation/env_image.toml")),
+            ("cornell with a mirror wall", cornell),
+        ] {
+            let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+            let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
+            let tracer = setup.tracer(&scene, &accel);
+            let lanes = setup.lanes().expect("a lane scene");
+            assert!(
+                lanes
+                    .mesh_mirror
+                    .iter()
+                    .chain(&lanes.sphere_mirror)
+                    .any(|&m| m),
+                "{name}"
+            );
+            assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
+        }
+    }
+
     /// Samples of every 97th pixel through `li` and through `lanes`: how many
     /// agreed (all of them, or it panics).
     fn compare_with_li(setup: &Setup, tracer: &PathTracer, lanes: &LaneScene) -> usize {
@@ -984,13 +1046,14 @@ mod tests {
         for scene in [
             "scenes/three_spheres_env.toml",
             "scenes/shadowfield_bunny.toml",
+            "scenes/validation/env_constant.toml",
         ] {
             assert!(lanes(&load(scene)), "{scene}");
         }
         for (scene, why) in [
             ("scenes/spheres_table.toml", "a glossy material"),
             ("scenes/glossy_teapot.toml", "a glossy material"),
-            ("scenes/validation/env_constant.toml", "a mirror"),
+            ("scenes/bunny_env.toml", "a glossy material"),
             ("scenes/objects_bumpy.toml", "bump maps"),
         ] {
             assert!(!lanes(&load(scene)), "{scene}: {why}");
@@ -1008,9 +1071,8 @@ mod tests {
         }
         assert!(lanes(&dark));
         // A glossy material on one mesh.
-        cornell.materials[cornell.meshes[0].material as usize] = Material::Mirror {
-            reflectance: Vec3::ONE,
-        };
+        let glossy = load("scenes/glossy_teapot.toml");
+        cornell.materials[cornell.meshes[0].material as usize] = glossy.materials[0].clone();
         assert!(!lanes(&cornell));
     }
 }
