@@ -4,8 +4,9 @@
 //! and three-wide vector work per vertex, at an IPC near the core's limit, so
 //! only fewer instructions make it faster. Here a batch of paths (up to
 //! `render::LANE_BATCH` of a tile row's samples) advances bounce by bounce:
-//! every live path's ray is traced with the same single-ray queries, then the hits are shaded eight at a time in SIMD
-//! lanes (`kernel`: AVX registers where the CPU has AVX2, `wide::f32x8` else) —
+//! every live path's ray is traced with the same single-ray queries, then
+//! the hits are shaded eight at a time in SIMD lanes (`kernel`: AVX
+//! registers where the CPU has AVX2, `wide::f32x8` else) —
 //! the surface point and its error bound, the frame, the light sample, the
 //! Lambertian eval, pdf and sample, MIS, both rays' offsets — then the shadow
 //! rays are traced and the paths go on. Same estimator, same random numbers
@@ -16,12 +17,12 @@
 //! It takes triangle meshes (with or without shading normals) and spheres,
 //! Lambertian or mirrors, without bump maps, under any light, without
 //! gradients or line sampling ([`refusal`]); everything else (glossy
-//! materials, bump maps) goes through `li`. A sphere hit's
-//! surface point is computed while the lanes are gathered (`sphere_point`,
-//! as `interaction` does), a triangle's in the kernel. A constant sky's
-//! cosine-weighted sample needs the shading frame, so the kernel maps it; an
-//! image's or a Gaussian sky's, and a sphere light's (from the hit point),
-//! are drawn while gathering (`LightSet::sample_without_frame`).
+//! materials, bump maps) goes through `li`. A sphere hit's surface point is
+//! computed while the lanes are gathered (`sphere_point`, as `interaction`
+//! does), a triangle's in the kernel. A constant sky's cosine-weighted
+//! sample needs the shading frame, so the kernel maps it; an image's or a
+//! Gaussian sky's, and a sphere light's (from the hit point), are drawn
+//! while gathering (`LightSet::sample_without_frame`).
 
 use super::interaction::interaction;
 use super::lights::{AreaLight, LaneLight, LightSample};
@@ -67,9 +68,11 @@ pub(crate) struct LaneScene {
     other_lights: bool,
     /// Each sphere's sanitised albedo (a mirror's reflectance).
     sphere_albedo: Vec<Vec3>,
-    /// Whether each mesh, each sphere is a mirror (else Lambertian).
+    /// Whether each mesh, each sphere is a mirror (else Lambertian), and
+    /// whether any is.
     mesh_mirror: Vec<bool>,
     sphere_mirror: Vec<bool>,
+    mirrors: bool,
     /// The kernel in AVX's registers (the CPU has AVX2), else in `wide`'s.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx2: bool,
@@ -104,8 +107,9 @@ impl LaneScene {
             .iter()
             .map(|s| albedo(s.material))
             .collect::<Option<_>>()?;
-        let sphere_mirror = scene.spheres.iter().map(|s| mirror(s.material)).collect();
-        let mesh_mirror = scene.meshes.iter().map(|m| mirror(m.material)).collect();
+        let sphere_mirror: Vec<bool> = scene.spheres.iter().map(|s| mirror(s.material)).collect();
+        let mesh_mirror: Vec<bool> = scene.meshes.iter().map(|m| mirror(m.material)).collect();
+        let mirrors = mesh_mirror.iter().chain(&sphere_mirror).any(|&m| m);
         let env = scene.environment.as_ref().map(|env| {
             if light_set.env_sample_in_frame() {
                 // The cosine-weighted sampler is built for a constant sky
@@ -149,6 +153,7 @@ impl LaneScene {
             sphere_albedo,
             mesh_mirror,
             sphere_mirror,
+            mirrors,
             avx2: avx2(),
             vertex_normals,
             smooth,
@@ -305,11 +310,7 @@ impl LaneScene {
         }
         g.other_lights = self.other_lights;
         g.spheres = !self.sphere_albedo.is_empty();
-        g.mirrors = self
-            .mesh_mirror
-            .iter()
-            .chain(&self.sphere_mirror)
-            .any(|&m| m);
+        g.mirrors = self.mirrors;
         // Unused lanes repeat lane 0: finite inputs, results dropped.
         for l in chunk.len()..LANES {
             g.copy_lane(0, l);
@@ -978,14 +979,7 @@ mod tests {
             let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
             let tracer = setup.tracer(&scene, &accel);
             let lanes = setup.lanes().expect("a lane scene");
-            assert!(
-                lanes
-                    .mesh_mirror
-                    .iter()
-                    .chain(&lanes.sphere_mirror)
-                    .any(|&m| m),
-                "{name}"
-            );
+            assert!(lanes.mirrors, "{name}");
             assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
         }
     }
