@@ -218,6 +218,64 @@ fn bad_arguments_are_one_error_line_with_status_1() {
     assert_eq!(tree(&dir), vec!["tiny.toml"]);
 }
 
+/// A scene whose BVH and shading tables would not fit is refused after it is
+/// loaded and before they are built, naming the scene file; with the memory
+/// they need it renders.
+#[test]
+fn a_scene_too_large_to_build_names_its_file() {
+    let dir = temp_dir("bigmesh");
+    // A 224 × 224 grid: 100,352 triangles, about 40 MB to build.
+    let n = 224;
+    let mut obj = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            obj += &format!(
+                "v {} 0 {}\n",
+                i as f32 / n as f32 - 0.5,
+                j as f32 / n as f32 - 0.5
+            );
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            let (b, c) = (a + 1, a + n + 1);
+            obj += &format!("f {a} {c} {b}\nf {b} {c} {}\n", c + 1);
+        }
+    }
+    std::fs::write(dir.join("grid.obj"), obj).unwrap();
+    let scene = TINY_SCENE.replace(
+        "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
+        "type = \"mesh\"\nfile = \"grid.obj\"",
+    );
+    assert!(scene.contains("grid.obj"));
+    std::fs::write(dir.join("big.toml"), scene).unwrap();
+    let small = ["--width", "2", "--height", "2", "--out", "out/big.exr"];
+    let out = run_in(
+        &dir,
+        &[&["render", "big.toml", "--max-memory", "0.03"][..], &small].concat(),
+    );
+    assert_failed_with(
+        &out,
+        "big.toml: a 2x2 render of 100352 triangles needs about",
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("BVH"));
+    assert_eq!(tree(&dir), vec!["big.toml", "grid.obj"]);
+    let out = run_in(
+        &dir,
+        &[
+            &["render", "big.toml", "--max-memory", "0.2", "--quiet"][..],
+            &small,
+        ]
+        .concat(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// An `--out` inside a regular file names that file (not "File exists").
 #[test]
 fn out_under_a_regular_file_names_the_file() {

@@ -42,6 +42,17 @@ pub fn adaptive_render_bytes(pixels: u64, budget: f32, opts: &RenderOptions) -> 
         ) * u64::from(opts.aovs)
 }
 
+/// Bytes of what a render builds from a loaded scene of `primitives` triangles
+/// and spheres: the BVH (obvhs' build at its peak, then the blocks, lane
+/// records and nodes) and the lane shading's per-triangle table. Measured as
+/// the peak RSS of rendering a 2×2 image of a grid mesh above the peak of
+/// loading it alone (2026-12-05, `--max-memory` tiny to stop after the load):
+/// 0.5 M triangles 92 → 207 MB, 2 M triangles 354 → 693 MB, i.e. 320–400 bytes
+/// per triangle above the loaded scene; 400 here.
+pub fn scene_structures_bytes(primitives: u64) -> u64 {
+    primitives * 400
+}
+
 /// Memory the system can give this process now (`MemAvailable`), if known.
 fn available_bytes() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -53,17 +64,53 @@ fn available_bytes() -> Option<u64> {
 /// An error when `bytes` exceed 90 % of the memory available (or `limit`, when
 /// given): `what` names the run, `hint` the options that shrink it.
 pub fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<()> {
-    let Some(cap) = limit.or_else(|| available_bytes().map(|a| a / 10 * 9)) else {
+    let Some(message) = over(bytes, limit, what) else {
         return Ok(());
     };
-    if bytes <= cap {
-        return Ok(());
-    }
-    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
     Err(Error::Option {
         option: hint.into(),
+        message: format!("{message}; make it smaller"),
+    })
+}
+
+/// [`check`] for a render of the scene file `scene` with `triangles` and
+/// `spheres`, `image_bytes` for its image: when what the scene builds is the
+/// larger part, the error names the scene file rather than the image's options.
+pub fn check_render(
+    image_bytes: u64,
+    (triangles, spheres): (u64, u64),
+    limit: Option<u64>,
+    what: &str,
+    scene: &std::path::Path,
+    hint: &str,
+) -> Result<()> {
+    let scene_bytes = scene_structures_bytes(triangles + spheres);
+    if scene_bytes <= image_bytes {
+        return check(image_bytes + scene_bytes, limit, what, hint);
+    }
+    let what = match spheres {
+        0 => format!("{what} of {triangles} triangles"),
+        _ => format!("{what} of {triangles} triangles and {spheres} spheres"),
+    };
+    let Some(message) = over(image_bytes + scene_bytes, limit, &what) else {
+        return Ok(());
+    };
+    Err(Error::Asset {
+        path: scene.to_path_buf(),
         message: format!(
-            "{what} needs about {:.1} GiB of memory, more than the {:.1} GiB {}; make it smaller",
+            "{message} ({:.1} GiB of it for the BVH and the shading tables); split or simplify the meshes",
+            gib(scene_bytes)
+        ),
+    })
+}
+
+/// What exceeds the cap, in words, or `None` when `bytes` fit (or the memory
+/// available is unknown and there is no `limit`).
+fn over(bytes: u64, limit: Option<u64>, what: &str) -> Option<String> {
+    let cap = limit.or_else(|| available_bytes().map(|a| a / 10 * 9))?;
+    (bytes > cap).then(|| {
+        format!(
+            "{what} needs about {:.1} GiB of memory, more than the {:.1} GiB {}",
             gib(bytes),
             gib(cap),
             if limit.is_some() {
@@ -71,6 +118,10 @@ pub fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<(
             } else {
                 "available"
             }
-        ),
+        )
     })
+}
+
+fn gib(b: u64) -> f64 {
+    b as f64 / (1u64 << 30) as f64
 }
