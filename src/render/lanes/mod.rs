@@ -296,13 +296,16 @@ impl LaneScene {
                 Some(&LaneLight::Environment { pick }) if self.env_in_frame() => {
                     g.set_env_in_frame(l, pick, self.env)
                 }
-                Some(LaneLight::Environment { .. } | LaneLight::Sphere) => {
-                    let ls = tracer.lights.sample_without_frame(
-                        tracer.scene,
-                        point.at(),
-                        u.pick,
-                        u.light,
-                    );
+                Some(light @ (LaneLight::Environment { .. } | LaneLight::Sphere)) => {
+                    // A sky's sample reads no point: the hit point is computed
+                    // only for a sphere light's.
+                    let at = match light {
+                        LaneLight::Sphere => point.at(),
+                        _ => Vec3::ZERO,
+                    };
+                    let ls = tracer
+                        .lights
+                        .sample_without_frame(tracer.scene, at, u.pick, u.light);
                     g.set_drawn_light(l, ls)
                 }
             };
