@@ -753,13 +753,29 @@ mod tests {
     use crate::math::Vec2;
     use crate::render::{camera_ray, camera_sample_at, RenderOptions, Setup};
 
+    fn load(path: &str) -> Scene {
+        crate::scene::load(std::path::Path::new(path)).expect("bundled scene")
+    }
+
+    /// `f` over `scene`'s set-up under `opts`, its tracer and its lanes (the
+    /// scene must take them).
+    fn with_lanes<R>(
+        scene: &Scene,
+        opts: &RenderOptions,
+        f: impl FnOnce(&Setup, &PathTracer, &LaneScene) -> R,
+    ) -> R {
+        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
+        let setup = Setup::new(scene, opts).expect("setup");
+        let tracer = setup.tracer(scene, &accel);
+        f(&setup, &tracer, setup.lanes().expect("a lane scene"))
+    }
+
     /// Every sample of a cornell render, traced by `li` and by the lanes with
     /// the same sampler: the same radiance bit for bit, the same AOVs, the
     /// same ray count.
     #[test]
     fn lanes_trace_the_paths_li_traces() {
-        let scene = crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
-            .expect("bundled scene");
+        let scene = load("scenes/validation/cornell_256.toml");
         let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
         let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
         let tracer = setup.tracer(&scene, &accel);
@@ -779,23 +795,16 @@ mod tests {
     /// scalar set-up), one bounce, and Russian roulette from the second.
     #[test]
     fn lanes_stop_where_li_stops() {
-        let mut scene =
-            crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
-                .expect("bundled scene");
+        let mut scene = load("scenes/validation/cornell_256.toml");
         scene.settings.rr_depth = 2;
-        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
         for max_depth in [1, 2, 6] {
             let opts = RenderOptions {
                 max_depth: Some(max_depth),
                 ..Default::default()
             };
-            let setup = Setup::new(&scene, &opts).expect("setup");
-            let tracer = setup.tracer(&scene, &accel);
-            let lanes = setup.lanes().expect("a lane scene");
-            assert!(
-                compare_with_li(&setup, &tracer, lanes) > 8000,
-                "{max_depth}"
-            );
+            with_lanes(&scene, &opts, |setup, tracer, lanes| {
+                assert!(compare_with_li(setup, tracer, lanes) > 8000, "{max_depth}");
+            });
         }
     }
 
@@ -803,9 +812,7 @@ mod tests {
     /// normal instead) and some below the surface (folded back), bit for bit.
     #[test]
     fn lanes_interpolate_shading_normals_as_li_does() {
-        let mut scene =
-            crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
-                .expect("bundled scene");
+        let mut scene = load("scenes/validation/cornell_256.toml");
         for (k, m) in scene.meshes.iter_mut().enumerate() {
             m.normals = (0..m.positions.len())
                 .map(|i| match (k + i) % 5 {
@@ -815,12 +822,10 @@ mod tests {
                 })
                 .collect();
         }
-        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-        let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
-        let tracer = setup.tracer(&scene, &accel);
-        let lanes = setup.lanes().expect("a lane scene");
-        assert!(lanes.smooth);
-        assert!(compare_with_li(&setup, &tracer, lanes) > 8000);
+        with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
+            assert!(lanes.smooth);
+            assert!(compare_with_li(setup, tracer, lanes) > 8000);
+        });
     }
 
     /// Emitting triangles (the light's rectangle dropped, so it is two
@@ -828,9 +833,7 @@ mod tests {
     /// triangle map, the pick and the MIS weights of emitter hits, bit for bit.
     #[test]
     fn lanes_trace_triangle_lights_as_li_does() {
-        let mut scene =
-            crate::scene::load(std::path::Path::new("scenes/validation/cornell_256.toml"))
-                .expect("bundled scene");
+        let mut scene = load("scenes/validation/cornell_256.toml");
         let light = scene
             .meshes
             .iter()
@@ -842,18 +845,16 @@ mod tests {
             .expect("a wall");
         scene.meshes[wall].emission = Vec3::new(0.4, 0.2, 0.1);
         scene.meshes[wall].rect = None;
-        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-        let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
-        let tracer = setup.tracer(&scene, &accel);
-        let lanes = setup.lanes().expect("still a lane scene");
-        assert!(
-            lanes.lights.len() > 3
-                && lanes
-                    .lights
-                    .iter()
-                    .all(|l| matches!(l, LaneLight::Area(a) if !a.rect))
-        );
-        assert!(compare_with_li(&setup, &tracer, lanes) > 8000);
+        with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
+            assert!(
+                lanes.lights.len() > 3
+                    && lanes
+                        .lights
+                        .iter()
+                        .all(|l| matches!(l, LaneLight::Area(a) if !a.rect))
+            );
+            assert!(compare_with_li(setup, tracer, lanes) > 8000);
+        });
     }
 
     /// Environments: the constant sky's cosine map in the kernel, the image's
@@ -864,7 +865,7 @@ mod tests {
     fn lanes_trace_environments_as_li_does() {
         use crate::scene::Environment;
         let load = |p: &str| {
-            let mut s = crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
+            let mut s = load(p);
             s.spheres.clear();
             s
         };
@@ -895,16 +896,14 @@ mod tests {
             ("cornell + constant", cornell, true),
             ("cornell + gaussian sky", cornell_sky, false),
         ] {
-            let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-            let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
-            let tracer = setup.tracer(&scene, &accel);
-            let lanes = setup.lanes().expect("a lane scene");
-            assert_eq!(
-                matches!(lanes.env, Some(EnvLanes::InFrame { .. })),
-                in_frame,
-                "{name}"
-            );
-            assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
+            with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
+                assert_eq!(
+                    matches!(lanes.env, Some(EnvLanes::InFrame { .. })),
+                    in_frame,
+                    "{name}"
+                );
+                assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
+            });
         }
     }
 
@@ -915,7 +914,6 @@ mod tests {
     #[test]
     fn lanes_trace_spheres_as_li_does() {
         use crate::scene::Sphere;
-        let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
         let mut cornell = load("scenes/validation/cornell_256.toml");
         let white = cornell.meshes[0].material;
         let ball = |center: Vec3, radius: f32, emission: Vec3, object_id: u32| Sphere {
@@ -949,12 +947,10 @@ mod tests {
                 load("scenes/shadowfield_bunny.toml"),
             ),
         ] {
-            let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-            let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
-            let tracer = setup.tracer(&scene, &accel);
-            let lanes = setup.lanes().expect("a lane scene");
-            assert!(!lanes.sphere_albedo.is_empty(), "{name}");
-            assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
+            with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
+                assert!(!lanes.sphere_albedo.is_empty(), "{name}");
+                assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
+            });
         }
     }
 
@@ -964,7 +960,6 @@ mod tests {
     /// box, bit for bit.
     #[test]
     fn lanes_trace_mirrors_as_li_does() {
-        let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
         let mut cornell = load("scenes/validation/cornell_256.toml");
         let back = cornell.meshes.len() - 1;
         let mirror = cornell.materials.len() as u32;
@@ -978,12 +973,10 @@ mod tests {
             ("image sky", load("scenes/validation/env_image.toml")),
             ("cornell with a mirror wall", cornell),
         ] {
-            let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-            let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
-            let tracer = setup.tracer(&scene, &accel);
-            let lanes = setup.lanes().expect("a lane scene");
-            assert!(lanes.mirrors, "{name}");
-            assert!(compare_with_li(&setup, &tracer, lanes) > 400, "{name}");
+            with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
+                assert!(lanes.mirrors, "{name}");
+                assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
+            });
         }
     }
 
@@ -1032,8 +1025,7 @@ mod tests {
 
     /// Only what the lanes shade exactly as `li` does gets them.
     #[test]
-    fn lane_scenes_are_lambertian_without_bump_maps() {
-        let load = |p: &str| crate::scene::load(std::path::Path::new(p)).expect("bundled scene");
+    fn lane_scenes_are_lambertian_or_mirror_without_bump_maps() {
         let lanes = |s: &Scene| {
             let lights = crate::render::lights::LightSet::build(s);
             LaneScene::build(s, &lights).is_some()
