@@ -123,7 +123,7 @@ impl SurfacePoint {
         Self::segment(o, target)
     }
 
-    pub(crate) fn segment(o: Vec3, end: Vec3) -> Ray {
+    fn segment(o: Vec3, end: Vec3) -> Ray {
         let d = end - o;
         let len = d.length();
         if len.is_nan() || len <= 0.0 || len.is_infinite() {
