@@ -12,6 +12,7 @@ pub mod denoise;
 pub mod error;
 pub mod flatland;
 pub mod math;
+pub mod memory;
 pub mod output;
 pub mod pipeline;
 pub mod preview;

@@ -14,6 +14,10 @@ use gradtrace::pipeline::diff::DiffOptions;
 use gradtrace::pipeline::{self, progress::ProgressMode};
 use std::process::ExitCode;
 
+/// A failed allocation ends the run with one `error:` line, not an abort.
+#[global_allocator]
+static ALLOCATOR: gradtrace::memory::OneLineOom = gradtrace::memory::OneLineOom;
+
 /// The x86 features this binary was compiled to assume (`.cargo/config.toml`)
 /// that the CPU lacks: run on one, it would die of an illegal instruction.
 fn missing_cpu_features() -> Vec<&'static str> {
@@ -79,6 +83,19 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
+    let _doing = {
+        let (path, activity) = match &cli.command {
+            Command::Render(a) => (&a.scene, "rendering"),
+            Command::Info(a) => (&a.scene, "reading the scene"),
+            Command::Diff(a) => (&a.image, "comparing the images"),
+            Command::Preview(PreviewCommand::ShadowField(a) | PreviewCommand::Glossy(a)) => {
+                (&a.scene, "making the preview")
+            }
+            Command::Merge(a) => (&a.out, "merging the parts"),
+            Command::Compare(a) => (&a.scene, "comparing the renderers"),
+        };
+        gradtrace::memory::doing(path, activity)
+    };
     match cli.command {
         Command::Render(args) => {
             let quiet = args.common.quiet;

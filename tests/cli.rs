@@ -225,24 +225,7 @@ fn bad_arguments_are_one_error_line_with_status_1() {
 fn a_scene_too_large_to_build_names_its_file() {
     let dir = temp_dir("bigmesh");
     // A 224 × 224 grid: 100,352 triangles, about 40 MB to build.
-    let n = 224;
-    let mut obj = String::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            obj += &format!(
-                "v {} 0 {}\n",
-                i as f32 / n as f32 - 0.5,
-                j as f32 / n as f32 - 0.5
-            );
-        }
-    }
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * (n + 1) + i + 1;
-            let (b, c) = (a + 1, a + n + 1);
-            obj += &format!("f {a} {c} {b}\nf {b} {c} {}\n", c + 1);
-        }
-    }
+    let obj = grid_obj(224);
     std::fs::write(dir.join("grid.obj"), obj).unwrap();
     let scene = TINY_SCENE.replace(
         "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
@@ -274,6 +257,103 @@ fn a_scene_too_large_to_build_names_its_file() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// An OBJ of an `n` × `n` grid of quads (2n² triangles) in the plane y = 0.
+fn grid_obj(n: usize) -> String {
+    let mut obj = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            obj += &format!(
+                "v {} 0 {}\n",
+                i as f32 / n as f32 - 0.5,
+                j as f32 / n as f32 - 0.5
+            );
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            let (b, c) = (a + 1, a + n + 1);
+            obj += &format!("f {a} {c} {b}\nf {b} {c} {}\n", c + 1);
+        }
+    }
+    obj
+}
+
+/// `gradtrace ARGS` in `dir` under an address-space limit of `kib` KiB
+/// (`ulimit -v`): past it every allocation fails, whatever memory is free.
+#[cfg(target_os = "linux")]
+fn run_limited(dir: &Path, kib: u64, args: &[&str]) -> Output {
+    std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\""))
+        .arg(common::BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// An OBJ whose load would not fit is refused before it is read, naming the
+/// scene's key and the OBJ: the memory available counts the address-space
+/// limit, which `MemAvailable` does not show. Without the check, the load ran
+/// out of memory halfway (before this check existed, an abort, status 134).
+#[test]
+#[cfg(target_os = "linux")]
+fn an_obj_too_large_to_load_names_it() {
+    let dir = temp_dir("bigobj");
+    // 605,000 triangles: about 20 MB of text, ~120 MB to load; 100 MB allowed.
+    let obj = grid_obj(550);
+    assert!(obj.len() > 18 << 20, "{}", obj.len());
+    std::fs::write(dir.join("grid.obj"), obj).unwrap();
+    let scene = TINY_SCENE.replace(
+        "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
+        "type = \"mesh\"\nfile = \"grid.obj\"",
+    );
+    std::fs::write(dir.join("big.toml"), scene).unwrap();
+    let out = run_limited(
+        &dir,
+        100_000,
+        &["render", "big.toml", "--out", "out/big.exr"],
+    );
+    assert_failed_with(&out, "big.toml: shapes[0].file (line ");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("grid.obj: loading this 2"), "{err}");
+    assert!(err.contains("MiB OBJ needs about 0.1 GiB"), "{err}");
+    assert_eq!(tree(&dir), vec!["big.toml", "grid.obj"]);
+}
+
+/// An allocation that fails anyway (here `--max-memory` lets through a render
+/// the address-space limit cannot hold) ends the run with one line naming the
+/// scene and status 1, not an abort, and leaves no file.
+#[test]
+#[cfg(target_os = "linux")]
+fn running_out_of_memory_is_one_line_not_an_abort() {
+    let dir = temp_dir("oom");
+    std::fs::write(dir.join("tiny.toml"), TINY_SCENE).unwrap();
+    let args = [
+        "render",
+        "tiny.toml",
+        "--width",
+        "20000",
+        "--height",
+        "20000",
+        "--max-memory",
+        "1000",
+        "--out",
+        "out/huge.exr",
+    ];
+    let out = run_limited(&dir, 1_000_000, &args);
+    assert_failed_with(
+        &out,
+        "error: tiny.toml: out of memory while rendering (an allocation of ",
+    );
+    assert_eq!(tree(&dir), vec!["tiny.toml"]);
+    // The same render within --max-memory's default (the memory available,
+    // which the limit caps) is refused before it starts.
+    let out = run_limited(&dir, 1_000_000, &args[..6]);
+    assert_failed_with(&out, "a 20000x20000 render needs about");
 }
 
 /// An `--out` inside a regular file names that file (not "File exists").

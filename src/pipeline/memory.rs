@@ -4,6 +4,7 @@
 //! after minutes with "memory allocation failed".
 
 use crate::math::Vec3;
+use crate::memory::gib;
 use crate::render::gradients::GradientSum;
 use crate::render::{PixelAccumulator, RenderOptions};
 use crate::{Error, Result};
@@ -53,14 +54,6 @@ pub fn scene_structures_bytes(primitives: u64) -> u64 {
     primitives * 400
 }
 
-/// Memory the system can give this process now (`MemAvailable`), if known.
-fn available_bytes() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
 /// An error when `bytes` exceed 90 % of the memory available (or `limit`, when
 /// given): `what` names the run, `hint` the options that shrink it.
 pub fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<()> {
@@ -104,10 +97,25 @@ pub fn check_render(
     })
 }
 
+/// [`check_render`] for a run whose images are small beside its scene (a
+/// comparison's or a preview's): the BVH and shading tables of `scene`, loaded
+/// from `path`, against the memory available.
+pub fn check_scene(scene: &crate::scene::Scene, path: &std::path::Path, what: &str) -> Result<()> {
+    let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+    check_render(
+        0,
+        (triangles as u64, scene.spheres.len() as u64),
+        None,
+        what,
+        path,
+        "",
+    )
+}
+
 /// What exceeds the cap, in words, or `None` when `bytes` fit (or the memory
 /// available is unknown and there is no `limit`).
 fn over(bytes: u64, limit: Option<u64>, what: &str) -> Option<String> {
-    let cap = limit.or_else(|| available_bytes().map(|a| a / 10 * 9))?;
+    let cap = crate::memory::cap(limit)?;
     (bytes > cap).then(|| {
         format!(
             "{what} needs about {:.1} GiB of memory, more than the {:.1} GiB {}",
@@ -120,8 +128,4 @@ fn over(bytes: u64, limit: Option<u64>, what: &str) -> Option<String> {
             }
         )
     })
-}
-
-fn gib(b: u64) -> f64 {
-    b as f64 / (1u64 << 30) as f64
 }
