@@ -56,7 +56,8 @@ fn proc_kib(file: &str, key: &str) -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// The limit of this process's memory cgroup less its usage: cgroup v2
+/// The limit of this process's memory cgroup less its usage (page cache not
+/// counted): cgroup v2
 /// (`memory.max`, `memory.current`) or v1 (`memory.limit_in_bytes`,
 /// `memory.usage_in_bytes`), in the group `/proc/self/cgroup` names, or at the
 /// mount's root where a container shows only its own group there.
@@ -75,12 +76,14 @@ fn headroom_of_groups(groups: &str, read: impl Fn(&str) -> Option<String>) -> Op
         let (_, Some(controllers), Some(group)) = (parts.next(), parts.next(), parts.next()) else {
             continue;
         };
-        let (base, limit, usage) = match controllers {
-            "" => ("/sys/fs/cgroup", "memory.max", "memory.current"),
+        // The files, and memory.stat's key for the page cache the usage counts.
+        let (base, limit, usage, cache) = match controllers {
+            "" => ("/sys/fs/cgroup", "memory.max", "memory.current", "file"),
             c if c.split(',').any(|c| c == "memory") => (
                 "/sys/fs/cgroup/memory",
                 "memory.limit_in_bytes",
                 "memory.usage_in_bytes",
+                "total_cache",
             ),
             _ => continue,
         };
@@ -92,7 +95,20 @@ fn headroom_of_groups(groups: &str, read: impl Fn(&str) -> Option<String>) -> Op
                 number(format!("{dir}/{usage}")),
             );
             if let (Some(l), Some(u)) = (l, u) {
-                let headroom = l.saturating_sub(u);
+                // The usage counts the page cache (a build's files, say), which
+                // the kernel reclaims before it fails an allocation.
+                let cached = read(&format!("{dir}/memory.stat"))
+                    .and_then(|stat| {
+                        stat.lines().find_map(|l| {
+                            l.strip_prefix(cache)?
+                                .strip_prefix(' ')?
+                                .trim()
+                                .parse()
+                                .ok()
+                        })
+                    })
+                    .unwrap_or(0);
+                let headroom = l.saturating_sub(u.saturating_sub(cached));
                 best = Some(best.map_or(headroom, |b| b.min(headroom)));
                 break;
             }
@@ -259,6 +275,16 @@ mod tests {
             ("/sys/fs/cgroup/memory.max", "max\n"),
         ]);
         assert_eq!(headroom_of_groups("0::/job\n", &fs), Some(700));
+        // The page cache within the usage is reclaimable: not counted.
+        let fs = files(&[
+            ("/sys/fs/cgroup/job/memory.max", "1000\n"),
+            ("/sys/fs/cgroup/job/memory.current", "900\n"),
+            (
+                "/sys/fs/cgroup/job/memory.stat",
+                "anon 300\nfile 600\nfile_mapped 7\n",
+            ),
+        ]);
+        assert_eq!(headroom_of_groups("0::/job\n", &fs), Some(700));
         // No limit ("max") anywhere: unknown, not zero.
         let fs = files(&[
             ("/sys/fs/cgroup/memory.max", "max\n"),
@@ -285,7 +311,11 @@ mod tests {
             ),
             (
                 "/sys/fs/cgroup/memory/docker/abc/memory.usage_in_bytes",
-                "1000",
+                "3000",
+            ),
+            (
+                "/sys/fs/cgroup/memory/docker/abc/memory.stat",
+                "cache 5\ntotal_cache 2000\n",
             ),
         ]);
         assert_eq!(headroom_of_groups(groups, &fs), Some(8000));
