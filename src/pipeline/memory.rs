@@ -7,6 +7,7 @@ use crate::math::Vec3;
 use crate::memory::gib;
 use crate::render::gradients::GradientSum;
 use crate::render::{PixelAccumulator, RenderOptions};
+use crate::scene::Scene;
 use crate::{Error, Result};
 
 /// Bytes per pixel of a full render: the film's running sums, its planes, the
@@ -56,7 +57,7 @@ pub fn scene_structures_bytes(primitives: u64) -> u64 {
 
 /// An error when `bytes` exceed 90 % of the memory available (or `limit`, when
 /// given): `what` names the run, `hint` the options that shrink it.
-pub fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<()> {
+fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<()> {
     let Some(message) = over(bytes, limit, what) else {
         return Ok(());
     };
@@ -66,17 +67,17 @@ pub fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<(
     })
 }
 
-/// [`check`] for a render of the scene file `scene` with `triangles` and
-/// `spheres`, `image_bytes` for its image: when what the scene builds is the
-/// larger part, the error names the scene file rather than the image's options.
+/// [`check`] for a render of `scene`, `image_bytes` for its image: when what
+/// the scene builds (its triangles and spheres) is the larger part, the error
+/// names the scene file rather than the image's options.
 pub fn check_render(
     image_bytes: u64,
-    (triangles, spheres): (u64, u64),
+    scene: &Scene,
     limit: Option<u64>,
     what: &str,
-    scene: &std::path::Path,
     hint: &str,
 ) -> Result<()> {
+    let (triangles, spheres) = (scene.stats.triangles as u64, scene.spheres.len() as u64);
     let scene_bytes = scene_structures_bytes(triangles + spheres);
     if scene_bytes <= image_bytes {
         return check(image_bytes + scene_bytes, limit, what, hint);
@@ -89,7 +90,7 @@ pub fn check_render(
         return Ok(());
     };
     Err(Error::Asset {
-        path: scene.to_path_buf(),
+        path: scene.path.clone(),
         message: format!(
             "{message} ({:.1} GiB of it for the BVH and the shading tables); split or simplify the meshes",
             gib(scene_bytes)
@@ -98,18 +99,10 @@ pub fn check_render(
 }
 
 /// [`check_render`] for a run whose images are small beside its scene (a
-/// comparison's or a preview's): the BVH and shading tables of `scene`, loaded
-/// from `path`, against the memory available.
-pub fn check_scene(scene: &crate::scene::Scene, path: &std::path::Path, what: &str) -> Result<()> {
-    let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
-    check_render(
-        0,
-        (triangles as u64, scene.spheres.len() as u64),
-        None,
-        what,
-        path,
-        "",
-    )
+/// comparison's or a preview's): the BVH and shading tables of `scene` against
+/// the memory available.
+pub fn check_scene(scene: &Scene, what: &str) -> Result<()> {
+    check_render(0, scene, None, what, "")
 }
 
 /// What exceeds the cap, in words, or `None` when `bytes` fit (or the memory

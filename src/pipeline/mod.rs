@@ -27,7 +27,7 @@ pub const MAX_THREADS_PER_CORE: usize = 8;
 /// Loads the scene and builds its BVH: what every command starts from.
 pub fn load(path: &Path) -> Result<(Scene, Accel)> {
     let scene = scene::load(path)?;
-    memory::check_scene(&scene, path, "a comparison")?;
+    memory::check_scene(&scene, "a comparison")?;
     let accel = Accel::build(&scene.meshes, &scene.spheres);
     Ok((scene, accel))
 }
@@ -55,7 +55,7 @@ pub fn with_threads<R: Send>(threads: Option<u32>, f: impl FnOnce() -> R + Send)
 /// how long the BVH takes to build.
 pub fn info(path: &Path) -> Result<String> {
     let scene = scene::load(path)?;
-    memory::check_scene(&scene, path, "the BVH")?;
+    memory::check_scene(&scene, "the BVH")?;
     let t0 = Instant::now();
     // Kept alive until after the timing so that its drop is not measured.
     let _accel = Accel::build(&scene.meshes, &scene.spheres);

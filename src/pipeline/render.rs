@@ -174,13 +174,11 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
         Some((s, _)) => memory::adaptive_render_bytes(pixels, s.budget, &job.options),
     };
     let what = format!("a {w}x{h} render");
-    let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
     memory::check_render(
         bytes,
-        (triangles as u64, scene.spheres.len() as u64),
+        &scene,
         job.max_memory,
         &what,
-        &job.scene,
         "--width/--height/--budget",
     )?;
     let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);

@@ -266,7 +266,7 @@ fn mean_luminance(img: &[Vec3]) -> f64 {
 /// Runs `preview glossy` end to end.
 pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
     let scene = crate::scene::load(&opts.scene)?;
-    crate::pipeline::memory::check_scene(&scene, &opts.scene, "a glossy preview")?;
+    crate::pipeline::memory::check_scene(&scene, "a glossy preview")?;
     let accel = Accel::build(&scene.meshes, &scene.spheres);
     let camera = match opts.resolution {
         Some((w, h)) => {

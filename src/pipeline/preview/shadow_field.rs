@@ -114,7 +114,7 @@ const NOISE_SPP: u32 = 4;
 /// Runs the whole command. See the module doc for what it writes.
 pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
     let mut scene = crate::scene::load(&opts.scene)?;
-    crate::pipeline::memory::check_scene(&scene, &opts.scene, "a shadow-field preview")?;
+    crate::pipeline::memory::check_scene(&scene, "a shadow-field preview")?;
     if let Some((w, h)) = opts.resolution {
         scene.camera = scene
             .camera
