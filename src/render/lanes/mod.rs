@@ -61,8 +61,11 @@ pub(crate) struct LaneScene {
     first: Vec<u32>,
     triangles: Vec<LaneTriangle>,
     lights: Vec<LaneLight>,
-    /// How an environment sample is drawn, when the scene has one.
-    env: Option<EnvLanes>,
+    /// A constant sky's radiance when the kernel maps its sample (cosine-
+    /// weighted about the shading frame); `None` when there is no
+    /// environment or its sample reads no frame and is drawn before the
+    /// kernel (`LightSet::sample_without_frame`).
+    sky_in_frame: Option<Vec3>,
     /// Some light's sample is drawn before the kernel (a sphere's, or an
     /// environment's), or mapped in it (a constant sky's).
     other_lights: bool,
@@ -110,17 +113,13 @@ impl LaneScene {
         let sphere_mirror: Vec<bool> = scene.spheres.iter().map(|s| mirror(s.material)).collect();
         let mesh_mirror: Vec<bool> = scene.meshes.iter().map(|m| mirror(m.material)).collect();
         let mirrors = mesh_mirror.iter().chain(&sphere_mirror).any(|&m| m);
-        let env = scene.environment.as_ref().map(|env| {
-            if light_set.env_sample_in_frame() {
-                // The cosine-weighted sampler is built for a constant sky
-                // only: its radiance is the same in every direction.
-                EnvLanes::InFrame {
-                    radiance: env.eval(Vec3::Z),
-                }
-            } else {
-                EnvLanes::Drawn
-            }
-        });
+        // The cosine-weighted sampler is built for a constant sky only: its
+        // radiance is the same in every direction.
+        let sky_in_frame = scene
+            .environment
+            .as_ref()
+            .filter(|_| light_set.env_sample_in_frame())
+            .map(|env| env.eval(Vec3::Z));
         let mut first = Vec::with_capacity(scene.meshes.len());
         let mut triangles = Vec::new();
         let smooth = scene.meshes.iter().any(|m| !m.normals.is_empty());
@@ -148,7 +147,7 @@ impl LaneScene {
             first,
             triangles,
             lights,
-            env,
+            sky_in_frame,
             other_lights,
             sphere_albedo,
             mesh_mirror,
@@ -290,13 +289,14 @@ impl LaneScene {
                 }
             };
             g.set(l, p, &u);
-            let kind = match tracer.lights.pick(u.pick).map(|k| &self.lights[k]) {
-                None => LightKind::None,
-                Some(LaneLight::Area(a)) => g.set_area_light(l, a, &u),
-                Some(&LaneLight::Environment { pick }) if self.env_in_frame() => {
-                    g.set_env_in_frame(l, pick, self.env)
+            let light = tracer.lights.pick(u.pick).map(|k| &self.lights[k]);
+            let kind = match (light, self.sky_in_frame) {
+                (None, _) => LightKind::None,
+                (Some(LaneLight::Area(a)), _) => g.set_area_light(l, a, &u),
+                (Some(&LaneLight::Environment { pick }), Some(radiance)) => {
+                    g.set_env_in_frame(l, pick, radiance)
                 }
-                Some(light @ (LaneLight::Environment { .. } | LaneLight::Sphere)) => {
+                (Some(light @ (LaneLight::Environment { .. } | LaneLight::Sphere)), _) => {
                     // A sky's sample reads no point: the hit point is computed
                     // only for a sphere light's.
                     let at = match light {
@@ -318,11 +318,6 @@ impl LaneScene {
         for l in chunk.len()..LANES {
             g.copy_lane(0, l);
         }
-    }
-
-    /// Whether the kernel maps the environment's sample (a constant sky).
-    fn env_in_frame(&self) -> bool {
-        matches!(self.env, Some(EnvLanes::InFrame { .. }))
     }
 
     /// The kernel over the gathered lanes, in the widest registers the CPU has.
@@ -540,17 +535,6 @@ struct LanePath {
     u_rr: f32,
 }
 
-/// How the lanes get an environment sample.
-#[derive(Clone, Copy, Debug)]
-enum EnvLanes {
-    /// Cosine-weighted about the shading frame (a constant sky of this
-    /// radiance): the kernel maps the square once it has the frame.
-    InFrame { radiance: Vec3 },
-    /// From the sampler's own distribution, which no frame enters:
-    /// `LightSet::sample_without_frame` draws it before the kernel.
-    Drawn,
-}
-
 /// What a lane's light sample is, in the kernel's `kind` plane.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -679,12 +663,9 @@ impl Gathered {
         LightKind::Area
     }
 
-    /// Lane `l`'s constant sky, picked with probability `pick`: the kernel
-    /// maps its direction.
-    fn set_env_in_frame(&mut self, l: usize, pick: f32, env: Option<EnvLanes>) -> LightKind {
-        let Some(EnvLanes::InFrame { radiance }) = env else {
-            unreachable!("a sky sampled in the frame");
-        };
+    /// Lane `l`'s constant sky of `radiance`, picked with probability
+    /// `pick`: the kernel maps its direction.
+    fn set_env_in_frame(&mut self, l: usize, pick: f32, radiance: Vec3) -> LightKind {
         self.light_pick[l] = pick;
         self.light_le[l] = radiance;
         LightKind::EnvInFrame
@@ -897,11 +878,7 @@ mod tests {
             ("cornell + gaussian sky", cornell_sky, false),
         ] {
             with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
-                assert_eq!(
-                    matches!(lanes.env, Some(EnvLanes::InFrame { .. })),
-                    in_frame,
-                    "{name}"
-                );
+                assert_eq!(lanes.sky_in_frame.is_some(), in_frame, "{name}");
                 assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
             });
         }
