@@ -8,7 +8,7 @@
 //! teapot against the path tracer (a few minutes on 2 cores).
 
 use gradtrace::brdf::Material;
-use gradtrace::math::{Frame, Vec2, Vec3};
+use gradtrace::math::{cross, Frame, Vec2, Vec3};
 use gradtrace::pipeline::preview::glossy::{run, GlossyOptions};
 use gradtrace::preview::glossy::fit::{MaterialFit, FIT_LEVEL};
 use gradtrace::preview::glossy::icosphere::Icosphere;
@@ -48,7 +48,7 @@ fn interp(m: &Mesh) -> impl Fn(u32, u32, Vec3) -> Vertex + '_ {
         Vertex {
             position,
             normal: position.normalize(),
-            geometric_normal: (p[1] - p[0]).cross(p[2] - p[0]).normalize(),
+            geometric_normal: cross(p[1] - p[0], p[2] - p[0]).normalize(),
             material: 0,
         }
     }
@@ -109,7 +109,7 @@ fn resolved_mesh_is_watertight_and_consistently_oriented() {
     let mut area = 0.0;
     for t in mesh.resolved_triangles() {
         let p = t.map(|i| mesh.vertices[i as usize].position);
-        let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+        let a = 0.5 * cross(p[1] - p[0], p[2] - p[0]).length();
         assert!(a > 0.0, "degenerate resolved triangle {t:?}");
         area += a;
         for k in 0..3 {

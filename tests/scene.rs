@@ -2,7 +2,7 @@
 //! environment images, and every bundled scene.
 
 use gradtrace::brdf::Material;
-use gradtrace::math::Vec3;
+use gradtrace::math::{cross, Vec3};
 use gradtrace::scene::{self, Environment, Scene};
 use std::path::{Path, PathBuf};
 
@@ -257,7 +257,7 @@ fn obj_mesh_is_transformed_with_normals_and_degenerates_counted() {
     // Kept triangles are counter-clockwise about +z.
     for t in &m.triangles {
         let [a, b, c] = t.map(|i| m.positions[i as usize]);
-        assert!((b - a).cross(c - a).z > 0.0);
+        assert!(cross(b - a, c - a).z > 0.0);
     }
     assert_eq!(m.uvs.len(), m.positions.len());
 
@@ -288,7 +288,7 @@ fn obj_mesh_is_transformed_with_normals_and_degenerates_counted() {
     for t in &m.triangles {
         let [a, b, c] = t.map(|i| m.positions[i as usize]);
         assert!(
-            (b - a).cross(c - a).z > 0.0,
+            cross(b - a, c - a).z > 0.0,
             "winding flipped back after mirroring"
         );
     }

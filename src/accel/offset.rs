@@ -18,6 +18,7 @@
 //! light sample, offset both ends and stop just short of the target
 //! ([`SurfacePoint::spawn_ray_to`]).
 
+use crate::math::cross;
 use crate::math::{Ray, Vec2, Vec3};
 
 use super::primitive::gamma;
@@ -150,7 +151,7 @@ pub fn triangle_point(v: [Vec3; 3], bary: Vec2) -> SurfacePoint {
 /// build time ([`super::Accel::hit_triangle`]) has the bits of one computed per hit.
 #[inline]
 pub fn triangle_normal(v: [Vec3; 3]) -> Vec3 {
-    (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero()
+    cross(v[1] - v[0], v[2] - v[0]).normalize_or_zero()
 }
 
 /// [`triangle_point`] with the triangle's [`triangle_normal`] already known.

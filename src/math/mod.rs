@@ -20,6 +20,18 @@ pub use glam::Vec2;
 /// 1 / |v|) and min/max with NaN operands (never relied on: NaN is tested for).
 pub type Vec3 = glam::Vec3A;
 
+/// The cross product `a × b` as plain products and differences, one rounding
+/// each. glam's own `Vec3A::cross` fuses a multiply into the subtraction (an
+/// FMA) when the build targets a CPU with FMA (`-C target-cpu=native`), which
+/// changes the bits of every normal and frame built from it; this one rounds
+/// alike in every build, so a native build renders the portable build's image
+/// bit for bit (`clippy.toml` keeps glam's out of the crate).
+#[inline(always)]
+pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    use glam::Vec3Swizzles;
+    a.yzx() * b.zxy() - a.zxy() * b.yzx()
+}
+
 /// A ray `o + t d`, valid for `t` in `[t_min, t_max]`. `d` need not be normalised
 /// for intersection, but every producer in this crate normalises it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,7 +179,7 @@ mod tests {
             assert!((f.s.length() - 1.0).abs() < 1e-5);
             assert!((f.t.length() - 1.0).abs() < 1e-5);
             assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5);
-            assert!((f.s.cross(f.t) - n).length() < 1e-5, "right-handed");
+            assert!((cross(f.s, f.t) - n).length() < 1e-5, "right-handed");
             let v = Vec3::new(0.1, 0.7, -0.2);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
         }

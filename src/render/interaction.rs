@@ -5,6 +5,7 @@
 use crate::accel::{
     sphere_point, triangle_normal, triangle_point_with_normal, Accel, Hit, PrimRef, SurfacePoint,
 };
+use crate::math::cross;
 use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::{PI, TAU};
@@ -216,7 +217,7 @@ pub fn bumped_normal(bump: &crate::scene::Bump, uv: Vec2, n: Vec3, dpdu: Vec3, d
     let j = bump.eval(uv);
     let pu = dpdu + j.h_u * n;
     let pv = dpdv + j.h_v * n;
-    let nb = pu.cross(pv).normalize_or_zero();
+    let nb = cross(pu, pv).normalize_or_zero();
     if nb == Vec3::ZERO || !nb.is_finite() {
         return n;
     }

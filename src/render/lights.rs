@@ -4,6 +4,7 @@
 //! ray hits the same light, for multiple importance sampling).
 
 use crate::accel::PrimRef;
+use crate::math::cross;
 use crate::math::distribution::{Distribution1D, Distribution2D};
 use crate::math::{luminance, warp, Frame, Vec2, Vec3};
 use crate::scene::environment::{self, direction_to_latlong, latlong_to_direction};
@@ -149,7 +150,7 @@ impl LightSet {
             }
             for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                let cross = (b - a).cross(c - a);
+                let cross = cross(b - a, c - a);
                 let area = 0.5 * cross.length();
                 lights.push(Light::Triangle {
                     mesh: mi as u32,

@@ -16,8 +16,9 @@
 
 use super::locate::{Ctx, KeyPath};
 use super::{Mesh, Scene, Sphere};
+use crate::math::cross;
 use crate::math::Vec3;
-use glam::{Mat3, Quat};
+use glam::{Mat3, Quat, Vec4};
 use serde::Deserialize;
 
 /// Raw TOML of the block (serde reports unknown keys with their spans).
@@ -206,6 +207,26 @@ pub fn frame_time(f: u32, n: u32) -> f32 {
     }
 }
 
+/// Spherical linear interpolation of unit quaternions along the shorter arc,
+/// in plain f32 arithmetic. glam's `Quat::slerp` takes its sines from a
+/// polynomial with fused multiply-adds where the build targets FMA
+/// (`-C target-cpu=native`), so a pose would depend on the build.
+fn slerp(a: Quat, b: Quat, s: f32) -> Quat {
+    let (a, mut b) = (Vec4::from(a), Vec4::from(b));
+    let mut dot = a.dot(b);
+    if dot < 0.0 {
+        b = -b;
+        dot = -dot;
+    }
+    if dot > 1.0 - f32::EPSILON {
+        // Nearly equal: the linear blend, renormalised (no division by sin θ ≈ 0).
+        return Quat::from_vec4(a + (b - a) * s).normalize();
+    }
+    let theta = dot.acos();
+    let q = (a * ((1.0 - s) * theta).sin() + b * (s * theta).sin()) / theta.sin();
+    Quat::from_vec4(q)
+}
+
 impl Track {
     /// Rotation and translation at time t (linear / slerp between keys, held
     /// outside them).
@@ -229,7 +250,7 @@ impl Track {
             Key {
                 t,
                 translate: a.translate.lerp(b.translate, s),
-                rotate: a.rotate.slerp(b.rotate, s),
+                rotate: slerp(a.rotate, b.rotate, s),
             }
         };
         (Mat3::from_quat(key.rotate), key.translate)
@@ -345,10 +366,65 @@ pub fn area_normals(m: &Mesh) -> Vec<Vec3> {
     let mut n = vec![Vec3::ZERO; m.positions.len()];
     for t in &m.triangles {
         let [a, b, c] = t.map(|i| m.positions[i as usize]);
-        let f = (b - a).cross(c - a);
+        let f = cross(b - a, c - a);
         for &i in t {
             n[i as usize] += f;
         }
     }
     n.iter().map(|v| v.normalize_or_zero()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Whether `a` and `b` are the same rotation to within `tol` per component
+    /// (q and −q are the same rotation).
+    fn same(a: Quat, b: Quat, tol: f32) -> bool {
+        let b = if a.dot(b) < 0.0 { -b } else { b };
+        (Vec4::from(a) - Vec4::from(b)).abs().max_element() <= tol
+    }
+
+    /// A rotation by `deg` degrees about the unit `axis`.
+    fn rot(axis: [f32; 3], deg: f32) -> Quat {
+        Quat::from_axis_angle(glam::Vec3::from(axis).normalize(), deg.to_radians())
+    }
+
+    #[test]
+    fn slerp_turns_at_a_constant_rate_along_the_shorter_arc() {
+        let (a, b) = (rot([0.0, 1.0, 0.0], 10.0), rot([0.0, 1.0, 0.0], 130.0));
+        for s in [0.0, 0.25, 0.5, 0.9, 1.0] {
+            // A known answer: the angle moves linearly, 10° → 130°.
+            let want = rot([0.0, 1.0, 0.0], 10.0 + 120.0 * s);
+            let got = slerp(a, b, s);
+            assert!(
+                got.dot(want).abs() > 1.0 - 1e-6,
+                "s = {s}: {got:?} against {want:?}"
+            );
+        }
+        // −b is the same rotation: the shorter arc still runs 10° → 130°.
+        let got = slerp(a, -b, 0.5);
+        assert!(same(got, rot([0.0, 1.0, 0.0], 70.0), 1e-6), "{got:?}");
+    }
+
+    #[test]
+    #[allow(clippy::disallowed_methods)] // glam's slerp is the independent reference here
+    fn slerp_agrees_with_glams_across_axes_and_angles() {
+        let axes = [[1.0, 0.0, 0.0], [0.3, -0.8, 0.5], [-0.2, 0.1, 0.97]];
+        for (i, &p) in axes.iter().enumerate() {
+            for &q in &axes[i..] {
+                for (da, db) in [(0.0, 179.0), (-40.0, 75.0), (20.0, 20.0 + 1e-3)] {
+                    let (a, b) = (rot(p, da), rot(q, db));
+                    for s in [0.1, 0.5, 0.8] {
+                        let (ours, glams) = (slerp(a, b, s), a.slerp(b, s));
+                        assert!(
+                            ours.dot(glams).abs() > 1.0 - 1e-6
+                                && (ours.length() - 1.0).abs() < 1e-5,
+                            "{p:?} {da}° → {q:?} {db}°, s = {s}: {ours:?} against {glams:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

@@ -1,5 +1,6 @@
 //! Pinhole look-at camera: pixel position → primary ray.
 
+use crate::math::cross;
 use crate::math::{Ray, Vec2, Vec3};
 
 /// A pinhole camera. `fov_y` is the full vertical field of view in degrees; image
@@ -34,7 +35,7 @@ impl Camera {
         if forward == Vec3::ZERO {
             return Err("`from` and `to` must differ".into());
         }
-        let right = forward.cross(up).normalize_or_zero();
+        let right = cross(forward, up).normalize_or_zero();
         if right == Vec3::ZERO {
             return Err("`up` must not be parallel to the viewing direction".into());
         }
@@ -44,7 +45,7 @@ impl Camera {
         if width == 0 || height == 0 {
             return Err("resolution must be at least 1×1".into());
         }
-        let true_up = right.cross(forward);
+        let true_up = cross(right, forward);
         Ok(Self {
             from,
             to,

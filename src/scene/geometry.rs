@@ -2,6 +2,7 @@
 //! transforms (points, vectors, normals), the two-triangle quad, Mitsuba's cube,
 //! and the degenerate-triangle filter. Everything here produces WORLD-space data.
 
+use crate::math::cross;
 use crate::math::{Vec2, Vec3};
 use glam::{Affine3A, Mat3};
 
@@ -79,7 +80,7 @@ pub(super) fn is_degenerate(positions: &[Vec3], t: [u32; 3]) -> bool {
     let e2 = p2 - p0;
     // Zero area, or collinear to within f32 precision (sin of the angle between the
     // edges below ~1e-7): such a triangle has no usable normal or barycentrics.
-    let cross = e1.cross(e2);
+    let cross = cross(e1, e2);
     let twice_area = cross.length();
     let scale = e1.length_squared().max(e2.length_squared());
     // The normal is cross / |cross|: |cross|² must be a normal f32 (a tiny
@@ -205,7 +206,7 @@ mod tests {
             assert_eq!(g.triangles.len(), 12);
             for t in &g.triangles {
                 let [a, b, c] = t.map(|i| g.positions[i as usize]);
-                let n = (b - a).cross(c - a);
+                let n = cross(b - a, c - a);
                 assert!(n.dot((a + b + c) / 3.0 - centre) > 0.0);
             }
         }

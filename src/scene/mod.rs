@@ -14,6 +14,7 @@ mod params;
 mod parse;
 
 use crate::brdf::Material;
+use crate::math::cross;
 use crate::math::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -117,10 +118,10 @@ pub struct Rect {
 
 impl Rect {
     pub fn normal(&self) -> Vec3 {
-        self.edge_u.cross(self.edge_v).normalize()
+        cross(self.edge_u, self.edge_v).normalize()
     }
     pub fn area(&self) -> f32 {
-        self.edge_u.cross(self.edge_v).length()
+        cross(self.edge_u, self.edge_v).length()
     }
 }
 

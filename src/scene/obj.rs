@@ -6,6 +6,7 @@
 
 use super::geometry::{filter_triangles, Xform};
 use crate::brdf::Material;
+use crate::math::cross;
 use crate::math::{Vec2, Vec3};
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -266,7 +267,7 @@ fn world_normals(
         let mut acc = vec![Vec3::ZERO; positions.len()];
         for t in triangles {
             let [a, b, c] = t.map(|i| positions[i as usize]);
-            let n = (b - a).cross(c - a);
+            let n = cross(b - a, c - a);
             for &i in t {
                 acc[i as usize] += n;
             }
@@ -306,7 +307,7 @@ pub(super) fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<
     for t in triangles {
         let [a, b, c] = t.map(|i| positions[i as usize]);
         // |cross| = twice the area: the sum is area-weighted.
-        let n = (b - a).cross(c - a);
+        let n = cross(b - a, c - a);
         for &i in t {
             acc[group[i as usize]] += n;
         }

@@ -16,6 +16,7 @@ use super::params::{self, list, Params};
 use super::{bump::Sinusoid, SceneStats, Sphere, MAX_MAGNITUDE};
 use super::{obj, Bump, Camera, Environment, Integrator, Mesh, Rect, RenderSettings, Scene};
 use crate::brdf::Material;
+use crate::math::cross;
 use crate::math::{Vec2, Vec3};
 use glam::{Affine3A, Mat3, Quat};
 use std::collections::HashMap;
@@ -875,7 +876,7 @@ fn rect_geometry(p: &Params, k: &ShapeKeys) -> crate::Result<(Vec3, Vec3, Vec3)>
             return Err(p.err(Some(key), format!("`{key}` must have non-zero length")));
         }
     }
-    if unit(u).cross(unit(v)).length() <= 1e-7 {
+    if cross(unit(u), unit(v)).length() <= 1e-7 {
         return Err(p.err(
             None,
             "`edge_u` and `edge_v` are parallel: the quad has no area",
@@ -883,7 +884,7 @@ fn rect_geometry(p: &Params, k: &ShapeKeys) -> crate::Result<(Vec3, Vec3, Vec3)>
     }
     // The renderer normalises edge_u × edge_v: its squared length must be a
     // normal f32, or the normal is NaN.
-    if u.cross(v).length_squared() < f32::MIN_POSITIVE {
+    if cross(u, v).length_squared() < f32::MIN_POSITIVE {
         return Err(p.err(None, "the quad is too small: its area underflows f32"));
     }
     Ok((c, u, v))

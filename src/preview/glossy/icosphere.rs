@@ -7,6 +7,7 @@
 //! Only view directions in the upper hemisphere are ever asked for, so the vertices
 //! that some face touching z > 0 needs get compact "slots", nested per level too.
 
+use crate::math::cross;
 use crate::math::Vec3;
 use std::collections::HashMap;
 
@@ -91,7 +92,7 @@ impl Icosphere {
                     .iter()
                     .map(|f| {
                         let [a, b, c] = f.map(|v| vertices[v as usize]);
-                        [b.cross(c), c.cross(a), a.cross(b)]
+                        [cross(b, c), cross(c, a), cross(a, b)]
                     })
                     .collect()
             })

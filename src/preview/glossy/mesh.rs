@@ -4,6 +4,7 @@
 //! [`AdaptiveMesh::resolve`] fans those away at the end. Vertices sit on the
 //! original flat triangles, their normals interpolated as the path tracer does.
 
+use crate::math::cross;
 use crate::math::{Vec2, Vec3};
 use crate::scene::Mesh;
 use std::collections::HashMap;
@@ -83,7 +84,7 @@ impl AdaptiveMesh {
             let mut areas = Vec::with_capacity(mesh.triangles.len());
             for (ti, t) in mesh.triangles.iter().enumerate() {
                 let p = t.map(|i| mesh.positions[i as usize]);
-                let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+                let cross = cross(p[1] - p[0], p[2] - p[0]);
                 let n_geo = cross.normalize_or(Vec3::Y);
                 let mut v = [0u32; 3];
                 for c in 0..3 {

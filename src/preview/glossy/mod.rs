@@ -19,6 +19,7 @@ pub mod slice;
 mod store;
 
 use crate::accel::{Accel, PrimRef};
+use crate::math::cross;
 use crate::math::{luminance, Frame, Vec2, Vec3};
 use crate::preview::raster::PrimaryVisibility;
 use crate::scene::{Camera, Scene};
@@ -188,7 +189,7 @@ fn interp_vertex(scene: &Scene) -> impl Fn(u32, u32, Vec3) -> Vertex + '_ {
         let m = &scene.meshes[mesh as usize];
         let t = m.triangles[tri as usize];
         let p = t.map(|i| m.positions[i as usize]);
-        let n_geo = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Y);
+        let n_geo = cross(p[1] - p[0], p[2] - p[0]).normalize_or(Vec3::Y);
         let normal = if m.normals.is_empty() {
             n_geo
         } else {

@@ -88,6 +88,7 @@ pub fn unpack_slice(s: &PackedSlice) -> Slice {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::cross;
 
     #[test]
     fn directions_round_trip_within_the_stated_angle_everywhere() {
@@ -109,7 +110,7 @@ mod tests {
             ] {
                 let back = oct_decode(oct_encode(d));
                 // atan2(|a × b|, a · b): acos of an f32 dot near 1 is off by ~3e-4.
-                worst = worst.max(back.cross(d).length().atan2(back.dot(d)));
+                worst = worst.max(cross(back, d).length().atan2(back.dot(d)));
                 assert!((back.length() - 1.0).abs() < 1e-6);
             }
         }

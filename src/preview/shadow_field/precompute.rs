@@ -11,6 +11,7 @@
 use super::field::{Field, Grid};
 use super::Settings;
 use crate::accel::{Accel, PrimRef};
+use crate::math::cross;
 use crate::math::sh::{self, ShF, COEFFS};
 use crate::math::{warp, Frame, Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Scene, Sphere};
@@ -410,7 +411,7 @@ pub fn vertex_normals(mesh: &Mesh) -> Vec<Vec3> {
     let mut n = vec![Vec3::ZERO; mesh.positions.len()];
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-        let f = (b - a).cross(c - a);
+        let f = cross(b - a, c - a);
         for &i in t {
             n[i as usize] += f;
         }

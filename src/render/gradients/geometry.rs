@@ -4,6 +4,7 @@
 
 use super::{GVec3, CAM, CDV, DV, SV};
 use crate::accel::PrimRef;
+use crate::math::cross;
 use crate::math::dual::{DVec3, Dual};
 use crate::math::{Frame, Ray, Vec3};
 use crate::render::interaction::Interaction;
@@ -85,12 +86,12 @@ pub fn shading_normal(scene: &Scene, si: &Interaction, x: N4, with_bump: bool) -
             let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
             let e1 = p1 - p0;
             let e2 = p2 - p0;
-            let nn = e1.cross(e2);
+            let nn = cross(e1, e2);
             let inv = 1.0 / nn.length_squared();
             let a = x - N4::constant(p0);
             // Barycentrics of x: b1 = a·(e2×N)/|N|², b2 = a·(N×e1)/|N|².
-            let b1 = a.dot_const(e2.cross(nn) * inv);
-            let b2 = a.dot_const(nn.cross(e1) * inv);
+            let b1 = a.dot_const(cross(e2, nn) * inv);
+            let b2 = a.dot_const(cross(nn, e1) * inv);
             let b0 = Dual::constant(1.0) - b1 - b2;
             let ng_orig = nn.normalize_or_zero();
             let base = if m.normals.is_empty() {

@@ -149,7 +149,7 @@ pub fn direct_sample(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{warp, Frame, Vec2};
+    use crate::math::{cross, warp, Frame, Vec2};
 
     /// The flow of each law is the derivative of the sampled direction (and of the
     /// weight) at fixed sample coordinates, against central differences of the
@@ -165,9 +165,9 @@ mod tests {
             let a = (centre - x).normalize();
             let a0 = frame0.n;
             let rot = |v: Vec3| {
-                let k = a0.cross(a);
+                let k = cross(a0, a);
                 let c = a0.dot(a);
-                v * c + k.cross(v) + k * (k.dot(v) / (1.0 + c))
+                v * c + cross(k, v) + k * (k.dot(v) / (1.0 + c))
             };
             (rot(frame0.s), rot(frame0.t), a)
         };

@@ -26,6 +26,7 @@
 
 use super::sphere_light::{cone_flow, ConeLaw};
 use crate::accel::{Accel, PrimRef};
+use crate::math::cross;
 use crate::math::quadrature::GaussLegendre;
 use crate::math::{Frame, Ray, Vec3};
 use crate::scene::Scene;
@@ -326,7 +327,7 @@ impl<'a> Marcher<'a> {
             .iter()
             .map(|&p| {
                 let q = p - self.x;
-                q.cross(self.frame.n).length().atan2(q.dot(self.frame.n))
+                cross(q, self.frame.n).length().atan2(q.dot(self.frame.n))
             })
             .fold(0.0, f32::max),
         }
@@ -503,14 +504,14 @@ impl<'a> Marcher<'a> {
             let mut exit: Option<(f32, Vec3, Vec3)> = None;
             for e in 0..3 {
                 let (a, b) = (v[e], v[(e + 1) % 3]);
-                let nu = a.cross(b);
+                let nu = cross(a, b);
                 if nu.length_squared() < 1e-20 {
                     continue;
                 }
                 for t in self.plane_crossings(curve, nu, from, visible_t) {
                     let w = self.dir(curve, t);
                     // Between the edge's endpoints, in front of x.
-                    let inside = a.cross(w).dot(nu) >= 0.0 && w.cross(b).dot(nu) >= 0.0;
+                    let inside = cross(a, w).dot(nu) >= 0.0 && cross(w, b).dot(nu) >= 0.0;
                     if !inside || w.dot(a + b) <= 0.0 {
                         continue;
                     }
@@ -526,7 +527,7 @@ impl<'a> Marcher<'a> {
                 let w = self.dir(curve, t);
                 let k = (b - a).normalize_or_zero();
                 let (_, d) = ray_line_distance(Vec3::ZERO, w, a, k);
-                let m = w.cross(k).normalize_or_zero();
+                let m = cross(w, k).normalize_or_zero();
                 return (m != Vec3::ZERO && d > 0.0).then_some((t, m, d));
             }
             from = past;
@@ -580,12 +581,12 @@ impl<'a> Marcher<'a> {
         };
         let w = self.dir(curve, at);
         let axis = self.frame.n;
-        let sin_t = w.cross(axis).length();
+        let sin_t = cross(w, axis).length();
         if sin_t < 1e-6 {
             return;
         }
-        let e_phi = axis.cross(w) / sin_t;
-        let e_theta = e_phi.cross(w);
+        let e_phi = cross(axis, w) / sin_t;
+        let e_theta = cross(e_phi, w);
         let m_theta = m.dot(e_theta).abs();
         // Crossing density per unit arc length of the silhouette (see
         // `trace_line_and_ring`).
@@ -671,7 +672,7 @@ fn silhouette_geometry(
                     best = (dist, k, tk);
                 }
             }
-            (w.cross(best.1).normalize_or_zero(), best.2)
+            (cross(w, best.1).normalize_or_zero(), best.2)
         }
     };
     (d.is_finite() && d > 0.0 && m != Vec3::ZERO && m.is_finite()).then_some((m, d))
@@ -680,7 +681,7 @@ fn silhouette_geometry(
 /// Distance between the ray x + t w and the line a + s k, and the ray parameter
 /// of the closest approach.
 fn ray_line_distance(x: Vec3, w: Vec3, a: Vec3, k: Vec3) -> (f32, f32) {
-    let n = w.cross(k);
+    let n = cross(w, k);
     let nn = n.length_squared();
     if nn < 1e-12 {
         let t = (a - x).dot(w);
@@ -689,7 +690,7 @@ fn ray_line_distance(x: Vec3, w: Vec3, a: Vec3, k: Vec3) -> (f32, f32) {
     let r = a - x;
     let dist = r.dot(n).abs() / nn.sqrt();
     // t = ((a − x) × k) · n / |n|²
-    let t = r.cross(k).dot(n) / nn;
+    let t = cross(r, k).dot(n) / nn;
     (dist, t)
 }
 
@@ -720,7 +721,7 @@ fn light_extent(domain: &Domain, x: Vec3, w: Vec3) -> (f32, Option<(Vec3, Vec3)>
             edge_v,
             ..
         } => {
-            let n = edge_u.cross(edge_v).normalize();
+            let n = cross(edge_u, edge_v).normalize();
             let denom = w.dot(n);
             if denom.abs() < 1e-12 {
                 return (0.0, None);
@@ -737,10 +738,10 @@ fn light_extent(domain: &Domain, x: Vec3, w: Vec3) -> (f32, Option<(Vec3, Vec3)>
 /// exit is where that line leaves the (convex) rectangle, found in its edge
 /// coordinates, and θmax is the angle between the axis and the exit point.
 fn rect_exit_angle(x: Vec3, axis: Vec3, d: Vec3, corner: Vec3, edge_u: Vec3, edge_v: Vec3) -> f32 {
-    let n = edge_u.cross(edge_v);
+    let n = cross(edge_u, edge_v);
     let centre = corner + 0.5 * (edge_u + edge_v);
     // Direction of the cut, oriented the way growing θ moves the hit point.
-    let mut m = n.cross(axis.cross(d));
+    let mut m = cross(n, cross(axis, d));
     if m.dot(d) < 0.0 {
         m = -m;
     }
@@ -768,7 +769,7 @@ fn rect_exit_angle(x: Vec3, axis: Vec3, d: Vec3, corner: Vec3, edge_u: Vec3, edg
     }
     let to_exit = centre + m * s_exit - x;
     let cos = to_exit.dot(axis);
-    let sin = to_exit.cross(axis).length();
+    let sin = cross(to_exit, axis).length();
     sin.atan2(cos)
 }
 
@@ -1083,7 +1084,7 @@ mod tests {
             let centre = corner + 0.5 * (eu + ev);
             let frame = Frame::from_normal((centre - x).normalize());
             let inside = |w: Vec3| {
-                let n = eu.cross(ev);
+                let n = cross(eu, ev);
                 let t = (corner - x).dot(n) / w.dot(n);
                 let q = x + w * t - corner;
                 let (uu, uv, vv) = (eu.length_squared(), eu.dot(ev), ev.length_squared());
