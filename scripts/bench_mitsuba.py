@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Speed and error of gradtrace against Mitsuba 3, each at its best sampler.
 
-    python3 scripts/bench_mitsuba.py [--gradtrace BINARY] [--pgo [BINARY]] [--runs 5]
+    python3 scripts/bench_mitsuba.py [--gradtrace BINARY] [--native [BINARY]] [--pgo [BINARY]]
+                                     [--runs 5]
                                      [--ref-spp 1024] [--scenes cornell,bunny]
                                      [--no-gradtrace] [--no-llvm]
 
@@ -13,9 +14,11 @@ depth 5. Box filter. Timed at equal spp:
     in the EXR header: light set-up, rendering and the film, as `mi.render`
     covers), median of --runs; the rest of the `render` process (scene load, BVH
     build, EXR and PNG writing) is reported separately as its scene load;
-    with --pgo, the PGO build of scripts/build_pgo.sh as a further row (built
-    by the script unless a BINARY is given), whose ratios against the Mitsuba
-    rows follow each table;
+    with --native, a `dist` build for this machine's CPU (`RUSTFLAGS="-C
+    target-cpu=native"`, in target/native/; what Mitsuba's LLVM JIT and Embree's
+    ISA dispatch do for theirs) as a further row, and with --pgo the PGO build
+    of scripts/build_pgo.sh (each built here unless a BINARY is given); their
+    ratios against the Mitsuba rows follow each table;
   * Mitsuba 3 `scalar_rgb` (independent sampler) and `llvm_ad_rgb` with each of
     its `independent`, `multijitter` and `ldsampler` samplers: `mi.render` wall
     time, median of --runs; scene loading (`mi.load_dict`) and, for LLVM, the
@@ -239,19 +242,38 @@ def gradtrace_binary(binary: str | None) -> str:
     return binary
 
 
+def native_binary(binary: str) -> str:
+    """`--native`'s binary: the `dist` profile compiled for this CPU, unless
+    `binary` names one."""
+    if binary != "build":
+        return binary
+    env = dict(os.environ, RUSTFLAGS="-C target-cpu=native")
+    subprocess.run(["cargo", "build", "--profile", "dist", "--quiet", "--target-dir", "target/native"], cwd=ms.REPO, env=env, check=True)
+    return str(ms.REPO / "target" / "native" / "dist" / "gradtrace")
+
+
+#: The builds beside the default one: variant -> (row label, output tag).
+EXTRA_BUILDS = {
+    "gradtrace-native": ("gradtrace, native build (`RUSTFLAGS=\"-C target-cpu=native\"`, `--profile dist`)", "native"),
+    "gradtrace-pgo": ("gradtrace, PGO build (`scripts/build_pgo.sh`)", "pgo"),
+}
+
+
 class GradtraceRenderer:
     """The `gradtrace render` process, round by round: its render time (what
-    `mi.render` covers) and, apart, the rest of the process."""
+    `mi.render` covers) and, apart, the rest of the process. `variant` is
+    `gradtrace` (the default build) or a key of EXTRA_BUILDS."""
 
-    def __init__(self, b: Bench, binary: str, pgo: bool = False):
-        self.b, self.binary, self.pgo = b, binary, pgo
+    def __init__(self, b: Bench, binary: str, variant: str = "gradtrace"):
+        self.b, self.binary, self.variant = b, binary, variant
         self.times: list[float] = []
         self.process_times: list[float] = []
         self.errs: list[float] = []
 
     def run(self, i: int, ref: Reference) -> None:
         b = self.b
-        out = OUT / f"gradtrace{'_pgo' if self.pgo else ''}_{b.key}_{i}.exr"
+        tag = f"_{EXTRA_BUILDS[self.variant][1]}" if self.variant in EXTRA_BUILDS else ""
+        out = OUT / f"gradtrace{tag}_{b.key}_{i}.exr"
         t0 = time.perf_counter()
         subprocess.run(
             [self.binary, "render", str(b.path), "--out", str(out), "--spp", str(b.spp), "--seed", str(100 + i), "--no-aovs", "--quiet"],
@@ -268,8 +290,8 @@ class GradtraceRenderer:
 
     def row(self) -> dict:
         return {
-            "name": "gradtrace, PGO build (`scripts/build_pgo.sh`)" if self.pgo else "gradtrace (Owen-scrambled Sobol; `--profile dist`)",
-            "variant": "gradtrace-pgo" if self.pgo else "gradtrace",
+            "name": EXTRA_BUILDS[self.variant][0] if self.variant in EXTRA_BUILDS else "gradtrace (Owen-scrambled Sobol; `--profile dist`)",
+            "variant": self.variant,
             "sampler": "sobol",
             "spp": self.b.spp,
             "render_s": statistics.median(self.times),
@@ -303,20 +325,21 @@ def add_ratios(rows: list[dict]) -> None:
         r["efficiency_ratio"], r["efficiency_ratio_rounds"] = efficiency(ours, r) if ours else (None, [])
 
 
-def pgo_note(label: str, rows: list[dict]) -> str | None:
-    """The PGO build's efficiency ratios against the Mitsuba rows (the table's
-    ratio column is the default build's)."""
-    pgo = next((r for r in rows if r["variant"] == "gradtrace-pgo"), None)
-    if pgo is None:
-        return None
-    parts = []
-    for r in rows:
-        if r["variant"].startswith("gradtrace"):
-            continue
-        ratio, rounds = efficiency(pgo, r)
-        vals = ", ".join("—" if v is None else f"{v:.2f}" for v in rounds)
-        parts.append(f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}]")
-    return f"{label}, the PGO build's efficiency ratio (PGO / row): " + "; ".join(parts) + "."
+def extra_notes(label: str, rows: list[dict]) -> list[str]:
+    """Each further build's efficiency ratios against the Mitsuba rows (the
+    table's ratio column is the default build's)."""
+    notes = []
+    for extra in (r for r in rows if r["variant"] in EXTRA_BUILDS):
+        parts = []
+        for r in rows:
+            if r["variant"].startswith("gradtrace"):
+                continue
+            ratio, rounds = efficiency(extra, r)
+            vals = ", ".join("—" if v is None else f"{v:.2f}" for v in rounds)
+            parts.append(f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}]")
+        build = EXTRA_BUILDS[extra["variant"]][1]
+        notes.append(f"{label}, the {build} build's efficiency ratio ({build} / row): " + "; ".join(parts) + ".")
+    return notes
 
 
 def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
@@ -346,8 +369,7 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
                 f"| {r['name']} | {r['render_s']:.2f} | {f(r['speed_vs_scalar'])}× | {r['rmse']:.4f} | "
                 f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['load_s'])} | {f(r['warmup_s'])} |"
             )
-        note = pgo_note(b.label, rows)
-        if note:
+        for note in extra_notes(b.label, rows):
             lines += ["", note]
     for note in meta["notes"]:
         lines.append(f"\n{note}")
@@ -369,6 +391,7 @@ def write_readme(table: str) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--gradtrace", help="gradtrace binary (default: cargo build --profile dist, target/dist/gradtrace)")
+    ap.add_argument("--native", nargs="?", const="build", metavar="BINARY", help="also time a dist build for this CPU (default: built here into target/native)")
     ap.add_argument("--pgo", nargs="?", const="build", metavar="BINARY", help="also time the PGO build (default: scripts/build_pgo.sh builds it)")
     # Five rounds: one 64-spp cornell render's RMSE moves by ±4 % from seed to
     # seed, ±8 % in a round's efficiency ratio before any timing noise.
@@ -393,14 +416,17 @@ def main() -> int:
         pgo_binary = str(ms.REPO / built.stdout.strip().splitlines()[-1])
     elif args.pgo is not None:
         pgo_binary = args.pgo
+    native = None if args.native is None else native_binary(args.native)
     if not args.no_llvm and LIBLLVM is None:
         notes.append("llvm_ad_rgb skipped: no libLLVM found (apt-get install -y libllvm19).")
     scene_rows = []
     for b in benches(args.scenes.split(",")):
         ref = reference(b, args.ref_spp)
         renderers: list = [] if binary is None else [GradtraceRenderer(b, binary)]
+        if native is not None:
+            renderers.append(GradtraceRenderer(b, native, "gradtrace-native"))
         if pgo_binary is not None:
-            renderers.append(GradtraceRenderer(b, pgo_binary, pgo=True))
+            renderers.append(GradtraceRenderer(b, pgo_binary, "gradtrace-pgo"))
         renderers.append(MitsubaRenderer(b, "scalar_rgb", "independent"))
         if not args.no_llvm and LIBLLVM is not None:
             renderers += [MitsubaRenderer(b, "llvm_ad_rgb", s) for s in LLVM_SAMPLERS]
