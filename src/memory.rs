@@ -38,9 +38,49 @@ pub fn cap(limit: Option<u64>) -> Option<u64> {
     limit.or_else(|| available_bytes().map(|a| a / 10 * 9))
 }
 
+thread_local! {
+    /// The limit [`limited`] sets for this thread's checks.
+    static LIMIT: std::cell::Cell<Option<u64>> = const { std::cell::Cell::new(None) };
+}
+
+/// Runs `f` with `limit` (`--max-memory`) as what this thread's checks below
+/// the pipeline may plan on: the scene loader's, which the option does not
+/// reach through its arguments. The previous limit is back when `f` returns.
+pub fn limited<R>(limit: Option<u64>, f: impl FnOnce() -> R) -> R {
+    let before = LIMIT.replace(limit);
+    let result = f();
+    LIMIT.set(before);
+    result
+}
+
+/// The limit [`limited`] set on this thread, if any.
+pub fn limit() -> Option<u64> {
+    LIMIT.get()
+}
+
+/// "available", or "allowed by --max-memory" where `limit` came from it: the
+/// end of a refusal's "more than the N GiB …".
+pub fn cap_source(limit: Option<u64>) -> &'static str {
+    if limit.is_some() {
+        "allowed by --max-memory"
+    } else {
+        "available"
+    }
+}
+
 /// `bytes` in GiB, for messages.
-pub fn gib(bytes: u64) -> f64 {
+fn gib(bytes: u64) -> f64 {
     bytes as f64 / (1u64 << 30) as f64
+}
+
+/// `bytes` for a message: "1.3 GiB", or "120 MiB" below a GiB (where one
+/// decimal of GiB would read 0.1 for both of two different figures).
+pub fn size(bytes: u64) -> String {
+    if bytes >= 1 << 30 {
+        format!("{:.1} GiB", gib(bytes))
+    } else {
+        format!("{:.0} MiB", bytes as f64 / (1u64 << 20) as f64)
+    }
 }
 
 /// `MemAvailable` of `/proc/meminfo`.
@@ -256,6 +296,28 @@ fn exit_now(code: i32) -> ! {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_limit_holds_inside_limited_only_and_names_itself() {
+        assert_eq!(limit(), None);
+        let inner = limited(Some(5 << 20), || {
+            // Nested: the inner limit, then the outer one back.
+            let nested = limited(Some(1), limit);
+            (nested, limit(), cap(limit()))
+        });
+        assert_eq!(inner, (Some(1), Some(5 << 20), Some(5 << 20)));
+        assert_eq!(limit(), None);
+        assert_eq!(cap_source(Some(1)), "allowed by --max-memory");
+        assert_eq!(cap_source(None), "available");
+    }
+
+    #[test]
+    fn sizes_read_in_mib_below_a_gib() {
+        assert_eq!(size(120 << 20), "120 MiB");
+        assert_eq!(size((1 << 30) - 1), "1024 MiB");
+        assert_eq!(size(1 << 30), "1.0 GiB");
+        assert_eq!(size(3 << 29), "1.5 GiB");
+    }
 
     /// A fake `/sys/fs/cgroup`: each path's contents.
     fn files<'a>(entries: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {

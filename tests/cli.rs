@@ -320,7 +320,28 @@ fn an_obj_too_large_to_load_names_it() {
     assert_failed_with(&out, "big.toml: shapes[0].file (line ");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("grid.obj: loading this 2"), "{err}");
-    assert!(err.contains("MiB OBJ needs about 0.1 GiB"), "{err}");
+    assert!(err.contains("MiB OBJ needs about 1"), "{err}");
+    assert!(err.contains(" MiB available; simplify the mesh"), "{err}");
+    assert_eq!(tree(&dir), vec!["big.toml", "grid.obj"]);
+    // `--max-memory` counts for the load too (it reaches the loader through
+    // `memory::limited`): refused under 50 MiB without any address-space limit.
+    let out = run_in(
+        &dir,
+        &[
+            "render",
+            "big.toml",
+            "--max-memory",
+            "0.05",
+            "--out",
+            "out/big.exr",
+        ],
+    );
+    assert_failed_with(&out, "big.toml: shapes[0].file (line ");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("more than the 51 MiB allowed by --max-memory"),
+        "{err}"
+    );
     assert_eq!(tree(&dir), vec!["big.toml", "grid.obj"]);
 }
 

@@ -4,7 +4,7 @@
 //! after minutes with "memory allocation failed".
 
 use crate::math::Vec3;
-use crate::memory::gib;
+use crate::memory::size;
 use crate::render::gradients::GradientSum;
 use crate::render::{PixelAccumulator, RenderOptions};
 use crate::scene::Scene;
@@ -92,8 +92,8 @@ pub fn check_render(
     Err(Error::Asset {
         path: scene.path.clone(),
         message: format!(
-            "{message} ({:.1} GiB of it for the BVH and the shading tables); split or simplify the meshes",
-            gib(scene_bytes)
+            "{message} ({} of it for the BVH and the shading tables); split or simplify the meshes",
+            size(scene_bytes)
         ),
     })
 }
@@ -111,14 +111,10 @@ fn over(bytes: u64, limit: Option<u64>, what: &str) -> Option<String> {
     let cap = crate::memory::cap(limit)?;
     (bytes > cap).then(|| {
         format!(
-            "{what} needs about {:.1} GiB of memory, more than the {:.1} GiB {}",
-            gib(bytes),
-            gib(cap),
-            if limit.is_some() {
-                "allowed by --max-memory"
-            } else {
-                "available"
-            }
+            "{what} needs about {} of memory, more than the {} {}",
+            size(bytes),
+            size(cap),
+            crate::memory::cap_source(limit)
         )
     })
 }

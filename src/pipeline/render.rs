@@ -166,7 +166,7 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
     let (exr, png) = output_paths(out, &stem)?;
     let resume = job.resume.as_deref().map(Part::read).transpose()?;
     check_combinations(job)?;
-    let scene = crate::scene::load(&job.scene)?;
+    let scene = crate::memory::limited(job.max_memory, || crate::scene::load(&job.scene))?;
     let (w, h) = job.options.resolution_of(&scene);
     let pixels = u64::from(w) * u64::from(h);
     let bytes = match &job.adaptive {

@@ -127,19 +127,22 @@ fn convert_material(path: &Path, m: &tobj::Material) -> crate::Result<ObjMateria
 const OBJ_LOAD_BYTES_PER_FILE_BYTE: u64 = 6;
 
 /// Refuses, naming the file, an OBJ whose load would not fit the memory
-/// available (`crate::memory::cap`): the allocator would otherwise stop the
-/// process halfway through, or the kernel kill it.
+/// available, or `--max-memory` when the run set it (`crate::memory::cap`,
+/// `crate::memory::limited`): the allocator would otherwise stop the process
+/// halfway through, or the kernel kill it.
 fn check_obj_fits(path: &Path, file: &std::fs::File) -> crate::Result<()> {
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let need = size.saturating_mul(OBJ_LOAD_BYTES_PER_FILE_BYTE);
-    match crate::memory::cap(None) {
+    let limit = crate::memory::limit();
+    match crate::memory::cap(limit) {
         Some(cap) if need > cap => Err(asset_err(
             path,
             format!(
-                "loading this {:.0} MiB OBJ needs about {:.1} GiB of memory, more than the {:.1} GiB available; simplify the mesh or free memory",
+                "loading this {:.0} MiB OBJ needs about {} of memory, more than the {} {}; simplify the mesh or free memory",
                 size as f64 / (1u64 << 20) as f64,
-                crate::memory::gib(need),
-                crate::memory::gib(cap)
+                crate::memory::size(need),
+                crate::memory::size(cap),
+                crate::memory::cap_source(limit)
             ),
         )),
         _ => Ok(()),
