@@ -59,7 +59,7 @@ pub fn limit() -> Option<u64> {
 }
 
 /// "available", or "allowed by --max-memory" where `limit` came from it: the
-/// end of a refusal's "more than the N GiB …".
+/// end of a refusal's "more than the [size] …".
 pub fn cap_source(limit: Option<u64>) -> &'static str {
     if limit.is_some() {
         "allowed by --max-memory"

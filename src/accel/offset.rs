@@ -18,8 +18,7 @@
 //! light sample, offset both ends and stop just short of the target
 //! ([`SurfacePoint::spawn_ray_to`]).
 
-use crate::math::cross;
-use crate::math::{Ray, Vec2, Vec3};
+use crate::math::{cross, Ray, Vec2, Vec3};
 
 use super::primitive::gamma;
 

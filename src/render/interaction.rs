@@ -5,8 +5,7 @@
 use crate::accel::{
     sphere_point, triangle_normal, triangle_point_with_normal, Accel, Hit, PrimRef, SurfacePoint,
 };
-use crate::math::cross;
-use crate::math::{Frame, Ray, Vec2, Vec3};
+use crate::math::{cross, Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::{PI, TAU};
 

@@ -16,8 +16,7 @@
 
 use super::locate::{Ctx, KeyPath};
 use super::{Mesh, Scene, Sphere};
-use crate::math::cross;
-use crate::math::Vec3;
+use crate::math::{cross, Vec3};
 use glam::{Mat3, Quat, Vec4};
 use serde::Deserialize;
 

@@ -1,7 +1,6 @@
 //! Pinhole look-at camera: pixel position → primary ray.
 
-use crate::math::cross;
-use crate::math::{Ray, Vec2, Vec3};
+use crate::math::{cross, Ray, Vec2, Vec3};
 
 /// A pinhole camera. `fov_y` is the full vertical field of view in degrees; image
 /// x grows to the right and y grows downwards (row 0 is the top row).

@@ -2,8 +2,7 @@
 //! transforms (points, vectors, normals), the two-triangle quad, Mitsuba's cube,
 //! and the degenerate-triangle filter. Everything here produces WORLD-space data.
 
-use crate::math::cross;
-use crate::math::{Vec2, Vec3};
+use crate::math::{cross, Vec2, Vec3};
 use glam::{Affine3A, Mat3};
 
 /// An invertible affine map with its normal matrix (inverse transpose of the

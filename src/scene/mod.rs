@@ -14,8 +14,7 @@ mod params;
 mod parse;
 
 use crate::brdf::Material;
-use crate::math::cross;
-use crate::math::{Vec2, Vec3};
+use crate::math::{cross, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
 pub use bump::Bump;

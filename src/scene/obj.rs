@@ -6,8 +6,7 @@
 
 use super::geometry::{filter_triangles, Xform};
 use crate::brdf::Material;
-use crate::math::cross;
-use crate::math::{Vec2, Vec3};
+use crate::math::{cross, Vec2, Vec3};
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

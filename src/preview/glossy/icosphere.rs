@@ -7,8 +7,7 @@
 //! Only view directions in the upper hemisphere are ever asked for, so the vertices
 //! that some face touching z > 0 needs get compact "slots", nested per level too.
 
-use crate::math::cross;
-use crate::math::Vec3;
+use crate::math::{cross, Vec3};
 use std::collections::HashMap;
 
 pub struct Icosphere {

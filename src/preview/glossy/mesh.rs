@@ -4,8 +4,7 @@
 //! [`AdaptiveMesh::resolve`] fans those away at the end. Vertices sit on the
 //! original flat triangles, their normals interpolated as the path tracer does.
 
-use crate::math::cross;
-use crate::math::{Vec2, Vec3};
+use crate::math::{cross, Vec2, Vec3};
 use crate::scene::Mesh;
 use std::collections::HashMap;
 

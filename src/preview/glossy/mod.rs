@@ -19,8 +19,7 @@ pub mod slice;
 mod store;
 
 use crate::accel::{Accel, PrimRef};
-use crate::math::cross;
-use crate::math::{luminance, Frame, Vec2, Vec3};
+use crate::math::{cross, luminance, Frame, Vec2, Vec3};
 use crate::preview::raster::PrimaryVisibility;
 use crate::scene::{Camera, Scene};
 use fit::MaterialFit;

@@ -26,8 +26,7 @@
 
 use super::sphere_light::{cone_flow, ConeLaw};
 use crate::accel::{Accel, PrimRef};
-use crate::math::cross;
-use crate::math::quadrature::GaussLegendre;
+use crate::math::{cross, quadrature::GaussLegendre};
 use crate::math::{Frame, Ray, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::TAU;
