@@ -259,6 +259,39 @@ fn a_scene_too_large_to_build_names_its_file() {
     );
 }
 
+/// A glossy preview whose transfer could not fit (here a vertex budget of four
+/// billion: ~70 TB of view-dependent slices) is refused before its mesh is
+/// split, naming the scene and the options that shrink it, and writes nothing.
+/// Without the check it would split and trace until the allocator gave up.
+#[test]
+fn a_glossy_transfer_too_large_is_refused_up_front() {
+    let dir = temp_dir("glossybig");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/glossy_teapot.toml");
+    let start = std::time::Instant::now();
+    let out = run_in(
+        &dir,
+        &[
+            "preview",
+            "glossy",
+            scene,
+            "--max-vertices",
+            "4000000000",
+            "--quiet",
+            "--out",
+            "preview",
+        ],
+    );
+    assert_failed_with(
+        &out,
+        "glossy_teapot.toml: glossy preview: the transfer of up to",
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("view directions needs about"), "{err}");
+    assert!(err.contains("lower --uniform or --max-vertices"), "{err}");
+    assert!(start.elapsed().as_secs() < 30, "refused up front");
+    assert!(tree(&dir).is_empty(), "{:?}", tree(&dir));
+}
+
 /// An OBJ of an `n` × `n` grid of quads (2n² triangles) in the plane y = 0.
 fn grid_obj(n: usize) -> String {
     let mut obj = String::new();

@@ -166,6 +166,56 @@ fn check_scene(scene: &Scene) -> crate::Result<()> {
     Ok(())
 }
 
+/// Bytes of a vertex beside its slices: the mesh's bookkeeping (~2.7 faces of
+/// ~80 bytes and ~3 edges in hash maps per vertex of a subdivided mesh) and
+/// the vertex itself, rounded up.
+const MESH_BYTES_PER_VERTEX: u64 = 640;
+
+/// The most vertices a precompute of `settings` reaches from a mesh of
+/// `vertices` vertices and `faces` triangles: each uniform 1-to-4 split adds
+/// about half a vertex per face (a closed mesh has twice as many faces as
+/// vertices), and the refinement stops past `max_vertices` after its last batch
+/// of at most `batch` splits (three new vertices each).
+fn vertex_bound(settings: &Settings, vertices: usize, faces: usize) -> u64 {
+    let splits = 4u64.saturating_pow(u32::from(settings.uniform_levels)) - 1;
+    let uniform = (vertices as u64).saturating_add((faces as u64).saturating_mul(splits) / 2);
+    uniform
+        .max(settings.max_vertices as u64)
+        .saturating_add(3 * settings.batch as u64)
+}
+
+/// Refuses, before any splitting, a precompute whose transfer would not fit the
+/// memory available: every vertex's transfer and mesh records and, with a
+/// glossy material, one packed slice per view direction (`glossy_slots`) —
+/// 30 KB a vertex at the default finest level, which `--uniform` multiplies by
+/// four per level.
+fn check_fits(
+    scene: &Scene,
+    settings: &Settings,
+    mesh: &AdaptiveMesh,
+    glossy_slots: Option<usize>,
+) -> crate::Result<()> {
+    let vertices = vertex_bound(settings, mesh.vertices.len(), mesh.face_count());
+    let per_vertex = (std::mem::size_of::<VertexTransfer>() + std::mem::size_of::<Frame>()) as u64
+        + MESH_BYTES_PER_VERTEX
+        + (glossy_slots.unwrap_or(0) * std::mem::size_of::<PackedSlice>()) as u64;
+    let need = vertices.saturating_mul(per_vertex);
+    let limit = crate::memory::limit();
+    match crate::memory::cap(limit) {
+        Some(cap) if need > cap => Err(error(
+            scene,
+            format!(
+                "the transfer of up to {vertices} vertices{} needs about {} of memory, more than the {} {}; lower --uniform or --max-vertices",
+                glossy_slots.map_or(String::new(), |n| format!(" × {n} view directions")),
+                crate::memory::size(need),
+                crate::memory::size(cap),
+                crate::memory::cap_source(limit)
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 fn material_fits(
     scene: &Scene,
     ico: &Icosphere,
@@ -333,6 +383,9 @@ pub fn precompute(
     let fits = material_fits(scene, &ico, settings)?;
     let interp = interp_vertex(scene);
     let mut mesh = AdaptiveMesh::new(&scene.meshes);
+    let glossy = fits.iter().any(|f| f.glossy.is_some());
+    let slots = ico.slot_end[settings.max_angular_level.min(ico.max_level())];
+    check_fits(scene, settings, &mesh, glossy.then_some(slots))?;
     for _ in 0..settings.uniform_levels {
         for f in mesh.leaves().collect::<Vec<_>>() {
             mesh.split(f, &interp);
