@@ -33,6 +33,9 @@ fn missing_cpu_features() -> Vec<&'static str> {
             )*};
         }
         need!("sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "avx", "avx2", "fma");
+        // What a `-C target-cpu=native` build on a recent x86 CPU may assume.
+        need!("bmi1", "bmi2", "lzcnt", "f16c", "movbe");
+        need!("avx512f", "avx512vl", "avx512bw", "avx512dq", "avx512cd");
     }
     missing
 }
