@@ -58,14 +58,23 @@ pub fn limit() -> Option<u64> {
     LIMIT.get()
 }
 
-/// "available", or "allowed by --max-memory" where `limit` came from it: the
-/// end of a refusal's "more than the [size] …".
-pub fn cap_source(limit: Option<u64>) -> &'static str {
-    if limit.is_some() {
-        "allowed by --max-memory"
-    } else {
-        "available"
-    }
+/// What exceeds the cap, in words ("`what` needs about 1.2 GiB of memory,
+/// more than the 0.9 GiB available", or "allowed by --max-memory" with a
+/// `limit`), or `None` when `bytes` fit or nothing is known to compare with.
+pub fn exceeds(bytes: u64, limit: Option<u64>, what: &str) -> Option<String> {
+    let cap = cap(limit)?;
+    (bytes > cap).then(|| {
+        format!(
+            "{what} needs about {} of memory, more than the {} {}",
+            size(bytes),
+            size(cap),
+            if limit.is_some() {
+                "allowed by --max-memory"
+            } else {
+                "available"
+            }
+        )
+    })
 }
 
 /// `bytes` in GiB, for messages.
@@ -298,7 +307,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_limit_holds_inside_limited_only_and_names_itself() {
+    fn a_limit_holds_inside_limited_only_and_refusals_name_it() {
         assert_eq!(limit(), None);
         let inner = limited(Some(5 << 20), || {
             // Nested: the inner limit, then the outer one back.
@@ -307,8 +316,11 @@ mod tests {
         });
         assert_eq!(inner, (Some(1), Some(5 << 20), Some(5 << 20)));
         assert_eq!(limit(), None);
-        assert_eq!(cap_source(Some(1)), "allowed by --max-memory");
-        assert_eq!(cap_source(None), "available");
+        assert_eq!(
+            exceeds(3 << 20, Some(2 << 20), "this").as_deref(),
+            Some("this needs about 3 MiB of memory, more than the 2 MiB allowed by --max-memory")
+        );
+        assert_eq!(exceeds(2 << 20, Some(2 << 20), "this"), None);
     }
 
     #[test]

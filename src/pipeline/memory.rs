@@ -58,7 +58,7 @@ pub fn scene_structures_bytes(primitives: u64) -> u64 {
 /// An error when `bytes` exceed 90 % of the memory available (or `limit`, when
 /// given): `what` names the run, `hint` the options that shrink it.
 fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<()> {
-    let Some(message) = over(bytes, limit, what) else {
+    let Some(message) = crate::memory::exceeds(bytes, limit, what) else {
         return Ok(());
     };
     Err(Error::Option {
@@ -86,7 +86,7 @@ pub fn check_render(
         0 => format!("{what} of {triangles} triangles"),
         _ => format!("{what} of {triangles} triangles and {spheres} spheres"),
     };
-    let Some(message) = over(image_bytes + scene_bytes, limit, &what) else {
+    let Some(message) = crate::memory::exceeds(image_bytes + scene_bytes, limit, &what) else {
         return Ok(());
     };
     Err(Error::Asset {
@@ -103,18 +103,4 @@ pub fn check_render(
 /// the memory available.
 pub fn check_scene(scene: &Scene, what: &str) -> Result<()> {
     check_render(0, scene, None, what, "")
-}
-
-/// What exceeds the cap, in words, or `None` when `bytes` fit (or the memory
-/// available is unknown and there is no `limit`).
-fn over(bytes: u64, limit: Option<u64>, what: &str) -> Option<String> {
-    let cap = crate::memory::cap(limit)?;
-    (bytes > cap).then(|| {
-        format!(
-            "{what} needs about {} of memory, more than the {} {}",
-            size(bytes),
-            size(cap),
-            crate::memory::cap_source(limit)
-        )
-    })
 }

@@ -132,19 +132,16 @@ const OBJ_LOAD_BYTES_PER_FILE_BYTE: u64 = 6;
 fn check_obj_fits(path: &Path, file: &std::fs::File) -> crate::Result<()> {
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let need = size.saturating_mul(OBJ_LOAD_BYTES_PER_FILE_BYTE);
-    let limit = crate::memory::limit();
-    match crate::memory::cap(limit) {
-        Some(cap) if need > cap => Err(asset_err(
+    let what = format!(
+        "loading this {:.0} MiB OBJ",
+        size as f64 / (1u64 << 20) as f64
+    );
+    match crate::memory::exceeds(need, crate::memory::limit(), &what) {
+        Some(message) => Err(asset_err(
             path,
-            format!(
-                "loading this {:.0} MiB OBJ needs about {} of memory, more than the {} {}; simplify the mesh or free memory",
-                size as f64 / (1u64 << 20) as f64,
-                crate::memory::size(need),
-                crate::memory::size(cap),
-                crate::memory::cap_source(limit)
-            ),
+            format!("{message}; simplify the mesh or free memory"),
         )),
-        _ => Ok(()),
+        None => Ok(()),
     }
 }
 

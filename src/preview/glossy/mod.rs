@@ -200,19 +200,16 @@ fn check_fits(
         + MESH_BYTES_PER_VERTEX
         + (glossy_slots.unwrap_or(0) * std::mem::size_of::<PackedSlice>()) as u64;
     let need = vertices.saturating_mul(per_vertex);
-    let limit = crate::memory::limit();
-    match crate::memory::cap(limit) {
-        Some(cap) if need > cap => Err(error(
+    let what = format!(
+        "the transfer of up to {vertices} vertices{}",
+        glossy_slots.map_or(String::new(), |n| format!(" × {n} view directions"))
+    );
+    match crate::memory::exceeds(need, crate::memory::limit(), &what) {
+        Some(message) => Err(error(
             scene,
-            format!(
-                "the transfer of up to {vertices} vertices{} needs about {} of memory, more than the {} {}; lower --uniform or --max-vertices",
-                glossy_slots.map_or(String::new(), |n| format!(" × {n} view directions")),
-                crate::memory::size(need),
-                crate::memory::size(cap),
-                crate::memory::cap_source(limit)
-            ),
+            format!("{message}; lower --uniform or --max-vertices"),
         )),
-        _ => Ok(()),
+        None => Ok(()),
     }
 }
 
