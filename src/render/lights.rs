@@ -4,9 +4,8 @@
 //! ray hits the same light, for multiple importance sampling).
 
 use crate::accel::PrimRef;
-use crate::math::cross;
 use crate::math::distribution::{Distribution1D, Distribution2D};
-use crate::math::{luminance, warp, Frame, Vec2, Vec3};
+use crate::math::{cross, luminance, warp, Frame, Vec2, Vec3};
 use crate::scene::environment::{self, direction_to_latlong, latlong_to_direction};
 use crate::scene::{Environment, Scene};
 use std::f32::consts::PI;
@@ -150,13 +149,13 @@ impl LightSet {
             }
             for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                let cross = cross(b - a, c - a);
-                let area = 0.5 * cross.length();
+                let normal = cross(b - a, c - a);
+                let area = 0.5 * normal.length();
                 lights.push(Light::Triangle {
                     mesh: mi as u32,
                     area,
                     v: [a, b, c],
-                    n: cross.normalize_or_zero(),
+                    n: normal.normalize_or_zero(),
                 });
                 power.push(luminance(m.emission) * area * PI);
             }

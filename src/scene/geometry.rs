@@ -79,12 +79,12 @@ pub(super) fn is_degenerate(positions: &[Vec3], t: [u32; 3]) -> bool {
     let e2 = p2 - p0;
     // Zero area, or collinear to within f32 precision (sin of the angle between the
     // edges below ~1e-7): such a triangle has no usable normal or barycentrics.
-    let cross = cross(e1, e2);
-    let twice_area = cross.length();
+    let normal = cross(e1, e2);
+    let twice_area = normal.length();
     let scale = e1.length_squared().max(e2.length_squared());
-    // The normal is cross / |cross|: |cross|² must be a normal f32 (a tiny
+    // The unit normal is normal / |normal|: |normal|² must be a normal f32 (a tiny
     // triangle's underflows to 0 or a subnormal, and its normal to NaN).
-    let normalisable = cross.length_squared() >= f32::MIN_POSITIVE;
+    let normalisable = normal.length_squared() >= f32::MIN_POSITIVE;
     !(normalisable && twice_area > 0.0 && twice_area > 1e-7 * scale)
 }
 

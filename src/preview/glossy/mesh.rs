@@ -83,8 +83,8 @@ impl AdaptiveMesh {
             let mut areas = Vec::with_capacity(mesh.triangles.len());
             for (ti, t) in mesh.triangles.iter().enumerate() {
                 let p = t.map(|i| mesh.positions[i as usize]);
-                let cross = cross(p[1] - p[0], p[2] - p[0]);
-                let n_geo = cross.normalize_or(Vec3::Y);
+                let normal = cross(p[1] - p[0], p[2] - p[0]);
+                let n_geo = normal.normalize_or(Vec3::Y);
                 let mut v = [0u32; 3];
                 for c in 0..3 {
                     let n = if mesh.normals.is_empty() {
@@ -104,7 +104,7 @@ impl AdaptiveMesh {
                     });
                 }
                 roots.push(m.faces.len() as u32);
-                areas.push(0.5 * cross.length());
+                areas.push(0.5 * normal.length());
                 m.add_leaf(Face {
                     v,
                     bary: [Vec3::X, Vec3::Y, Vec3::Z],

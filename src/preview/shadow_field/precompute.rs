@@ -11,9 +11,8 @@
 use super::field::{Field, Grid};
 use super::Settings;
 use crate::accel::{Accel, PrimRef};
-use crate::math::cross;
 use crate::math::sh::{self, ShF, COEFFS};
-use crate::math::{warp, Frame, Ray, Vec2, Vec3};
+use crate::math::{cross, warp, Frame, Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Scene, Sphere};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};

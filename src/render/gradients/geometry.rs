@@ -4,9 +4,8 @@
 
 use super::{GVec3, CAM, CDV, DV, SV};
 use crate::accel::PrimRef;
-use crate::math::cross;
 use crate::math::dual::{DVec3, Dual};
-use crate::math::{Frame, Ray, Vec3};
+use crate::math::{cross, Frame, Ray, Vec3};
 use crate::render::interaction::Interaction;
 use crate::scene::Scene;
 use std::f32::consts::{PI, TAU};

@@ -26,8 +26,8 @@
 
 use super::sphere_light::{cone_flow, ConeLaw};
 use crate::accel::{Accel, PrimRef};
-use crate::math::{cross, quadrature::GaussLegendre};
-use crate::math::{Frame, Ray, Vec3};
+use crate::math::quadrature::GaussLegendre;
+use crate::math::{cross, Frame, Ray, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::TAU;
 
