@@ -225,14 +225,7 @@ fn bad_arguments_are_one_error_line_with_status_1() {
 fn a_scene_too_large_to_build_names_its_file() {
     let dir = temp_dir("bigmesh");
     // A 224 × 224 grid: 100,352 triangles, about 40 MB to build.
-    let obj = grid_obj(224);
-    std::fs::write(dir.join("grid.obj"), obj).unwrap();
-    let scene = TINY_SCENE.replace(
-        "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
-        "type = \"mesh\"\nfile = \"grid.obj\"",
-    );
-    assert!(scene.contains("grid.obj"));
-    std::fs::write(dir.join("big.toml"), scene).unwrap();
+    write_grid_scene(&dir, 224);
     let small = ["--width", "2", "--height", "2", "--out", "out/big.exr"];
     let out = run_in(
         &dir,
@@ -292,6 +285,21 @@ fn a_glossy_transfer_too_large_is_refused_up_front() {
     assert!(tree(&dir).is_empty(), "{:?}", tree(&dir));
 }
 
+/// Writes `grid.obj` (an `n` × `n` grid, [`grid_obj`]) and `big.toml`, the
+/// tiny scene with the grid in place of its sphere, into `dir`; returns the
+/// OBJ's size in bytes.
+fn write_grid_scene(dir: &Path, n: usize) -> usize {
+    let obj = grid_obj(n);
+    std::fs::write(dir.join("grid.obj"), &obj).unwrap();
+    let scene = TINY_SCENE.replace(
+        "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
+        "type = \"mesh\"\nfile = \"grid.obj\"",
+    );
+    assert!(scene.contains("grid.obj"));
+    std::fs::write(dir.join("big.toml"), scene).unwrap();
+    obj.len()
+}
+
 /// An OBJ of an `n` × `n` grid of quads (2n² triangles) in the plane y = 0.
 fn grid_obj(n: usize) -> String {
     let mut obj = String::new();
@@ -337,14 +345,8 @@ fn run_limited(dir: &Path, kib: u64, args: &[&str]) -> Output {
 fn an_obj_too_large_to_load_names_it() {
     let dir = temp_dir("bigobj");
     // 605,000 triangles: about 20 MB of text, ~120 MB to load; 100 MB allowed.
-    let obj = grid_obj(550);
-    assert!(obj.len() > 18 << 20, "{}", obj.len());
-    std::fs::write(dir.join("grid.obj"), obj).unwrap();
-    let scene = TINY_SCENE.replace(
-        "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
-        "type = \"mesh\"\nfile = \"grid.obj\"",
-    );
-    std::fs::write(dir.join("big.toml"), scene).unwrap();
+    let obj_bytes = write_grid_scene(&dir, 550);
+    assert!(obj_bytes > 18 << 20, "{obj_bytes}");
     let out = run_limited(
         &dir,
         100_000,
