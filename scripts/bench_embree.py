@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Ray throughput of gradtrace's BVH against Embree 4 and Mitsuba 3 on the same rays.
 
-    python3 scripts/bench_embree.py [--rounds 5] [--runs 15] [--measurement-time 2] [--no-cargo] [--no-mitsuba]
+    python3 scripts/bench_embree.py [--rounds 5] [--runs 15] [--measurement-time 2] [--profile dist] [--no-cargo] [--no-mitsuba]
 
-Runs `cargo bench --bench accel` (closest_hit/*, shadow/*, obvhs_baseline_*) with
+Runs `cargo bench --profile dist --bench accel` (closest_hit/*, shadow/*,
+obvhs_baseline_*; `dist` is the build that ships and that bench_mitsuba times,
+`--profile bench` the one of the runs before 2026-12-05 afternoon) with
 GRADTRACE_ACCEL_RAYS set, so that the bench writes the Stanford bunny and its
 exact ray sets (coherent camera grid, incoherent random rays; the bench's own
 xorshift64* generators) to out/bench/accel_rays.bin, and the Cornell box of
@@ -91,17 +93,17 @@ def read_dump(path: Path) -> tuple[np.ndarray, np.ndarray, list[dict]]:
     return verts, tris, sets
 
 
-def run_ours(measurement_time: float) -> None:
+def run_ours(profile: str, measurement_time: float) -> None:
     """The full bench once: builds it, dumps the rays, times obvhs' traversal."""
     OUT.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, GRADTRACE_ACCEL_RAYS=str(RAYS))
-    cmd = ["cargo", "bench", "--bench", "accel", "--", "--warm-up-time", "1", "--measurement-time", str(measurement_time), "closest_hit|shadow"]
+    cmd = ["cargo", "bench", "--profile", profile, "--bench", "accel", "--", "--warm-up-time", "1", "--measurement-time", str(measurement_time), "closest_hit|shadow"]
     print("$ " + " ".join(cmd), flush=True)
     subprocess.run(cmd, cwd=ms.REPO, env=env, check=True)
 
 
-def bench_executable() -> str:
-    cmd = ["cargo", "bench", "--bench", "accel", "--no-run", "--message-format=json"]
+def bench_executable(profile: str) -> str:
+    cmd = ["cargo", "bench", "--profile", profile, "--bench", "accel", "--no-run", "--message-format=json"]
     out = subprocess.run(cmd, cwd=ms.REPO, capture_output=True, text=True, check=True).stdout
     for line in out.splitlines():
         msg = json.loads(line)
@@ -201,6 +203,7 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=5, help="rounds of back-to-back timings per bench")
     ap.add_argument("--runs", type=int, default=15, help="at least this many Embree passes per bench and round")
     ap.add_argument("--measurement-time", type=float, default=2.0, help="criterion seconds per bench")
+    ap.add_argument("--profile", default="dist", help="cargo profile of gradtrace's bench build (dist: the shipped build; bench: release settings)")
     ap.add_argument("--no-cargo", action="store_true", help="skip the full cargo bench run, reusing its ray dump and obvhs figures")
     ap.add_argument("--no-mitsuba", action="store_true", help="time Embree only")
     ap.add_argument("--mitsuba-worker", nargs=5, help=argparse.SUPPRESS)
@@ -215,8 +218,8 @@ def main() -> int:
     # Mitsuba's rows need libLLVM (looked up once, not per round).
     args.mitsuba = not args.no_mitsuba and ms.find_libllvm() is not None
     if not args.no_cargo:
-        run_ours(args.measurement_time)
-    exe = bench_executable()
+        run_ours(args.profile, args.measurement_time)
+    exe = bench_executable(args.profile)
     rows, triangles = [], {}
     for scene_name, dump in DUMPS:
         verts, tris, sets = read_dump(dump)
@@ -231,6 +234,7 @@ def main() -> int:
         "rounds": args.rounds,
         "runs": args.runs,
         "measurement_time": args.measurement_time,
+        "profile": args.profile,
         "cpu": ms_cpu(),
         "load_avg": os.getloadavg()[0],
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
@@ -306,7 +310,7 @@ def markdown(rows: list[dict], meta: dict) -> str:
     scenes = " and ".join(f"the {name} ({n:,} triangles)" for name, n in meta["triangles"].items())
     lines = [
         f"{scenes[0].upper()}{scenes[1:]}, the `accel` bench's rays (65,536 per set), one thread; "
-        f"gradtrace: criterion median; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray) and Mitsuba 3 "
+        f"gradtrace: criterion median, the `{meta.get('profile', 'bench')}` profile; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray) and Mitsuba 3 "
         f"(`llvm_ad_rgb`, `ray_intersect_preliminary`/`ray_test` on the set as one wavefront, one Dr.Jit thread): median of the passes in "
         f"{meta['measurement_time']:g} s after 1 s of warm-up, as criterion's; "
         f"{meta['rounds']} rounds, each timing the three back to back on one bench; ratio = median of the per-round ratios (in brackets), throughputs = medians over rounds. "
