@@ -618,6 +618,61 @@ fn spawned_rays_do_not_self_intersect() {
     assert!(checked > 5000, "{checked}");
 }
 
+/// A ray spawned off a wall of a room (an axis-aligned box seen from inside,
+/// each face its own leaf) starts outside that wall's padded leaf box, so the
+/// traversal never tests the wall's own triangles: a ray spawned straight up
+/// off the floor tests the ceiling's two triangles and nothing else. With the
+/// hit point's rounding bound alone as the offset (the floor's removed) the
+/// origin sits inside the floor's padding and the floor's two are tested too,
+/// which is what `Accel::spawn_floor` saves (cornell −9 %).
+#[test]
+fn rays_spawned_off_a_wall_do_not_open_its_leaf() {
+    let accel = Accel::build(&[cube(Vec3::splat(-1.0), Vec3::splat(1.0))], &[]);
+    let floor = accel.spawn_floor();
+    assert!(floor > 0.0 && floor < 1.0e-4, "{floor}");
+    let mut rng = Rng::new(29);
+    let (mut with, mut without) = (0, 0);
+    for _ in 0..500 {
+        let (x, z) = (rng.range(-0.9, 0.9), rng.range(-0.9, 0.9));
+        let down = Ray::new(Vec3::new(x, 0.0, z), -Vec3::Y);
+        let h = accel.intersect(&down).expect("the floor");
+        let sp = accel.surface_point(&down, &h).expect("a triangle");
+        assert!(sp.p_error.min_element() >= floor);
+        let up = sp.spawn_ray(Vec3::Y);
+        assert!(up.origin.y > -1.0 + floor, "{}", up.origin.y);
+        with += accel.closest_hit_work(&up).1;
+        let bare = gradtrace::accel::offset_ray_origin_with_error(
+            sp.p,
+            sp.p_error.min(Vec3::splat(floor * 0.01)),
+            sp.n_geo,
+            Vec3::Y,
+        );
+        without += accel.closest_hit_work(&Ray::new(bare, Vec3::Y)).1;
+        assert_eq!(
+            accel.intersect(&up).map(|h| h.prim),
+            accel.intersect(&Ray::new(bare, Vec3::Y)).map(|h| h.prim)
+        );
+    }
+    assert_eq!(with, 2 * 500, "the ceiling's two triangles per ray");
+    assert_eq!(without, 4 * 500, "and the floor's two without the floor");
+}
+
+/// The floor stays a negligible fraction of a scene far from the origin,
+/// whose box padding grows with its coordinates rather than its size.
+#[test]
+fn the_spawn_floor_follows_the_scene_size_far_from_the_origin() {
+    let near = Accel::build(&[cube(Vec3::splat(-1.0), Vec3::splat(1.0))], &[]);
+    let shift = Vec3::new(1.0e4, 0.0, -1.0e4);
+    let far = Accel::build(
+        &[cube(Vec3::splat(-1.0) + shift, Vec3::splat(1.0) + shift)],
+        &[],
+    );
+    // Twice the padding (2^-16 of the largest coordinate) at the origin…
+    assert_eq!(near.spawn_floor(), 2.0 / 65_536.0);
+    // …and 2^-15 of the extent (2) far from it, not of the coordinates (1e4).
+    assert_eq!(far.spawn_floor(), 2.0 / 32_768.0);
+}
+
 /// Rays leaving a convex object at grazing angles (cos θ from 1e-2 down to
 /// 1e-6 against the geometric normal), near the origin and 1e4–1e6 away from it,
 /// must never hit that object again, although the spawn offset is only the hit

@@ -72,6 +72,12 @@ impl Default for BuildPreset {
     }
 }
 
+/// How far every primitive box is padded, for a scene whose largest
+/// coordinate magnitude is `magnitude` (see `build_tree`).
+pub(super) fn box_pad(magnitude: f32) -> f32 {
+    (magnitude * (1.0 / 65_536.0)).max(1.0e-30)
+}
+
 /// Builds the 4- or 8-wide tree over `boxes` (unpadded, finite, within
 /// [`MAX_BUILD_MAGNITUDE`]); `leaf_order` refers to `boxes`.
 pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> Bvh<N> {
@@ -90,7 +96,7 @@ pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> B
     // defeat the watertight triangle test. A ray through a point of a padded box
     // stays inside it for ≥ pad along its path, which dwarfs those errors.
     let magnitude = total.min.abs().max(total.max.abs()).max_element();
-    let pad = (magnitude * (1.0 / 65_536.0)).max(1.0e-30);
+    let pad = box_pad(magnitude);
     let frame = ScaledFrame::new(magnitude.max(pad));
     let scaled: Vec<Aabb> = boxes
         .iter()

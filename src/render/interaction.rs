@@ -37,10 +37,13 @@ pub struct Interaction {
 /// Builds the [`Interaction`] of `hit` along `ray` (`accel`: the structure
 /// that found it, built over `scene`).
 pub fn interaction(scene: &Scene, accel: &Accel, ray: &Ray, hit: &Hit) -> Interaction {
-    match hit.prim {
+    let mut si = match hit.prim {
         PrimRef::Triangle { mesh, tri } => triangle_interaction(scene, accel, ray, hit, mesh, tri),
         PrimRef::Sphere(i) => sphere_interaction(scene, ray, hit, i),
-    }
+    };
+    // Spawned rays clear the tree's padded boxes (`Accel::spawn_floor`).
+    si.p_error = si.p_error.max(Vec3::splat(accel.spawn_floor()));
+    si
 }
 
 fn triangle_interaction(

@@ -259,6 +259,13 @@ unsafe fn shade8<L: Lanes>(g: &Gathered) -> Shaded8 {
     } else {
         (p, p_error)
     };
+    // `interaction`'s floor: spawned rays clear the tree's padded boxes.
+    let floor = L::splat(g.spawn_floor);
+    let p_error = V8 {
+        x: p_error.x.max(floor),
+        y: p_error.y.max(floor),
+        z: p_error.z.max(floor),
+    };
     // `triangle_interaction`'s shading normal: the vertices' normals
     // interpolated and normalised, the geometric one where that gives zero.
     let n = V8::load(&g.n);

@@ -260,6 +260,7 @@ impl LaneScene {
         g: &mut Gathered,
     ) {
         g.smooth = self.smooth;
+        g.spawn_floor = tracer.accel.spawn_floor();
         for (l, &i) in chunk.iter().enumerate() {
             let p = &mut paths[i];
             let u = VertexSamples::draw(&mut p.sampler, depth);
@@ -562,6 +563,8 @@ struct Gathered {
     /// The vertices' shading normals, read only when `smooth`.
     vn: [Rows; 3],
     smooth: bool,
+    /// The least error bound of a spawned origin ([`Accel::spawn_floor`]).
+    spawn_floor: f32,
     /// Whether the scene has spheres: the planes below, a sphere's surface
     /// point where `sphere` is 1, are read only then.
     spheres: bool,
