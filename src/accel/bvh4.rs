@@ -121,12 +121,15 @@ impl BoxRay {
     /// that the reciprocal is finite and `0 · ∞` cannot occur); `t_lo ≥ 0`.
     #[inline(always)]
     pub(super) fn new(org: Vec3, dir: Vec3, t_lo: f32) -> Self {
-        // One packed division for the three reciprocals.
-        let inv = (Vec3::ONE / dir).to_array();
+        // One packed division for the three reciprocals; the splats lane by
+        // lane from the registers (through `to_array` they were 16-byte loads
+        // across separate stores: a store-forwarding stall per query).
+        let inv = Vec3::ONE / dir;
+        let splat = |v: Vec3| [f32x4::splat(v.x), f32x4::splat(v.y), f32x4::splat(v.z)];
         Self {
-            org: org.to_array().map(f32x4::splat),
-            inv: inv.map(f32x4::splat),
-            near: dir.to_array().map(|d| (d < 0.0) as usize),
+            org: splat(org),
+            inv: splat(inv),
+            near: [dir.x, dir.y, dir.z].map(|d| (d < 0.0) as usize),
             t_lo: f32x4::splat(t_lo),
         }
     }

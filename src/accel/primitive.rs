@@ -209,13 +209,33 @@ impl<F: MaskLanes> LaneTest<F> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WatertightRay {
     org: Vec3,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    /// (Sx, Sy, Sz) in one register: the SIMD tests splat them from one
+    /// 16-byte store, which forwards (three f32 fields were read 16 bytes at
+    /// a time across separate stores, a store-forwarding stall per query).
+    shear: Vec3,
     /// (kx, ky, kz): `kz` the dominant axis, kx and ky swapped when
-    /// `dir[kz] < 0` to keep the winding. Each is below 3 (set only by `new`),
-    /// which is what makes [`pick`] safe.
-    axes: [usize; 3],
+    /// `dir[kz] < 0` to keep the winding.
+    axes: Axes,
+}
+
+/// A permutation (kx, ky, kz) packed in one `u32`, a byte each, so that the
+/// SIMD tests' copy of it is one 4-byte load of one 4-byte store (as
+/// `[usize; 3]` it was copied 16 bytes at a time across separate 8-byte
+/// stores: a store-forwarding stall per query). Each axis is below 3 (built
+/// only by [`Axes::new`]), which is what makes [`pick`] safe.
+#[derive(Clone, Copy, Debug)]
+struct Axes(u32);
+
+impl Axes {
+    fn new(kx: usize, ky: usize, kz: usize) -> Self {
+        debug_assert!(kx < 3 && ky < 3 && kz < 3);
+        Self(kx as u32 | (ky as u32) << 8 | (kz as u32) << 16)
+    }
+
+    #[inline(always)]
+    fn get(self) -> [usize; 3] {
+        [0, 8, 16].map(|shift| ((self.0 >> shift) & 0xff) as usize)
+    }
 }
 
 /// `row[axis]` for an axis of a [`WatertightRay`]'s permutation, without a
@@ -223,7 +243,8 @@ pub(crate) struct WatertightRay {
 #[inline(always)]
 fn pick<T: Copy>(row: &[T; 3], axis: usize) -> T {
     debug_assert!(axis < 3);
-    // SAFETY: every axis of a permutation is 0, 1 or 2 (`WatertightRay::new`).
+    // SAFETY: every axis of a permutation is 0, 1 or 2 (`Axes::new`, called
+    // only by `WatertightRay::new`).
     unsafe { *row.get_unchecked(axis) }
 }
 
@@ -232,30 +253,25 @@ impl WatertightRay {
         let a = dir.abs();
         // kz = index of the largest |dir| component (paper: max_dim(abs(dir))),
         // kx, ky the next two, swapped when dir[kz] < 0 to preserve the winding.
-        let kz = if a.x > a.y {
-            if a.x > a.z {
-                0
-            } else {
-                2
-            }
-        } else if a.y > a.z {
-            1
+        // Selects rather than branches: for a bounce's random direction each
+        // comparison is a coin toss.
+        let (xy, xz, yz) = (a.x > a.y, a.x > a.z, a.y > a.z);
+        let kz = if xy {
+            2 * usize::from(!xz)
         } else {
-            2
+            1 + usize::from(!yz)
         };
-        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let d = dir.to_array();
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let d = [dir.x, dir.y, dir.z];
+        let flip = usize::from(d[kz] < 0.0);
+        // (kz + 1, kz + 2) mod 3, in that order or swapped.
+        let kx = (kz + 1 + flip) % 3;
+        let ky = (kz + 2 - flip) % 3;
         // Shear constants (paper §3: Sx = dx/dz, Sy = dy/dz, Sz = 1/dz).
         let sz = 1.0 / d[kz];
         Self {
             org,
-            sx: d[kx] * sz,
-            sy: d[ky] * sz,
-            sz,
-            axes: [kx, ky, kz],
+            shear: Vec3::new(d[kx] * sz, d[ky] * sz, sz),
+            axes: Axes::new(kx, ky, kz),
         }
     }
 
@@ -275,10 +291,13 @@ impl WatertightRay {
         let b = (v1 - self.org).to_array();
         let c = (v2 - self.org).to_array();
         // Shear and scale of the vertices (paper §3, Listing 1).
-        let [kx, ky, kz] = self.axes;
+        let [kx, ky, kz] = self.axes.get();
         let shear = |v: &[f32; 3]| {
             let z = pick(v, kz);
-            (pick(v, kx) - self.sx * z, pick(v, ky) - self.sy * z)
+            (
+                pick(v, kx) - self.shear.x * z,
+                pick(v, ky) - self.shear.y * z,
+            )
         };
         let ((ax, ay), (bx, by), (cx, cy)) = (shear(&a), shear(&b), shear(&c));
         // Scaled barycentric coordinates = 2D edge functions (paper §3, eq. 3).
@@ -311,9 +330,9 @@ impl WatertightRay {
         }
         // Scaled hit distance (paper eq. 5): T = U·Az + V·Bz + W·Cz.
         let (az, bz, cz) = (
-            self.sz * pick(&a, kz),
-            self.sz * pick(&b, kz),
-            self.sz * pick(&c, kz),
+            self.shear.z * pick(&a, kz),
+            self.shear.z * pick(&b, kz),
+            self.shear.z * pick(&c, kz),
         );
         let t_scaled = u * az + v * bz + w * cz;
         let rcp_det = 1.0 / det;
@@ -386,7 +405,7 @@ pub(crate) struct WatertightRay4 {
     sx: f32x4,
     sy: f32x4,
     sz: f32x4,
-    axes: [usize; 3],
+    axes: Axes,
 }
 
 /// The four lanes' results: `hits` the lanes with a hit in range; `fallback`
@@ -402,11 +421,12 @@ pub(crate) struct Hits4 {
 
 impl WatertightRay4 {
     pub(crate) fn new(wr: &WatertightRay) -> Self {
+        let (o, s) = (wr.org, wr.shear);
         Self {
-            org: wr.org.to_array().map(f32x4::splat),
-            sx: f32x4::splat(wr.sx),
-            sy: f32x4::splat(wr.sy),
-            sz: f32x4::splat(wr.sz),
+            org: [f32x4::splat(o.x), f32x4::splat(o.y), f32x4::splat(o.z)],
+            sx: f32x4::splat(s.x),
+            sy: f32x4::splat(s.y),
+            sz: f32x4::splat(s.z),
             axes: wr.axes,
         }
     }
@@ -416,7 +436,7 @@ impl WatertightRay4 {
     /// the masks.
     #[inline(always)]
     pub(crate) fn intersect<const ANY: bool>(&self, tri: &Tri4, t_min: f32, t_max: f32) -> Hits4 {
-        let axes = self.axes;
+        let axes = self.axes.get();
         let lt = lane_test(
             |k, i| pick(&tri.v[k], axes[i]) - pick(&self.org, axes[i]),
             [self.sx, self.sy, self.sz],
@@ -572,10 +592,10 @@ pub(crate) mod avx {
             let p = |t: &Tri4| t.v[k].as_ptr().add(axis) as *const f32;
             F8(_mm256_loadu2_m128(p(hi), p(lo)))
         };
-        let axes = wr.axes;
+        let axes = wr.axes.get();
         let lt = lane_test(
             |k, i| load(k, axes[i]) - super::pick(&org, axes[i]),
-            [wr.sx, wr.sy, wr.sz].map(F8::from),
+            wr.shear.to_array().map(F8::from),
         );
         let (hits, on_edge) = lt.decide(t_min, t_max);
         let (b1, b2) = if ANY || hits == 0 {
