@@ -583,7 +583,8 @@ impl Accel {
     /// The least error bound a spawned ray's origin is given (an absolute
     /// distance, the same on every axis), so that it is offset at least this
     /// far off its surface (`offset_ray_origin_with_error` moves it by
-    /// `dot(|n|, p_error)` ≥ this for a unit normal). See [`spawn_floor`].
+    /// `dot(|n|, p_error)` ≥ this for a unit normal); why: the function
+    /// `spawn_floor` below.
     pub fn spawn_floor(&self) -> f32 {
         self.spawn_floor
     }
@@ -1066,10 +1067,10 @@ impl Accel {
 /// leaf box and the traversal never opens the leaf it leaves. With pbrt's
 /// bound alone (~γ₇ of the coordinates) every such ray started inside it and
 /// tested the wall's own triangles for nothing (cornell: −9 % render time,
-/// benches/README.md). At most 2^-15 of the scene's extent, so that a scene
-/// far from the origin (whose padding grows with its coordinates, not its
-/// size) is not offset by more than a negligible fraction of its size: there
-/// the floor stays below pbrt's bound and changes nothing.
+/// benches/README.md). At most 2^-15 of the scene's extent: far from the
+/// origin the padding grows with the coordinates, not the scene's size, and
+/// the floor must not (in the render test's scene 10⁴ units away it stays
+/// below pbrt's own bound there, and the image is the one at the origin).
 fn spawn_floor((lo, hi): (Vec3, Vec3)) -> f32 {
     let magnitude = lo.abs().max(hi.abs()).max_element();
     let extent = (hi - lo).max_element();
