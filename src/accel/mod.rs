@@ -589,6 +589,12 @@ impl Accel {
         self.spawn_floor
     }
 
+    /// `p_error` raised to [`Accel::spawn_floor`] on every axis: the bound a
+    /// ray spawned from a hit of this tree is offset by.
+    pub fn spawn_error(&self, p_error: Vec3) -> Vec3 {
+        p_error.max(Vec3::splat(self.spawn_floor))
+    }
+
     /// Wall-clock time of [`Accel::build`] (AABBs, BVH build, reordering).
     pub fn build_time(&self) -> Duration {
         self.build_time
@@ -767,7 +773,7 @@ impl Accel {
                 offset::sphere_point(center, radius, ray.at(hit.t))
             }
         };
-        sp.p_error = sp.p_error.max(Vec3::splat(self.spawn_floor));
+        sp.p_error = self.spawn_error(sp.p_error);
         Some(sp)
     }
 

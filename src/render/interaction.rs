@@ -42,7 +42,7 @@ pub fn interaction(scene: &Scene, accel: &Accel, ray: &Ray, hit: &Hit) -> Intera
         PrimRef::Sphere(i) => sphere_interaction(scene, ray, hit, i),
     };
     // Spawned rays clear the tree's padded boxes (`Accel::spawn_floor`).
-    si.p_error = si.p_error.max(Vec3::splat(accel.spawn_floor()));
+    si.p_error = accel.spawn_error(si.p_error);
     si
 }
 

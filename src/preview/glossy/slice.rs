@@ -114,11 +114,9 @@ impl TraceContext<'_> {
     }
 
     fn spawn(&self, at: &SurfaceSample, dir: Vec3) -> Ray {
-        // At least the tree's floor, as every spawned ray (`Accel::spawn_floor`).
-        let err = Vec3::splat(
-            (at.position.abs().max_element().max(1.0) * 32.0 * f32::EPSILON)
-                .max(self.accel.spawn_floor()),
-        );
+        let err = self.accel.spawn_error(Vec3::splat(
+            at.position.abs().max_element().max(1.0) * 32.0 * f32::EPSILON,
+        ));
         Ray::new(
             offset_ray_origin_with_error(at.position, err, at.geometric_normal, dir),
             dir,
