@@ -83,10 +83,10 @@ impl Bvh8 {
         let (org, inv) = (ray.org_scalar(), ray.inv_scalar());
         let org = org.map(|o| _mm256_set1_ps(o));
         let inv = inv.map(|i| _mm256_set1_ps(i));
+        let inv_far = ray.inv_far_scalar().map(|i| _mm256_set1_ps(i));
         let near = ray.near;
         let (nx, ny, nz) = (near[0] & 1, 2 + (near[1] & 1), 4 + (near[2] & 1));
         let t_lo = _mm256_set1_ps(ray.t_lo_scalar());
-        let widen = _mm256_set1_ps(WIDEN);
         let mut hi = t_hi * WIDEN;
         let mut hi_w = _mm256_set1_ps(hi);
         let mut sp = 0usize;
@@ -98,17 +98,18 @@ impl Bvh8 {
                 let b = &node.bounds;
                 // SAFETY: `Node8` is 32-byte aligned and each bounds row is
                 // 32 bytes at a multiple of 32.
-                let slab = |i: usize, a: usize| {
+                let slab = |i: usize, a: usize, inv: &[__m256; 3]| {
                     _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b[i].as_ptr()), org[a]), inv[a])
                 };
-                let (tnx, tny, tnz) = (slab(nx, 0), slab(ny, 1), slab(nz, 2));
-                let (tfx, tfy, tfz) = (slab(nx ^ 1, 0), slab(ny ^ 1, 1), slab(nz ^ 1, 2));
+                let (tnx, tny, tnz) = (slab(nx, 0, &inv), slab(ny, 1, &inv), slab(nz, 2, &inv));
+                let (tfx, tfy, tfz) = (
+                    slab(nx ^ 1, 0, &inv_far),
+                    slab(ny ^ 1, 1, &inv_far),
+                    slab(nz ^ 1, 2, &inv_far),
+                );
                 // Same operand order as the BVH4's `fast_max`/`fast_min`.
                 let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
-                let t_far = _mm256_min_ps(
-                    _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz), widen),
-                    hi_w,
-                );
+                let t_far = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz), hi_w);
                 let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far)) as u32;
                 if mask == 0 {
                     cur = EMPTY;
