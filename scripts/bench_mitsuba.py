@@ -29,7 +29,9 @@ Error: RMSE (all pixels and channels) against a converged reference (Mitsuba
 `scalar_rgb` at --ref-spp; its own noise is subtracted), cached in out/bench/.
 Efficiency ratio = (t·RMSE²)_gradtrace / (t·RMSE²)_Mitsuba: the ratio of the times
 both would need for equal error (Monte Carlo error² ∝ 1/t); below 1 gradtrace is
-more efficient. Writes out/bench/bench_mitsuba.json and, when gradtrace and the
+more efficient. RMSE: the median of the rounds' (each round has its own seed); a
+further column takes the rounds' mean MSE instead (the expected MSE that
+efficiency is defined with). Writes out/bench/bench_mitsuba.json and, when gradtrace and the
 LLVM rows both ran, the table between the markers in benches/README.md.
 
 The LLVM variant needs libLLVM (Debian: `apt-get install -y libllvm19`);
@@ -315,6 +317,20 @@ def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None]]:
     return ratio, rounds
 
 
+def mean_mse(r: dict) -> float:
+    """The mean of the rounds' squared errors: each round renders with its own
+    seed, so this estimates the expected MSE that efficiency (1 / (t·MSE)) is
+    defined with; the median of five RMSEs moves with one seed's luck (±4 % in
+    RMSE per seed on cornell at 64 spp, ±8 % in a ratio)."""
+    return statistics.fmean(e * e for e in r["rmses"])
+
+
+def efficiency_mean_mse(a: dict, b: dict) -> float | None:
+    """(t·MSE)_a / (t·MSE)_b with the median times and the rounds' mean MSE."""
+    cost = b["render_s"] * mean_mse(b)
+    return a["render_s"] * mean_mse(a) / cost if cost > 0 else None
+
+
 def add_ratios(rows: list[dict]) -> None:
     """Speed at equal spp against scalar_rgb, and the efficiency ratio against
     gradtrace: (t·RMSE²)_gradtrace / (t·RMSE²)_this."""
@@ -323,6 +339,7 @@ def add_ratios(rows: list[dict]) -> None:
     for r in rows:
         r["speed_vs_scalar"] = scalar["render_s"] / r["render_s"] if scalar else None
         r["efficiency_ratio"], r["efficiency_ratio_rounds"] = efficiency(ours, r) if ours else (None, [])
+        r["efficiency_ratio_mean_mse"] = efficiency_mean_mse(ours, r) if ours else None
 
 
 def extra_notes(label: str, rows: list[dict]) -> list[str]:
@@ -336,7 +353,11 @@ def extra_notes(label: str, rows: list[dict]) -> list[str]:
                 continue
             ratio, rounds = efficiency(extra, r)
             vals = ", ".join("—" if v is None else f"{v:.2f}" for v in rounds)
-            parts.append(f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}]")
+            pooled = efficiency_mean_mse(extra, r)
+            parts.append(
+                f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}], "
+                f"mean MSE {'—' if pooled is None else f'{pooled:.2f}'}×"
+            )
         build = EXTRA_BUILDS[extra["variant"]][1]
         notes.append(f"{label}, the {build} build's efficiency ratio ({build} / row): " + "; ".join(parts) + ".")
     return notes
@@ -353,7 +374,10 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
         f"Median of {meta['runs']} runs on {meta['cpus']} CPU threads ({meta['cpu']}); RMSE against Mitsuba "
         f"`scalar_rgb` at {meta['ref_spp']} spp (its own noise subtracted). Efficiency ratio = "
         "(t·RMSE²)_gradtrace / (t·RMSE²)_row: the ratio of the times both need for equal error; "
-        f"below 1.00× gradtrace is the more efficient. Measured {meta['date']}, load average "
+        "below 1.00× gradtrace is the more efficient. Its RMSE is the median of the rounds' (each round "
+        "renders with its own seed, 100 + round); the *mean MSE* column takes the mean of the rounds' "
+        "squared errors instead, the expected MSE that efficiency is defined with, which one seed's luck "
+        f"moves less. Measured {meta['date']}, load average "
         f"{meta['load_avg']:.1f} (shared, loaded machine: compare within a table).",
     ]
     for b, rows in scene_rows:
@@ -361,13 +385,14 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
             "",
             f"**{b.label}**, {b.w}x{b.h}, {b.spp} spp, max depth {b.depth}, box filter.",
             "",
-            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | per round | scene load (s) | JIT warm-up (s) |",
-            "|---|---:|---:|---:|---:|---|---:|---:|",
+            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | per round | mean MSE | scene load (s) | JIT warm-up (s) |",
+            "|---|---:|---:|---:|---:|---|---:|---:|---:|",
         ]
         for r in rows:
             lines.append(
                 f"| {r['name']} | {r['render_s']:.2f} | {f(r['speed_vs_scalar'])}× | {r['rmse']:.4f} | "
-                f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['load_s'])} | {f(r['warmup_s'])} |"
+                f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['efficiency_ratio_mean_mse'])}× | "
+                f"{f(r['load_s'])} | {f(r['warmup_s'])} |"
             )
         for note in extra_notes(b.label, rows):
             lines += ["", note]
