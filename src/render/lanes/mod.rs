@@ -450,7 +450,12 @@ impl Point<'_> {
 }
 
 /// Starts loading every cache line `r` lies on (a hint; nothing on other
-/// architectures).
+/// architectures): its first byte's line and on to its last byte's, for the
+/// 60-byte triangle records that straddle two lines more often than not. The
+/// traversal's `prefetch_lines` steps from the start alone, for its aligned
+/// nodes and blocks; one helper for both (the exact line range, or a
+/// prefetch of the last byte added to the traversal's) cost cornell and the
+/// bunny 1–1.7 % (benches/README.md, levers).
 #[inline(always)]
 fn prefetch<T>(r: &T) {
     #[cfg(target_arch = "x86_64")]
