@@ -35,8 +35,8 @@ efficiency is defined with). Writes out/bench/bench_mitsuba.json and, when gradt
 LLVM rows both ran, the table between the markers in benches/README.md.
 
 The LLVM variant needs libLLVM (Debian: `apt-get install -y libllvm19`);
-DRJIT_LIBLLVM_PATH is set from `dpkg -L libllvm19` when not already set, and
-the variant is skipped (with a note) when no libLLVM is found.
+DRJIT_LIBLLVM_PATH is set from `dpkg -L libllvm19` when not already set; with
+no libLLVM found the script stops at once, unless --no-llvm leaves it out.
 """
 
 from __future__ import annotations
@@ -428,6 +428,15 @@ def main() -> int:
     ap.add_argument("--no-gradtrace", action="store_true", help="time the Mitsuba variants only")
     ap.add_argument("--no-llvm", action="store_true", help="skip llvm_ad_rgb")
     args = ap.parse_args()
+    if not args.no_llvm and LIBLLVM is None:
+        # Checked first: without the LLVM rows the run (~11 minutes on a fresh
+        # machine, the reference included) cannot write its table.
+        print(
+            "error: llvm_ad_rgb needs libLLVM and none was found: apt-get install -y libllvm19 "
+            "(or set DRJIT_LIBLLVM_PATH), or pass --no-llvm to time the other rows without writing benches/README.md",
+            file=sys.stderr,
+        )
+        return 2
     notes = [
         "Times are render times: gradtrace's `gradtrace.render_time_s` (its EXR header: light set-up, rendering, film), "
         "Mitsuba's `mi.render`; gradtrace's scene load is the rest of its `gradtrace render --no-aovs` process "
@@ -444,8 +453,6 @@ def main() -> int:
     elif args.pgo is not None:
         pgo_binary = args.pgo
     native = None if args.native is None else native_binary(args.native)
-    if not args.no_llvm and LIBLLVM is None:
-        notes.append("llvm_ad_rgb skipped: no libLLVM found (apt-get install -y libllvm19).")
     scene_rows = []
     for b in benches(args.scenes.split(",")):
         ref = reference(b, args.ref_spp)
