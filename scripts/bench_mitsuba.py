@@ -307,14 +307,17 @@ class GradtraceRenderer:
         }
 
 
-def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None]]:
-    """(t·RMSE²)_a / (t·RMSE²)_b from the medians, and the same within each
-    round (the rows of a round ran back to back: its spread shows how far the
-    machine's noise moves the figure)."""
+def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None], float | None]:
+    """(t·RMSE²)_a / (t·RMSE²)_b from the medians; the same within each round
+    (the rows of a round ran back to back: its spread shows how far the
+    machine's noise moves the figure); and (t·MSE)_a / (t·MSE)_b with the
+    median times and the rounds' mean MSE (`mean_mse`)."""
     cost = b["render_s"] * b["rmse"] ** 2
     ratio = a["render_s"] * a["rmse"] ** 2 / cost if cost > 0 else None
     rounds = [t0 * e0**2 / (t * e**2) if t * e > 0 else None for t0, e0, t, e in zip(a["times_s"], a["rmses"], b["times_s"], b["rmses"])]
-    return ratio, rounds
+    pooled_cost = b["render_s"] * mean_mse(b)
+    pooled = a["render_s"] * mean_mse(a) / pooled_cost if pooled_cost > 0 else None
+    return ratio, rounds, pooled
 
 
 def mean_mse(r: dict) -> float:
@@ -325,12 +328,6 @@ def mean_mse(r: dict) -> float:
     return statistics.fmean(e * e for e in r["rmses"])
 
 
-def efficiency_mean_mse(a: dict, b: dict) -> float | None:
-    """(t·MSE)_a / (t·MSE)_b with the median times and the rounds' mean MSE."""
-    cost = b["render_s"] * mean_mse(b)
-    return a["render_s"] * mean_mse(a) / cost if cost > 0 else None
-
-
 def add_ratios(rows: list[dict]) -> None:
     """Speed at equal spp against scalar_rgb, and the efficiency ratio against
     gradtrace: (t·RMSE²)_gradtrace / (t·RMSE²)_this."""
@@ -338,8 +335,9 @@ def add_ratios(rows: list[dict]) -> None:
     ours = next((r for r in rows if r["variant"] == "gradtrace"), None)
     for r in rows:
         r["speed_vs_scalar"] = scalar["render_s"] / r["render_s"] if scalar else None
-        r["efficiency_ratio"], r["efficiency_ratio_rounds"] = efficiency(ours, r) if ours else (None, [])
-        r["efficiency_ratio_mean_mse"] = efficiency_mean_mse(ours, r) if ours else None
+        (r["efficiency_ratio"], r["efficiency_ratio_rounds"], r["efficiency_ratio_mean_mse"]) = (
+            efficiency(ours, r) if ours else (None, [], None)
+        )
 
 
 def extra_notes(label: str, rows: list[dict]) -> list[str]:
@@ -351,9 +349,8 @@ def extra_notes(label: str, rows: list[dict]) -> list[str]:
         for r in rows:
             if r["variant"].startswith("gradtrace"):
                 continue
-            ratio, rounds = efficiency(extra, r)
+            ratio, rounds, pooled = efficiency(extra, r)
             vals = ", ".join("—" if v is None else f"{v:.2f}" for v in rounds)
-            pooled = efficiency_mean_mse(extra, r)
             parts.append(
                 f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}], "
                 f"mean MSE {'—' if pooled is None else f'{pooled:.2f}'}×"
@@ -462,7 +459,7 @@ def main() -> int:
         if pgo_binary is not None:
             renderers.append(GradtraceRenderer(b, pgo_binary, "gradtrace-pgo"))
         renderers.append(MitsubaRenderer(b, "scalar_rgb", "independent"))
-        if not args.no_llvm and LIBLLVM is not None:
+        if not args.no_llvm:
             renderers += [MitsubaRenderer(b, "llvm_ad_rgb", s) for s in LLVM_SAMPLERS]
         # Round by round, every renderer once per round: a change in the machine's
         # load then reaches all rows alike instead of whichever ran at the time.
@@ -490,7 +487,7 @@ def main() -> int:
     table = markdown(scene_rows, meta)
     # benches/README.md holds issue 16's comparison: a table without gradtrace or
     # without the LLVM rows cannot stand for it, so it is printed, not written.
-    missing = [what for what, gone in (("gradtrace", binary is None), ("llvm_ad_rgb", args.no_llvm or LIBLLVM is None)) if gone]
+    missing = [what for what, gone in (("gradtrace", binary is None), ("llvm_ad_rgb", args.no_llvm)) if gone]
     if missing:
         print(f"benches/README.md left as it was: this table lacks {' and '.join(missing)}.", file=sys.stderr)
     else:
