@@ -68,6 +68,13 @@ pub struct RenderOptions {
 }
 
 impl RenderOptions {
+    /// Whether the film keeps the camera rays' first hits: for the AOV planes,
+    /// or for the merge planes (hit counts, normal lengths). Without either the
+    /// lane shading makes none (cornell: −1 % of the render).
+    pub(crate) fn keeps_first_hits(&self) -> bool {
+        self.aovs || self.merge_planes
+    }
+
     /// Every setting that changes what a pixel's samples are, resolved against the
     /// scene (but not `spp`, the crop or the sample range): parts of one render
     /// share it, so `merge` compares it.
@@ -474,6 +481,7 @@ pub fn render_passes(
         gradients: opts.gradients,
         first: range.start,
         lanes: setup.lanes(),
+        first_hits: opts.keeps_first_hits(),
     };
     let mut film = Film::new(crop, setup.camera.width as usize, ctx.gradients);
     let cancelled = || {
@@ -559,6 +567,8 @@ pub(crate) struct SampleContext<'a> {
     pub first: u32,
     /// Paths traced together and shaded in lanes, where the scene allows.
     pub lanes: Option<&'a lanes::LaneScene>,
+    /// [`RenderOptions::keeps_first_hits`]: whether the lanes record them.
+    pub first_hits: bool,
 }
 
 /// The running sums of every pixel of a crop, tile by tile (tiles in a scrambled
@@ -644,7 +654,7 @@ impl Film {
                         // a time, and added in the order the loop below adds them.
                         let mut flush =
                             |batch: &mut lanes::LaneBatch, keys: &mut Vec<(usize, u32)>| {
-                                lanes.trace(&ctx.tracer, batch);
+                                lanes.trace(&ctx.tracer, batch, ctx.first_hits);
                                 for ((i, s), r) in keys.drain(..).zip(batch.results()) {
                                     t.pixels[i].add(&r, s, s == ctx.first);
                                 }

@@ -132,6 +132,7 @@ pub fn render_noise_adaptive(
         gradients: opts.gradients,
         first: 0,
         lanes: setup.lanes(),
+        first_hits: opts.keeps_first_hits(),
     };
     let mut film = Film::new(Crop::full(w as u32, h as u32), w, ctx.gradients);
     let mut counts = vec![0u32; w * h];

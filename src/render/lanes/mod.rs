@@ -160,8 +160,9 @@ impl LaneScene {
     }
 
     /// Traces every path of `batch` and leaves in it what [`PathTracer::li`]
-    /// would return for each (no gradients).
-    pub(crate) fn trace(&self, tracer: &PathTracer, batch: &mut LaneBatch) {
+    /// would return for each (no gradients); the camera rays' first hits only
+    /// with `first_hits` (else `None`, where the film would drop them).
+    pub(crate) fn trace(&self, tracer: &PathTracer, batch: &mut LaneBatch, first_hits: bool) {
         let LaneBatch {
             paths,
             live,
@@ -174,7 +175,7 @@ impl LaneScene {
             let mut kept = 0;
             for k in 0..live.len() {
                 let i = live[k];
-                if self.intersect(tracer, &mut paths[i], depth) {
+                if self.intersect(tracer, &mut paths[i], depth, first_hits) {
                     live[kept] = i;
                     kept += 1;
                 }
@@ -192,7 +193,7 @@ impl LaneScene {
             for k in 0..live.len() {
                 let i = live[k];
                 let s = &shaded[k / LANES];
-                if self.finish(tracer, &mut paths[i], s, k % LANES, depth) {
+                if self.finish(tracer, &mut paths[i], s, k % LANES, depth, first_hits) {
                     live[kept] = i;
                     kept += 1;
                 }
@@ -207,7 +208,13 @@ impl LaneScene {
     /// The path's closest hit and the emission found there (MIS-weighted as
     /// `li` weighs it); `false` when the ray leaves the scene, with the
     /// environment's light.
-    fn intersect(&self, tracer: &PathTracer, p: &mut LanePath, depth: u32) -> bool {
+    fn intersect(
+        &self,
+        tracer: &PathTracer,
+        p: &mut LanePath,
+        depth: u32,
+        first_hits: bool,
+    ) -> bool {
         p.rays += 1;
         let Some(hit) = tracer.accel.intersect(&p.ray) else {
             p.st.radiance += tracer.escaped(&p.ray, &p.st);
@@ -216,7 +223,7 @@ impl LaneScene {
         let surface = Surface::of(tracer.scene, &hit);
         // The first hit's AOVs come from the lanes (`finish`), unless no
         // bounce is shaded at all.
-        let aovs = depth == 1 && tracer.max_depth == 1;
+        let aovs = first_hits && depth == 1 && tracer.max_depth == 1;
         if surface.emission != Vec3::ZERO || aovs {
             // Rare: the scalar set-up, which gives the same point and normals.
             let si = interaction(tracer.scene, tracer.accel, &p.ray, &hit);
@@ -334,7 +341,7 @@ impl LaneScene {
 
     /// Direct light through the shadow ray, then the continuation (throughput,
     /// MIS state, Russian roulette), as `li` does; `false` when the path ends.
-    /// `s`'s lane `l` is this path's.
+    /// `s`'s lane `l` is this path's; the first hit is recorded with `first_hits`.
     fn finish(
         &self,
         tracer: &PathTracer,
@@ -342,9 +349,10 @@ impl LaneScene {
         s: &Shaded8,
         l: usize,
         depth: u32,
+        first_hits: bool,
     ) -> bool {
         let bit = |m: u32| m & (1 << l) != 0;
-        if depth == 1 {
+        if depth == 1 && first_hits {
             // `li`'s `visible_surface`, with the lanes' shading normal.
             let hit = p.hit.expect("a shaded path has a hit");
             let surface = Surface::of(tracer.scene, &hit);
@@ -966,13 +974,15 @@ mod tests {
     }
 
     /// Samples of every 97th pixel through `li` and through `lanes`: how many
-    /// agreed (all of them, or it panics).
+    /// agreed (all of them, or it panics). Traced again without first hits,
+    /// the lanes give the same radiance and ray counts and no first hit.
     fn compare_with_li(setup: &Setup, tracer: &PathTracer, lanes: &LaneScene) -> usize {
         let (w, h) = (setup.camera.width, setup.camera.height);
         let mut compared = 0;
         for pixel in (0..w * h).step_by(97) {
             let corner = Vec2::new((pixel % w) as f32, (pixel / w) as f32);
             let mut batch = LaneBatch::default();
+            let mut without = LaneBatch::default();
             let mut expected = Vec::new();
             for s in 0..13 {
                 expected.push(camera_sample_at(
@@ -985,10 +995,23 @@ mod tests {
                     false,
                 ));
                 let (ray, sampler) = camera_ray(&setup.camera, corner, pixel, s, 5);
-                batch.push(ray, sampler);
+                batch.push(ray, sampler.clone());
+                without.push(ray, sampler);
             }
-            lanes.trace(tracer, &mut batch);
+            lanes.trace(tracer, &mut batch, true);
+            lanes.trace(tracer, &mut without, false);
             let got: Vec<SampleResult> = batch.results().collect();
+            for (g, w) in got.iter().zip(without.results()) {
+                assert_eq!(
+                    g.radiance.to_array().map(f32::to_bits),
+                    w.radiance.to_array().map(f32::to_bits)
+                );
+                assert_eq!(
+                    (g.rays, w.first_hit.is_none()),
+                    (w.rays, true),
+                    "pixel {pixel}"
+                );
+            }
             for (e, g) in expected.iter().zip(&got) {
                 assert_eq!(
                     e.radiance.to_array().map(f32::to_bits),
