@@ -403,6 +403,14 @@ fn image_environment_sampling_integrates_the_map() {
             .sample(&s, Vec3::ZERO, &Frame::from_normal(Vec3::Y), u1, u2)
             .unwrap_or_else(|| panic!("{u1} {u2}"));
         assert!((lights.pdf_env(&s, ls.wi, Vec3::Y) - ls.pdf).abs() < 1e-3 * ls.pdf.max(1e-3));
+        // The radiance comes from the sampled (u, v), not from the direction:
+        // the same lookup up to the round trip's rounding.
+        let le = env.eval(ls.wi);
+        assert!(
+            (ls.radiance - le).abs().max_element() <= 1e-4 * le.max_element().max(1e-3),
+            "{} vs {le}",
+            ls.radiance
+        );
         est += (ls.radiance.x / ls.pdf) as f64;
     }
     let got = est / n as f64;

@@ -335,16 +335,13 @@ impl PathTracer<'_> {
         let Some(env) = &self.scene.environment else {
             return Vec3::ZERO;
         };
-        let le = env.eval(ray.dir);
+        let (le, pdf_env) = self.lights.escaped(self.scene, env, ray.dir, st.prev_n);
         let w = if st.prev_line {
             0.0
         } else if st.prev_pdf.is_infinite() {
             1.0
         } else {
-            power_heuristic(
-                st.prev_pdf,
-                self.lights.pdf_env(self.scene, ray.dir, st.prev_n),
-            )
+            power_heuristic(st.prev_pdf, pdf_env)
         };
         st.beta * le * w
     }

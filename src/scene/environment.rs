@@ -60,6 +60,21 @@ impl Environment {
         Vec3::from_array(self.radiance(d.to_array()))
     }
 
+    /// A lat-long image's radiance at (u, v): [`Self::eval`]'s bits for the
+    /// (u, v) that [`direction_to_latlong`] gives its direction, for callers that
+    /// have (u, v) already; `None` for the other environments.
+    pub fn eval_latlong(&self, uv: Vec2) -> Option<Vec3> {
+        match self {
+            &Environment::Image {
+                width,
+                height,
+                ref texels,
+                scale,
+            } => Some(bilinear(texels, width, height, uv) * scale),
+            _ => None,
+        }
+    }
+
     /// Radiance arriving from the unit direction `d`, for any scalar type: the one
     /// implementation of every environment, used by [`eval`](Self::eval) (f32) and
     /// by the gradient stage over duals (whose lanes then carry ∂L/∂d · ∂d).
