@@ -34,14 +34,16 @@ pub enum Environment {
     },
 }
 
-/// Direction → lat-long (u, v) ∈ [0,1)².
+/// Direction → lat-long (u, v) ∈ [0,1)². `libm`'s `atan2f` (musl's): on an
+/// image-sky render, the platform's took ~4 % of the time after the light
+/// samples stopped calling it, `libm`'s 2–3 % less of the whole.
 pub fn direction_to_latlong(d: Vec3) -> Vec2 {
-    let mut u = d.x.atan2(-d.z) / TAU;
+    let mut u = libm::atan2f(d.x, -d.z) / TAU;
     if u < 0.0 {
         u += 1.0;
     }
     // atan2 rather than acos: accurate near the poles, where y rounds to ±1.
-    let v = (d.x * d.x + d.z * d.z).sqrt().atan2(d.y) / PI;
+    let v = libm::atan2f((d.x * d.x + d.z * d.z).sqrt(), d.y) / PI;
     Vec2::new(u.min(1.0 - f32::EPSILON), v.min(1.0 - f32::EPSILON))
 }
 
