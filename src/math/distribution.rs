@@ -97,7 +97,8 @@ impl Distribution1D {
         // NaN and negative u give bucket 0 (`as` saturates), then fail the check.
         let k = ((u * n as f32) as usize).min(n - 1);
         let (lo, hi) = (self.guide[k] as usize, self.guide[k + 1] as usize);
-        let i = lo + self.cdf[lo + 1..=hi.max(lo)].partition_point(|&c| c <= u);
+        // `guide` is non-decreasing (k/n and the cell of u both are): hi ≥ lo.
+        let i = lo + self.cdf[lo + 1..=hi].partition_point(|&c| c <= u);
         (self.cdf[i] <= u && (i + 1 == n || self.cdf[i + 1] > u)).then_some(i)
     }
 

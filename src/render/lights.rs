@@ -396,20 +396,33 @@ impl LightSet {
         choose.discrete_pmf(idx as usize) * self.env_pdf(env, wi, n)
     }
 
-    /// The radiance `env` sends along `-wi` and [`Self::pdf_env`] of `wi`, for a
-    /// ray that leaves the scene: a lat-long image's (u, v) is computed once for
-    /// both (two `atan2`s), with the bits of the two calls.
-    pub fn escaped(&self, scene: &Scene, env: &Environment, wi: Vec3, n: Vec3) -> (Vec3, f32) {
+    /// The radiance `env` sends along `-wi` and, when `mis` asks for it,
+    /// [`Self::pdf_env`] of `wi` (else 0), for a ray that leaves the scene: a
+    /// lat-long image's (u, v) is computed once for both (two `atan2`s), with
+    /// the bits of the two calls.
+    pub fn escaped(
+        &self,
+        scene: &Scene,
+        env: &Environment,
+        wi: Vec3,
+        n: Vec3,
+        mis: bool,
+    ) -> (Vec3, f32) {
         if let (Some(EnvSampler::Image(dist)), Some(idx), Some(choose)) =
             (self.env_sampler.as_ref(), self.env_light, &self.choose)
         {
             let uv = direction_to_latlong(wi);
             if let Some(le) = env.eval_latlong(uv) {
-                let pdf = choose.discrete_pmf(idx as usize) * image_pdf(dist.pdf(uv), wi);
+                let pdf = if mis {
+                    choose.discrete_pmf(idx as usize) * image_pdf(dist.pdf(uv), wi)
+                } else {
+                    0.0
+                };
                 return (le, pdf);
             }
         }
-        (env.eval(wi), self.pdf_env(scene, wi, n))
+        let pdf = if mis { self.pdf_env(scene, wi, n) } else { 0.0 };
+        (env.eval(wi), pdf)
     }
 
     fn sample_env(&self, env: &Environment, frame: &Frame, u: Vec2) -> Option<LightSample> {

@@ -335,7 +335,12 @@ impl PathTracer<'_> {
         let Some(env) = &self.scene.environment else {
             return Vec3::ZERO;
         };
-        let (le, pdf_env) = self.lights.escaped(self.scene, env, ray.dir, st.prev_n);
+        // The light-sampling density only where MIS weighs this ray: not after
+        // lines (weight 0), not after a camera ray or a delta lobe (weight 1).
+        let mis = !st.prev_line && !st.prev_pdf.is_infinite();
+        let (le, pdf_env) = self
+            .lights
+            .escaped(self.scene, env, ray.dir, st.prev_n, mis);
         let w = if st.prev_line {
             0.0
         } else if st.prev_pdf.is_infinite() {
