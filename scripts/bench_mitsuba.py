@@ -31,7 +31,8 @@ Efficiency ratio = (t·RMSE²)_gradtrace / (t·RMSE²)_Mitsuba: the ratio of the
 both would need for equal error (Monte Carlo error² ∝ 1/t); below 1 gradtrace is
 more efficient. RMSE: the median of the rounds' (each round has its own seed); a
 further column takes the rounds' mean MSE instead (the expected MSE that
-efficiency is defined with). Writes out/bench/bench_mitsuba.json and, when gradtrace and the
+efficiency is defined with), with its 95 % bootstrap interval over the rounds.
+Writes out/bench/bench_mitsuba.json and, when gradtrace and the
 LLVM rows both ran, the table between the markers in benches/README.md.
 
 The LLVM variant needs libLLVM (Debian: `apt-get install -y libllvm19`);
@@ -315,9 +316,36 @@ def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None], floa
     cost = b["render_s"] * b["rmse"] ** 2
     ratio = a["render_s"] * a["rmse"] ** 2 / cost if cost > 0 else None
     rounds = [t0 * e0**2 / (t * e**2) if t * e > 0 else None for t0, e0, t, e in zip(a["times_s"], a["rmses"], b["times_s"], b["rmses"])]
-    pooled_cost = b["render_s"] * mean_mse(b)
-    pooled = a["render_s"] * mean_mse(a) / pooled_cost if pooled_cost > 0 else None
-    return ratio, rounds, pooled
+    return ratio, rounds, pooled_ratio(a, b, range(len(a["rmses"])))
+
+
+def pooled_ratio(a: dict, b: dict, rounds) -> float | None:
+    """(t·MSE)_a / (t·MSE)_b over `rounds` (indices, repeats allowed): median
+    times, mean MSE."""
+    t = lambda r: statistics.median(r["times_s"][i] for i in rounds)  # noqa: E731
+    m = lambda r: statistics.fmean(r["rmses"][i] ** 2 for i in rounds)  # noqa: E731
+    cost = t(b) * m(b)
+    return t(a) * m(a) / cost if cost > 0 else None
+
+
+#: Bootstrap resamples for the mean-MSE ratio's interval; a fixed seed, so a
+#: table's interval is reproducible from its rounds.
+BOOTSTRAP = 4000
+
+
+def pooled_interval(a: dict, b: dict) -> tuple[float, float] | None:
+    """The 95 % bootstrap interval of the mean-MSE efficiency ratio: rounds
+    resampled with replacement, each round's two renders kept together (they
+    ran back to back, under the same load). One 64-spp cornell render's MSE
+    moves by ±8 % with its seed, so ten rounds pin a ratio only to about
+    ±8 %: a figure of 1.05× may be the same efficiency as 1.00×."""
+    n = min(len(a["rmses"]), len(b["rmses"]))
+    if n < 2:
+        return None
+    rng = np.random.default_rng(2026)
+    vals = [pooled_ratio(a, b, rng.integers(0, n, n)) for _ in range(BOOTSTRAP)]
+    vals = np.array([v for v in vals if v is not None])
+    return (float(np.quantile(vals, 0.025)), float(np.quantile(vals, 0.975))) if len(vals) else None
 
 
 def mean_mse(r: dict) -> float:
@@ -338,6 +366,7 @@ def add_ratios(rows: list[dict]) -> None:
         (r["efficiency_ratio"], r["efficiency_ratio_rounds"], r["efficiency_ratio_mean_mse"]) = (
             efficiency(ours, r) if ours else (None, [], None)
         )
+        r["efficiency_ratio_mean_mse_95"] = pooled_interval(ours, r) if ours and r is not ours else None
 
 
 def extra_notes(label: str, rows: list[dict]) -> list[str]:
@@ -353,11 +382,16 @@ def extra_notes(label: str, rows: list[dict]) -> list[str]:
             vals = ", ".join("—" if v is None else f"{v:.2f}" for v in rounds)
             parts.append(
                 f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}], "
-                f"mean MSE {'—' if pooled is None else f'{pooled:.2f}'}×"
+                f"mean MSE {'—' if pooled is None else f'{pooled:.2f}'}×{interval(pooled_interval(extra, r))}"
             )
         build = EXTRA_BUILDS[extra["variant"]][1]
         notes.append(f"{label}, the {build} build's efficiency ratio ({build} / row): " + "; ".join(parts) + ".")
     return notes
+
+
+def interval(ci: tuple[float, float] | None) -> str:
+    """A 95 % interval as the tables print it after a ratio."""
+    return "" if ci is None else f" ({ci[0]:.2f}–{ci[1]:.2f})"
 
 
 def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
@@ -374,7 +408,8 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
         "below 1.00× gradtrace is the more efficient. Its RMSE is the median of the rounds' (each round "
         "renders with its own seed, 100 + round); the *mean MSE* column takes the mean of the rounds' "
         "squared errors instead, the expected MSE that efficiency is defined with, which one seed's luck "
-        f"moves less. Measured {meta['date']}, load average "
+        "moves less; in brackets its 95 % bootstrap interval over the rounds (each round's renders kept "
+        f"together). Measured {meta['date']}, load average "
         f"{meta['load_avg']:.1f} (shared, loaded machine: compare within a table).",
     ]
     for b, rows in scene_rows:
@@ -382,13 +417,13 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
             "",
             f"**{b.label}**, {b.w}x{b.h}, {b.spp} spp, max depth {b.depth}, box filter.",
             "",
-            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | per round | mean MSE | scene load (s) | JIT warm-up (s) |",
+            "| renderer, sampler | time (s) | speed vs scalar_rgb | RMSE | efficiency ratio (ours / row) | per round | mean MSE (95 %) | scene load (s) | JIT warm-up (s) |",
             "|---|---:|---:|---:|---:|---|---:|---:|---:|",
         ]
         for r in rows:
             lines.append(
                 f"| {r['name']} | {r['render_s']:.2f} | {f(r['speed_vs_scalar'])}× | {r['rmse']:.4f} | "
-                f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['efficiency_ratio_mean_mse'])}× | "
+                f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['efficiency_ratio_mean_mse'])}×{interval(r.get('efficiency_ratio_mean_mse_95'))} | "
                 f"{f(r['load_s'])} | {f(r['warmup_s'])} |"
             )
         for note in extra_notes(b.label, rows):
@@ -418,7 +453,8 @@ def main() -> int:
     # Ten rounds: one 64-spp cornell render's RMSE moves by ±4 % from seed to
     # seed, ±8 % in a round's efficiency ratio before any timing noise; with
     # five, cornell read 1.08× from the median RMSE and 1.02× from the mean MSE
-    # in one run (2026-12-05 16:26), and 1.08× from both with ten.
+    # in one run (2026-12-05 16:26), and 1.08× from both with ten. Ten rounds
+    # still leave cornell's ratio a 95 % interval of about ±9 % (printed).
     ap.add_argument("--runs", type=int, default=10, help="rounds (each renders every row once with seed 100 + round)")
     ap.add_argument("--ref-spp", type=int, default=1024, help="reference spp, a multiple of 16 (its noise is subtracted from the RMSE, so 1024 suffices)")
     ap.add_argument("--scenes", default="cornell,bunny", help="comma-separated: cornell, bunny")
