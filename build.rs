@@ -8,6 +8,9 @@
 //!   re-rendered exactly when the renderer's pixels change, not at every commit.
 //! - `GRADTRACE_SOURCE_HASH`: a hash of every file under `src/`. The preview
 //!   layers' precomputations are not pinned, so their caches key on the source.
+//!
+//! It also warns when an x86-64 build misses the x86-64-v2 target of
+//! `.cargo/config.toml`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -101,4 +104,17 @@ fn main() {
         }
     }
     println!("cargo:rerun-if-changed=build.rs");
+
+    // `.cargo/config.toml` (x86-64-v2) is read from the directory cargo runs
+    // in: a build started elsewhere (`--manifest-path`) targets baseline x86-64
+    // without a word, and renders 5–10 % slower (benches/README.md, levers).
+    let features = std::env::var("CARGO_CFG_TARGET_FEATURE").unwrap_or_default();
+    if std::env::var("CARGO_CFG_TARGET_ARCH").as_deref() == Ok("x86_64")
+        && !features.split(',').any(|f| f == "sse4.1")
+    {
+        println!(
+            "cargo:warning=building for baseline x86-64: .cargo/config.toml's x86-64-v2 applies \
+             when cargo runs inside the repository; this build renders 5-10 % slower"
+        );
+    }
 }
