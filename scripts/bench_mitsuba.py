@@ -312,7 +312,7 @@ def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None], floa
     """(t·RMSE²)_a / (t·RMSE²)_b from the medians; the same within each round
     (the rows of a round ran back to back: its spread shows how far the
     machine's noise moves the figure); and (t·MSE)_a / (t·MSE)_b with the
-    median times and the rounds' mean MSE (`mean_mse`)."""
+    median times and the rounds' mean MSE (`pooled_ratio`)."""
     cost = b["render_s"] * b["rmse"] ** 2
     ratio = a["render_s"] * a["rmse"] ** 2 / cost if cost > 0 else None
     rounds = [t0 * e0**2 / (t * e**2) if t * e > 0 else None for t0, e0, t, e in zip(a["times_s"], a["rmses"], b["times_s"], b["rmses"])]
@@ -321,7 +321,10 @@ def efficiency(a: dict, b: dict) -> tuple[float | None, list[float | None], floa
 
 def pooled_ratio(a: dict, b: dict, rounds) -> float | None:
     """(t·MSE)_a / (t·MSE)_b over `rounds` (indices, repeats allowed): median
-    times, mean MSE."""
+    times, and the mean of the rounds' squared errors: each round renders with
+    its own seed, so that mean estimates the expected MSE that efficiency
+    (1 / (t·MSE)) is defined with; the median of the RMSEs moves with one
+    seed's luck (±4 % in RMSE per seed on cornell at 64 spp, ±8 % in a ratio)."""
     t = lambda r: statistics.median(r["times_s"][i] for i in rounds)  # noqa: E731
     m = lambda r: statistics.fmean(r["rmses"][i] ** 2 for i in rounds)  # noqa: E731
     cost = t(b) * m(b)
@@ -338,7 +341,7 @@ def pooled_interval(a: dict, b: dict) -> tuple[float, float] | None:
     resampled with replacement, each round's two renders kept together (they
     ran back to back, under the same load). One 64-spp cornell render's MSE
     moves by ±8 % with its seed, so ten rounds pin a ratio only to about
-    ±8 %: a figure of 1.05× may be the same efficiency as 1.00×."""
+    ±9 %: a figure of 1.05× may be the same efficiency as 1.00×."""
     n = min(len(a["rmses"]), len(b["rmses"]))
     if n < 2:
         return None
@@ -346,14 +349,6 @@ def pooled_interval(a: dict, b: dict) -> tuple[float, float] | None:
     vals = [pooled_ratio(a, b, rng.integers(0, n, n)) for _ in range(BOOTSTRAP)]
     vals = np.array([v for v in vals if v is not None])
     return (float(np.quantile(vals, 0.025)), float(np.quantile(vals, 0.975))) if len(vals) else None
-
-
-def mean_mse(r: dict) -> float:
-    """The mean of the rounds' squared errors: each round renders with its own
-    seed, so this estimates the expected MSE that efficiency (1 / (t·MSE)) is
-    defined with; the median of five RMSEs moves with one seed's luck (±4 % in
-    RMSE per seed on cornell at 64 spp, ±8 % in a ratio)."""
-    return statistics.fmean(e * e for e in r["rmses"])
 
 
 def add_ratios(rows: list[dict]) -> None:

@@ -88,8 +88,8 @@ impl Distribution1D {
     /// cdf ≤ u) and the whole CDF searched when the check fails, so the result
     /// is always the full search's.
     /// One cell (a scene with one light) needs no search: its answer is 0
-    /// whatever u is, and the call, inlined, costs nothing (out of line, its
-    /// dependent loads were 4.5 % of a cornell render).
+    /// whatever u is. Inlined, that costs nothing; out of line, the call's
+    /// dependent loads stalled the lanes' light pick (cornell −0.7 %).
     #[inline]
     pub fn sample_discrete(&self, u: f32) -> usize {
         if self.len() == 1 {
