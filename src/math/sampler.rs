@@ -106,16 +106,21 @@ impl PixelSampler {
     /// with their bounds and cache checks (cornell: −4.6 % of the render's instructions).
     #[inline]
     pub fn block8(&self, dim: u32) -> [f32; 8] {
+        let [a, b] = [dim, dim + 4].map(|d| self.block4(d));
+        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+    }
+
+    /// Dimensions `dim .. dim + 4` (`dim` a multiple of four): one Sobol set
+    /// or four hashes, the first half of [`Self::block8`].
+    #[inline]
+    pub fn block4(&self, dim: u32) -> [f32; 4] {
         debug_assert!(dim.is_multiple_of(4));
         let set = dim / 4;
-        let [a, b] = [set, set + 1].map(|s| {
-            if self.sobol_serves(s) {
-                self.sobol_4d(s)
-            } else {
-                self.hashed_4d(4 * s)
-            }
-        });
-        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+        if self.sobol_serves(set) {
+            self.sobol_4d(set)
+        } else {
+            self.hashed_4d(dim)
+        }
     }
 
     /// The hashed stream of dimensions `dim .. dim + 4` in lanes: [`hash2`] of

@@ -42,8 +42,23 @@ pub(super) struct VertexSamples {
 }
 
 impl VertexSamples {
-    pub(super) fn draw(sampler: &mut PixelSampler, depth: u32) -> Self {
-        let u = sampler.block8(FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE);
+    /// `roulette`: whether Russian roulette reads `rr` at this vertex; where
+    /// it does not, `rr` is 0 and unread. The first vertex then needs only the
+    /// block's first set (its direction comes from the camera set): one Sobol
+    /// set instead of two, the same values where they are read.
+    pub(super) fn draw(sampler: &mut PixelSampler, depth: u32, roulette: bool) -> Self {
+        let dim = FIRST_BOUNCE_DIM + (depth - 1) * DIMS_PER_BOUNCE;
+        if depth == 1 && !roulette {
+            let u = sampler.block4(dim);
+            return Self {
+                pick: u[0],
+                light: Vec2::new(u[1], u[2]),
+                lobe: u[3],
+                dir: sampler.next_2d_at(FIRST_DIRECTION_DIM),
+                rr: 0.0,
+            };
+        }
+        let u = sampler.block8(dim);
         // The first vertex's direction from the camera set (its own slot unread).
         let dir = if depth == 1 {
             sampler.next_2d_at(FIRST_DIRECTION_DIM)
@@ -254,7 +269,7 @@ impl PathTracer<'_> {
             if wo.z <= 0.0 {
                 break;
             }
-            let u = VertexSamples::draw(sampler, depth);
+            let u = VertexSamples::draw(sampler, depth, depth >= self.rr_depth);
             // The BSDF sample that continues the path, taken before the light's
             // shadow ray: the two samples are independent chains of square roots
             // and divisions, which the CPU overlaps when they sit side by side
