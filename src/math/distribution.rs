@@ -87,6 +87,7 @@ impl Distribution1D {
     /// put u just outside them: the answer is checked (the last cell with
     /// cdf ≤ u) and the whole CDF searched when the check fails, so the result
     /// is always the full search's.
+    ///
     /// One cell (a scene with one light) needs no search: its answer is 0
     /// whatever u is. Inlined, that costs nothing; out of line, the call's
     /// dependent loads stalled the lanes' light pick (cornell −0.7 %).

@@ -38,6 +38,7 @@ pub(super) struct VertexSamples {
     pub light: Vec2,
     pub lobe: f32,
     pub dir: Vec2,
+    /// Russian roulette's number; 0 and unread where roulette does not apply.
     pub rr: f32,
 }
 
