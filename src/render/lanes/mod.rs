@@ -184,10 +184,15 @@ impl LaneScene {
             if depth == tracer.max_depth || live.is_empty() {
                 break;
             }
-            shaded.clear();
-            for chunk in live.chunks(LANES) {
+            // Slots reused from bounce to bounce (grown, never cleared): the
+            // kernel writes each in place.
+            let chunks = live.len().div_ceil(LANES);
+            if shaded.len() < chunks {
+                shaded.resize(chunks, Shaded8::default());
+            }
+            for (chunk, out) in live.chunks(LANES).zip(shaded.iter_mut()) {
                 self.gather(tracer, paths, chunk, depth, gathered);
-                shaded.push(self.kernel(gathered));
+                self.kernel(gathered, out);
             }
             let mut kept = 0;
             for k in 0..live.len() {
@@ -329,14 +334,14 @@ impl LaneScene {
     }
 
     /// The kernel over the gathered lanes, in the widest registers the CPU has.
-    fn kernel(&self, g: &Gathered) -> Shaded8 {
+    fn kernel(&self, g: &Gathered, out: &mut Shaded8) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is true only where AVX2 was detected on this CPU
             // (`LaneScene::build`).
-            return unsafe { kernel::shade8_avx2(g) };
+            return unsafe { kernel::shade8_avx2(g, out) };
         }
-        kernel::shade8_wide(g)
+        kernel::shade8_wide(g, out)
     }
 
     /// Direct light through the shadow ray, then the continuation (throughput,
