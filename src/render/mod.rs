@@ -578,6 +578,8 @@ pub(crate) struct SampleContext<'a> {
 pub(crate) struct Film {
     crop: Crop,
     full_width: usize,
+    /// Whether the tiles keep gradient sums.
+    gradients: bool,
     tiles: Vec<FilmTile>,
 }
 
@@ -587,10 +589,34 @@ struct FilmTile {
     y0: usize,
     x1: usize,
     y1: usize,
+    /// Empty until the film's first pass, which allocates it in the worker
+    /// that renders the tile ([`FilmTile::working_copy`]).
     pixels: Vec<PixelAccumulator>,
     /// Each pixel's gradient sums, with `--gradients` only (empty otherwise: at
     /// 160 bytes a pixel they would be most of the film).
     gradients: Vec<GradientSum>,
+}
+
+impl FilmTile {
+    fn pixel_count(&self) -> usize {
+        (self.x1 - self.x0) * (self.y1 - self.y0)
+    }
+
+    /// The sums a pass adds to, leaving `self` as it was until the pass is
+    /// done (all or nothing): a copy, or on the film's first pass fresh zeros.
+    /// Why not zeros up front in `Film::new`: 128 bytes a pixel (8 MB at 256²)
+    /// that one thread wrote before the render and the pass then copied.
+    fn working_copy(&self, gradients: bool) -> FilmTile {
+        if !self.pixels.is_empty() {
+            return self.clone();
+        }
+        let n = self.pixel_count();
+        FilmTile {
+            pixels: vec![PixelAccumulator::default(); n],
+            gradients: vec![GradientSum::default(); if gradients { n } else { 0 }],
+            ..*self
+        }
+    }
 }
 
 impl Film {
@@ -604,20 +630,20 @@ impl Film {
             .map(|t| {
                 let (x0, y0) = (cx0 + t % tiles_x * TILE, cy0 + t / tiles_x * TILE);
                 let (x1, y1) = ((x0 + TILE).min(cx1), (y0 + TILE).min(cy1));
-                let n = (x1 - x0) * (y1 - y0);
                 FilmTile {
                     x0,
                     y0,
                     x1,
                     y1,
-                    pixels: vec![PixelAccumulator::default(); n],
-                    gradients: vec![GradientSum::default(); if gradients { n } else { 0 }],
+                    pixels: Vec::new(),
+                    gradients: Vec::new(),
                 }
             })
             .collect();
         Self {
             crop,
             full_width,
+            gradients,
             tiles,
         }
     }
@@ -641,7 +667,7 @@ impl Film {
             .tiles
             .par_iter()
             .map(|tile| {
-                let mut t = tile.clone();
+                let mut t = tile.working_copy(self.gradients);
                 let tw = t.x1 - t.x0;
                 let mut batch = lanes::LaneBatch::default();
                 let mut keys = Vec::new();
@@ -713,12 +739,13 @@ impl Film {
     /// Calls `f(pixel, accumulator, gradient sums)` for every pixel (linear index
     /// in the full image); the gradient sums are there when the film keeps them.
     pub fn for_each(&self, mut f: impl FnMut(usize, &PixelAccumulator, Option<&GradientSum>)) {
+        let empty = PixelAccumulator::default();
         for t in &self.tiles {
             let tw = t.x1 - t.x0;
-            for (i, acc) in t.pixels.iter().enumerate() {
+            for i in 0..t.pixel_count() {
                 f(
                     (t.y0 + i / tw) * self.full_width + t.x0 + i % tw,
-                    acc,
+                    t.pixels.get(i).unwrap_or(&empty),
                     t.gradients.get(i),
                 );
             }
