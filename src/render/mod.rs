@@ -738,6 +738,7 @@ impl Film {
 
     /// Calls `f(pixel, accumulator, gradient sums)` for every pixel (linear index
     /// in the full image); the gradient sums are there when the film keeps them.
+    /// Before the first pass every pixel reads as empty, without sums.
     pub fn for_each(&self, mut f: impl FnMut(usize, &PixelAccumulator, Option<&GradientSum>)) {
         let empty = PixelAccumulator::default();
         for t in &self.tiles {

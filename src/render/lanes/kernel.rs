@@ -191,7 +191,7 @@ fn select_v<L: Lanes>(m: L, t: V8<L>, f: V8<L>) -> V8<L> {
 /// What [`shade8`] writes, per lane. About 1.1 KB: the kernel writes it in
 /// place (a slot of the batch's vector), since returning it by value cost a
 /// copy per call (`memmove`, ~1.2 % of a cornell profile).
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Default)]
 pub(super) struct Shaded8 {
     /// Bit l: lane l's path goes on from this hit (ω_o above the surface).
     pub alive: u32,
