@@ -11,18 +11,25 @@ use crate::scene::Scene;
 use crate::{Error, Result};
 
 /// Bytes per pixel of a full render: the film's running sums, its planes, the
-/// output image and the EXR encoder's copy of that, and the PNG.
-pub fn full_render_bytes(pixels: u64, opts: &RenderOptions) -> u64 {
+/// output image and the EXR encoder's copy of that, and the PNG. `passes`:
+/// the render adds its samples in several passes (`--time-limit`, the
+/// noise-adaptive rounds), each after the first working on a copy of the
+/// film's sums (all or nothing), so that they are held twice.
+pub fn full_render_bytes(pixels: u64, opts: &RenderOptions, passes: bool) -> u64 {
     // Planes hold `Vec3`s (16 bytes, SIMD-aligned); the output image and the EXR
     // encoder three f32 channels each.
     let vec3 = std::mem::size_of::<Vec3>() as u64;
-    let mut per_pixel = std::mem::size_of::<PixelAccumulator>() as u64 + vec3 + 2 * 12 + 3;
+    let mut sums = std::mem::size_of::<PixelAccumulator>() as u64;
+    if opts.gradients {
+        sums += std::mem::size_of::<GradientSum>() as u64;
+    }
+    let mut per_pixel = sums * (1 + u64::from(passes)) + vec3 + 2 * 12 + 3;
     if opts.aovs {
         // variance, normal, albedo, depth, id: planes, then image and encoder.
         per_pixel += 3 * vec3 + 8 + 2 * 44;
     }
     if opts.gradients {
-        per_pixel += std::mem::size_of::<GradientSum>() as u64 + 52 * 3;
+        per_pixel += 52 * 3;
     }
     pixels * per_pixel
 }
@@ -41,6 +48,7 @@ pub fn adaptive_render_bytes(pixels: u64, budget: f32, opts: &RenderOptions) -> 
                 gradients: false,
                 ..opts.clone()
             },
+            false,
         ) * u64::from(opts.aovs)
 }
 
@@ -103,4 +111,28 @@ pub fn check_render(
 /// the memory available.
 pub fn check_scene(scene: &Scene, what: &str) -> Result<()> {
     check_render(0, scene, None, what, "")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A render in several passes holds the film's sums twice (the copy a
+    /// later pass adds to), gradient sums included; one pass holds them once.
+    #[test]
+    fn several_passes_count_the_film_sums_twice() {
+        let accumulator = std::mem::size_of::<PixelAccumulator>() as u64;
+        let gradient = std::mem::size_of::<GradientSum>() as u64;
+        for gradients in [false, true] {
+            let opts = RenderOptions {
+                gradients,
+                ..RenderOptions::default()
+            };
+            let sums = accumulator + if gradients { gradient } else { 0 };
+            let one = full_render_bytes(1000, &opts, false);
+            let several = full_render_bytes(1000, &opts, true);
+            assert_eq!(several - one, 1000 * sums, "gradients: {gradients}");
+            assert!(one > 1000 * sums, "one pass counts the sums and more");
+        }
+    }
 }

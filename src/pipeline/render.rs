@@ -170,7 +170,11 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
     let (w, h) = job.options.resolution_of(&scene);
     let pixels = u64::from(w) * u64::from(h);
     let bytes = match &job.adaptive {
-        None => memory::full_render_bytes(pixels, &job.options),
+        None => memory::full_render_bytes(
+            pixels,
+            &job.options,
+            job.passes.time_limit.is_some() || job.noise_adaptive.is_some(),
+        ),
         Some((s, _)) => memory::adaptive_render_bytes(pixels, s.budget, &job.options),
     };
     let what = format!("a {w}x{h} render");
