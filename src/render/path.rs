@@ -270,7 +270,7 @@ impl PathTracer<'_> {
             if wo.z <= 0.0 {
                 break;
             }
-            let u = VertexSamples::draw(sampler, depth, depth >= self.rr_depth);
+            let u = VertexSamples::draw(sampler, depth, self.roulette_at(depth));
             // The BSDF sample that continues the path, taken before the light's
             // shadow ray: the two samples are independent chains of square roots
             // and divisions, which the CPU overlaps when they sit side by side
@@ -496,11 +496,17 @@ impl PathTracer<'_> {
         self.survives(&mut st.beta, u_rr, depth).then_some(ray)
     }
 
+    /// Whether Russian roulette applies at path vertex `depth` (and reads the
+    /// vertex's `rr` number).
+    pub(super) fn roulette_at(&self, depth: u32) -> bool {
+        depth >= self.rr_depth
+    }
+
     /// Russian roulette on the throughput `beta` at `depth`, once paths are long
     /// enough (the survivor's `beta` divided by its probability); `false`
     /// when the path ends here, by the roulette or with zero throughput.
     pub(super) fn survives(&self, beta: &mut Vec3, u_rr: f32, depth: u32) -> bool {
-        if depth >= self.rr_depth {
+        if self.roulette_at(depth) {
             let q = beta.max_element().min(0.95);
             if q <= 0.0 || u_rr >= q {
                 return false;

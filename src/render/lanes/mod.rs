@@ -275,7 +275,7 @@ impl LaneScene {
         g.spawn_floor = tracer.accel.spawn_floor();
         for (l, &i) in chunk.iter().enumerate() {
             let p = &mut paths[i];
-            let u = VertexSamples::draw(&mut p.sampler, depth, depth >= tracer.rr_depth);
+            let u = VertexSamples::draw(&mut p.sampler, depth, tracer.roulette_at(depth));
             let hit = p.hit.expect("a live path has a hit");
             p.u_rr = u.rr;
             // The hit point, computed here only where a light's sample needs it
