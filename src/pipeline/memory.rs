@@ -11,11 +11,11 @@ use crate::scene::Scene;
 use crate::{Error, Result};
 
 /// Bytes per pixel of a full render: the film's running sums, its planes, the
-/// output image and the EXR encoder's copy of that, and the PNG. `passes`:
-/// the render adds its samples in several passes (`--time-limit`, the
-/// noise-adaptive rounds), each after the first working on a copy of the
-/// film's sums (all or nothing), so that they are held twice.
-pub fn full_render_bytes(pixels: u64, opts: &RenderOptions, passes: bool) -> u64 {
+/// output image and the EXR encoder's copy of that, and the PNG.
+/// `several_passes`: the render adds its samples in several passes
+/// (`--time-limit`, the noise-adaptive rounds), each after the first working
+/// on a copy of the film's sums (all or nothing), so that they are held twice.
+pub fn full_render_bytes(pixels: u64, opts: &RenderOptions, several_passes: bool) -> u64 {
     // Planes hold `Vec3`s (16 bytes, SIMD-aligned); the output image and the EXR
     // encoder three f32 channels each.
     let vec3 = std::mem::size_of::<Vec3>() as u64;
@@ -23,7 +23,7 @@ pub fn full_render_bytes(pixels: u64, opts: &RenderOptions, passes: bool) -> u64
     if opts.gradients {
         sums += std::mem::size_of::<GradientSum>() as u64;
     }
-    let mut per_pixel = sums * (1 + u64::from(passes)) + vec3 + 2 * 12 + 3;
+    let mut per_pixel = sums * (1 + u64::from(several_passes)) + vec3 + 2 * 12 + 3;
     if opts.aovs {
         // variance, normal, albedo, depth, id: planes, then image and encoder.
         per_pixel += 3 * vec3 + 8 + 2 * 44;
