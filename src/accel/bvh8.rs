@@ -196,3 +196,68 @@ impl Bvh8 {
         }
     }
 }
+
+/// One ray's view for [`Bvh8::child_mask`]: what [`Bvh8::traverse`] splats
+/// from its [`BoxRay`], and its fixed upper bound (made by the ray streams'
+/// set-up, `accel::stream`, with [`BoxRay::new`]'s operations).
+#[derive(Clone, Copy, Default)]
+#[repr(C)]
+pub(super) struct NodeRay {
+    pub(super) org: [f32; 3],
+    pub(super) inv: [f32; 3],
+    pub(super) inv_far: [f32; 3],
+    /// Index of the near plane's row per axis (0 or 1, offset by 2·axis).
+    pub(super) near: [u32; 3],
+    pub(super) t_lo: f32,
+    pub(super) hi: f32,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Bvh8 {
+    /// The children of inner node `node` that `ray` enters: [`Bvh8::traverse`]'s
+    /// slab test, with the same operations and the interval's first upper end
+    /// (a closest hit found since would only have narrowed it). For the ray
+    /// streams (`accel::stream`), which test a node once per ray of a batch.
+    ///
+    /// # Safety
+    /// AVX2, as [`Bvh8::traverse`]; the caller must be an AVX2 function.
+    #[inline(always)]
+    pub(super) unsafe fn child_mask(&self, node: u32, ray: &NodeRay) -> u32 {
+        use std::arch::x86_64::*;
+        let b = &self.nodes[node as usize].bounds;
+        let splat = |v: [f32; 3]| {
+            [
+                _mm256_set1_ps(v[0]),
+                _mm256_set1_ps(v[1]),
+                _mm256_set1_ps(v[2]),
+            ]
+        };
+        let (org, inv, inv_far) = (splat(ray.org), splat(ray.inv), splat(ray.inv_far));
+        let slab = |i: usize, a: usize, inv: &[__m256; 3]| {
+            _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b[i].as_ptr()), org[a]), inv[a])
+        };
+        let [nx, ny, nz] = [
+            ray.near[0] as usize,
+            ray.near[1] as usize,
+            ray.near[2] as usize,
+        ];
+        let (tnx, tny, tnz) = (slab(nx, 0, &inv), slab(ny, 1, &inv), slab(nz, 2, &inv));
+        let (tfx, tfy, tfz) = (
+            slab(nx ^ 1, 0, &inv_far),
+            slab(ny ^ 1, 1, &inv_far),
+            slab(nz ^ 1, 2, &inv_far),
+        );
+        let t_lo = _mm256_set1_ps(ray.t_lo);
+        let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
+        let t_far = _mm256_min_ps(
+            _mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz),
+            _mm256_set1_ps(ray.hi),
+        );
+        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far)) as u32
+    }
+
+    /// The eight child references of inner node `node`.
+    pub(super) fn children_of(&self, node: u32) -> &[u32; 8] {
+        &self.nodes[node as usize].children
+    }
+}

@@ -11,7 +11,9 @@
 //! collapse obvhs does only for its CWBVH) and traverse that: 8-wide with AVX2
 //! where the CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
 //! leaves hold triangle4 blocks ([`LeafBlock`]), and the 8-wide tree tests a
-//! leaf of two blocks as one eight-lane AVX block (`primitive::avx`). obvhs 0.4
+//! leaf of two blocks as one eight-lane AVX block (`primitive::avx`). On small
+//! trees the lane shading's rays go through as ray streams instead
+//! (`stream.rs`: a batch node by node, each triangle against eight rays). obvhs 0.4
 //! pitfalls and where they are handled:
 //! 1. `Triangle::compute_barycentric` is scaled wrongly, 2. its triangle test is
 //!    not watertight → neither is used; see `primitive::WatertightRay`.
@@ -35,6 +37,7 @@ mod bvh4;
 mod bvh8;
 mod offset;
 mod primitive;
+mod stream;
 
 #[doc(hidden)]
 pub use build::BuildPreset;
@@ -47,6 +50,7 @@ pub(crate) use offset::{DEFAULT_REL_ERROR, SHADOW_EPSILON};
 /// pbrt's γ(n), the bound on n rounded f32 operations (the error bounds'
 /// constant, for the lane shading's copy of `triangle_point_with_normal`).
 pub(crate) use primitive::gamma as gamma_bound;
+pub(crate) use stream::RayStream;
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};

@@ -181,18 +181,27 @@ impl<F: MaskLanes> LaneTest<F> {
     /// scalar test must decide (its double-precision path).
     #[inline(always)]
     fn decide(&self, t_min: f32, t_max: f32) -> (u32, u32) {
+        let forward = if t_min >= 0.0 { u32::MAX } else { 0 };
+        self.decide_in(F::from(t_min), F::from(t_max), forward)
+    }
+
+    /// [`LaneTest::decide`] with each lane's own interval (one ray per lane,
+    /// [`avx::intersect_rays8`]); `forward`: the lanes whose ray has
+    /// `t_min ≥ 0`, which the δt test applies to.
+    #[inline(always)]
+    fn decide_in(&self, t_min: F, t_max: F, forward: u32) -> (u32, u32) {
         let [u, v, w] = self.e;
         let zero = F::from(0.0);
         let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
         let negative = u.lt(zero) | v.lt(zero) | w.lt(zero);
         let positive = u.gt(zero) | v.gt(zero) | w.gt(zero);
-        let in_range = self.t.ge(F::from(t_min)) & self.t.le(F::from(t_max));
+        let in_range = self.t.ge(t_min) & self.t.le(t_max);
         // `ne` is true for a NaN det, as the scalar test's `det == 0` is false.
         let mut hits =
             (in_range & self.det.ne(zero)).bits() & !(negative & positive).bits() & !on_edge;
         // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
-        if hits != 0 && t_min >= 0.0 {
-            hits &= !self.t.le(self.t_error_bound()).bits();
+        if hits & forward != 0 {
+            hits &= !(self.t.le(self.t_error_bound()).bits() & forward);
         }
         (hits, on_edge)
     }
@@ -472,7 +481,7 @@ pub(crate) mod avx {
     /// Eight f32 lanes; its operators must only run inside an AVX function
     /// (they are `#[inline(always)]` so that they inline into one).
     #[derive(Clone, Copy)]
-    pub(crate) struct F8(__m256);
+    pub(crate) struct F8(pub(crate) __m256);
 
     /// `impl $op for F8` by the intrinsic `$f`.
     macro_rules! binary_ops {
@@ -561,6 +570,7 @@ pub(crate) mod avx {
     }
 
     /// [`super::Hits4`] for eight lanes.
+    #[derive(Default)]
     pub(crate) struct Hits8 {
         pub(crate) hits: u32,
         pub(crate) fallback: u32,
@@ -610,6 +620,101 @@ pub(crate) mod avx {
             t: lt.t.to_array(),
             b1,
             b2,
+        }
+    }
+
+    /// Eight rays in lanes for [`intersect_rays8`]: each lane's
+    /// [`WatertightRay::lane_setup`] and interval start, gathered once per
+    /// leaf and tested against each of its triangles.
+    pub(crate) struct Rays8 {
+        /// The origin along each lane's permuted axes.
+        org: [F8; 3],
+        shear: [F8; 3],
+        /// Per permuted axis i, the lanes whose axis is 1 and those whose axis is 2.
+        is_y: [F8; 3],
+        is_z: [F8; 3],
+        t_min: F8,
+        /// The lanes with `t_min ≥ 0` (the δt test's).
+        forward: u32,
+    }
+
+    impl Rays8 {
+        /// The lanes' origins along their permuted axes, shear constants,
+        /// permutations (each axis 0, 1 or 2 in an i32 lane) and `t_min`.
+        ///
+        /// # Safety
+        /// AVX2, as [`intersect8`].
+        #[inline(always)]
+        pub(crate) unsafe fn new(
+            org: [F8; 3],
+            shear: [F8; 3],
+            axis: [__m256i; 3],
+            t_min: F8,
+        ) -> Self {
+            let is = |k: i32| {
+                let eq = |a: __m256i| {
+                    F8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                        a,
+                        _mm256_set1_epi32(k),
+                    )))
+                };
+                [eq(axis[0]), eq(axis[1]), eq(axis[2])]
+            };
+            Self {
+                org,
+                shear,
+                is_y: is(1),
+                is_z: is(2),
+                forward: t_min.ge(F8::from(0.0)).bits(),
+                t_min,
+            }
+        }
+    }
+
+    /// [`WatertightRay::intersect`] of eight rays (one per lane) with one
+    /// triangle `v` (`v[k][axis]`), each lane's interval [t_min, `t_max`]:
+    /// every lane runs the scalar test's operations in its order, its axes
+    /// picked by blends, so its bits are the scalar test's (the ray streams
+    /// of `accel::stream`).
+    ///
+    /// # Safety
+    /// AVX2, as [`intersect8`].
+    #[inline(always)]
+    pub(crate) unsafe fn intersect_rays8<const ANY: bool>(
+        rays: &Rays8,
+        v: &[[f32; 3]; 3],
+        t_max: F8,
+    ) -> Hits8 {
+        let pick = |k: usize, i: usize| {
+            let [x, y, z] = [F8::from(v[k][0]), F8::from(v[k][1]), F8::from(v[k][2])];
+            let xy = _mm256_blendv_ps(x.0, y.0, rays.is_y[i].0);
+            F8(_mm256_blendv_ps(xy, z.0, rays.is_z[i].0))
+        };
+        let lt = lane_test(|k, i| pick(k, i) - rays.org[i], rays.shear);
+        let (hits, on_edge) = lt.decide_in(rays.t_min, t_max, rays.forward);
+        let (b1, b2) = if ANY || hits == 0 {
+            ([0.0; 8], [0.0; 8])
+        } else {
+            let (b1, b2) = lt.barycentrics();
+            (b1.to_array(), b2.to_array())
+        };
+        Hits8 {
+            hits,
+            fallback: on_edge,
+            t: lt.t.to_array(),
+            b1,
+            b2,
+        }
+    }
+
+    impl F8 {
+        /// Lane `l` is the f32 at `base + offsets[l]` (offsets in f32s).
+        ///
+        /// # Safety
+        /// AVX2; every lane's address inside one allocation, f32-aligned.
+        #[inline(always)]
+        pub(crate) unsafe fn gather(base: *const f32, offsets: __m256i) -> Self {
+            F8(_mm256_i32gather_ps::<4>(base, offsets))
         }
     }
 }

@@ -58,14 +58,20 @@ pub fn info(path: &Path) -> Result<String> {
     memory::check_scene(&scene, "the BVH")?;
     let t0 = Instant::now();
     // Kept alive until after the timing so that its drop is not measured.
-    let _accel = Accel::build(&scene.meshes, &scene.spheres);
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
     let build = t0.elapsed();
     let primitives = scene.stats.triangles + scene.spheres.len();
+    let queries = if accel.streams() {
+        "ray streams (a small tree)"
+    } else {
+        "one ray at a time"
+    };
     Ok(format!(
-        "{}renderer: {}\nbvh: built in {:.3} ms ({primitives} primitives)\n",
+        "{}renderer: {}\nbvh: built in {:.3} ms ({primitives} primitives, {} inner nodes); lane queries: {queries}\n",
         scene.describe(),
         crate::render::describe(&scene),
         build.as_secs_f64() * 1e3,
+        accel.node_count(),
     ))
 }
 

@@ -4,7 +4,8 @@
 //! and three-wide vector work per vertex, at an IPC near the core's limit, so
 //! only fewer instructions make it faster. Here a batch of paths (up to
 //! `render::LANE_BATCH` of a tile row's samples) advances bounce by bounce:
-//! every live path's ray is traced with the same single-ray queries, then
+//! every live path's ray is traced (as one ray stream where the tree is
+//! small, `accel::stream`; else with the same single-ray queries), then
 //! the hits are shaded eight at a time in SIMD lanes (`kernel`: AVX
 //! registers where the CPU has AVX2, `wide::f32x8` else) —
 //! the surface point and its error bound, the frame, the light sample, the
@@ -28,7 +29,8 @@ use super::interaction::interaction;
 use super::lights::{AreaLight, LaneLight, LightSample};
 use super::path::{FirstHit, PathState, PathTracer, SampleResult, VertexSamples};
 use crate::accel::{
-    sphere_point, triangle_normal, triangle_point_with_normal, Hit, PrimRef, SurfacePoint,
+    sphere_point, triangle_normal, triangle_point_with_normal, Hit, PrimRef, RayStream,
+    SurfacePoint,
 };
 use crate::brdf::Material;
 use crate::math::sampler::PixelSampler;
@@ -168,14 +170,28 @@ impl LaneScene {
             live,
             shaded,
             gathered,
+            queries: q,
         } = batch;
+        let streams = tracer.accel.streams();
         live.clear();
         live.extend(0..paths.len());
         for depth in 1..=tracer.max_depth {
+            if streams {
+                let n = live.len();
+                tracer
+                    .accel
+                    .intersect_stream(n, |k| &paths[live[k]].ray, &mut q.stream);
+            }
             let mut kept = 0;
             for k in 0..live.len() {
                 let i = live[k];
-                if self.intersect(tracer, &mut paths[i], depth, first_hits) {
+                let p = &mut paths[i];
+                let hit = if streams {
+                    q.stream.hit(tracer.accel, k)
+                } else {
+                    tracer.accel.intersect(&p.ray)
+                };
+                if self.intersect(tracer, p, hit, depth, first_hits) {
                     live[kept] = i;
                     kept += 1;
                 }
@@ -194,11 +210,32 @@ impl LaneScene {
                 self.gather(tracer, paths, chunk, depth, gathered);
                 self.kernel(gathered, out);
             }
+            if streams {
+                // The shadow rays of the lanes that have one, in live order.
+                q.shadow.clear();
+                for k in 0..live.len() {
+                    let (s, l) = (&shaded[k / LANES], k % LANES);
+                    if casts_shadow_ray(s, l) {
+                        q.shadow.push(shadow_ray(s, l));
+                    }
+                }
+                let shadow = &q.shadow;
+                tracer
+                    .accel
+                    .occluded_stream(shadow.len(), |k| &shadow[k], &mut q.stream);
+            }
             let mut kept = 0;
+            let mut shadow = 0;
             for k in 0..live.len() {
                 let i = live[k];
-                let s = &shaded[k / LANES];
-                if self.finish(tracer, &mut paths[i], s, k % LANES, depth, first_hits) {
+                let (s, l) = (&shaded[k / LANES], k % LANES);
+                let occluded = if !streams || !casts_shadow_ray(s, l) {
+                    None
+                } else {
+                    shadow += 1;
+                    Some(q.stream.occluded(shadow - 1))
+                };
+                if self.finish(tracer, &mut paths[i], s, l, occluded, depth, first_hits) {
                     live[kept] = i;
                     kept += 1;
                 }
@@ -217,11 +254,12 @@ impl LaneScene {
         &self,
         tracer: &PathTracer,
         p: &mut LanePath,
+        hit: Option<Hit>,
         depth: u32,
         first_hits: bool,
     ) -> bool {
         p.rays += 1;
-        let Some(hit) = tracer.accel.intersect(&p.ray) else {
+        let Some(hit) = hit else {
             p.st.radiance += tracer.escaped(&p.ray, &p.st);
             return false;
         };
@@ -347,12 +385,15 @@ impl LaneScene {
     /// Direct light through the shadow ray, then the continuation (throughput,
     /// MIS state, Russian roulette), as `li` does; `false` when the path ends.
     /// `s`'s lane `l` is this path's; the first hit is recorded with `first_hits`.
+    /// `occluded`: the shadow ray's answer where a stream has traced it.
+    #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
         tracer: &PathTracer,
         p: &mut LanePath,
         s: &Shaded8,
         l: usize,
+        occluded: Option<bool>,
         depth: u32,
         first_hits: bool,
     ) -> bool {
@@ -375,8 +416,7 @@ impl LaneScene {
         }
         if bit(s.direct) {
             p.rays += 1;
-            let shadow = Ray::segment(s.shadow_o[l], s.shadow_d[l], s.shadow_t[l]);
-            if !tracer.accel.occluded(&shadow) {
+            if !occluded.unwrap_or_else(|| tracer.accel.occluded(&shadow_ray(s, l))) {
                 p.st.radiance += s.ld[l];
             }
         }
@@ -390,6 +430,16 @@ impl LaneScene {
         p.ray = Ray::new(s.next_o[l], s.next_d[l]);
         tracer.survives(&mut p.st.beta, p.u_rr, depth)
     }
+}
+
+/// Whether lane `l`'s path traces its shadow ray (`finish`: alive, with direct light).
+fn casts_shadow_ray(s: &Shaded8, l: usize) -> bool {
+    (s.alive & s.direct) & (1 << l) != 0
+}
+
+/// Lane `l`'s shadow ray.
+fn shadow_ray(s: &Shaded8, l: usize) -> Ray {
+    Ray::segment(s.shadow_o[l], s.shadow_d[l], s.shadow_t[l])
 }
 
 /// Why the lanes do not take `scene` (what `li` handles and they do not), or
@@ -511,6 +561,16 @@ pub(crate) struct LaneBatch {
     live: Vec<usize>,
     shaded: Vec<Shaded8>,
     gathered: Gathered,
+    /// Where the tree takes ray streams (`Accel::streams`): the stream's
+    /// scratch and each bounce's shadow rays.
+    queries: Queries,
+}
+
+/// A bounce's rays traced as one stream: the stream, and the shadow rays.
+#[derive(Default)]
+struct Queries {
+    stream: RayStream,
+    shadow: Vec<Ray>,
 }
 
 impl LaneBatch {
