@@ -18,7 +18,7 @@
 //! `valgrind --tool=callgrind --toggle-collect='*trace_once*' target/release/deps/accel-*`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use gradtrace::accel::Accel;
+use gradtrace::accel::{Accel, RayStream};
 use gradtrace::math::{Ray, Vec3};
 use gradtrace::scene::Mesh;
 
@@ -360,6 +360,43 @@ fn bench_accel(c: &mut Criterion) {
         }
     }
     g.finish();
+
+    // The same cornell rays as ray streams (the lane shading's queries on
+    // a small tree), in batches of the lanes' size.
+    if cornell_accel.streams() {
+        let mut stream = RayStream::default();
+        for (group, any) in [("closest_hit_stream", false), ("shadow_stream", true)] {
+            let mut g = c.benchmark_group(group);
+            for (name, rays) in &cornell_sets {
+                g.throughput(Throughput::Elements(rays.len() as u64));
+                g.bench_function(*name, |b| {
+                    b.iter(|| stream_hits(&cornell_accel, black_box(rays), any, &mut stream))
+                });
+            }
+            g.finish();
+        }
+    }
+}
+
+/// Rays of a stream batch, as `render::LANE_BATCH`.
+const STREAM_BATCH: usize = 256;
+
+/// Hits (closest, or with `any` occluded) of `rays` traced as streams of
+/// [`STREAM_BATCH`].
+fn stream_hits(accel: &Accel, rays: &[Ray], any: bool, s: &mut RayStream) -> usize {
+    let mut hits = 0;
+    for batch in rays.chunks(STREAM_BATCH) {
+        if any {
+            accel.occluded_stream(batch.len(), |k| &batch[k], s);
+            hits += (0..batch.len()).filter(|&k| s.occluded(k)).count();
+        } else {
+            accel.intersect_stream(batch.len(), |k| &batch[k], s);
+            hits += (0..batch.len())
+                .filter(|&k| s.hit(accel, k).is_some())
+                .count();
+        }
+    }
+    hits
 }
 
 /// Best of 15 interleaved passes per query and ray set, in Mrays/s: on a

@@ -61,6 +61,10 @@ README = ms.REPO / "benches" / "README.md"
 BEGIN, END = "<!-- bench_embree:begin -->", "<!-- bench_embree:end -->"
 # (criterion group, Embree query)
 QUERIES = [("closest_hit", "INTERSECT"), ("shadow", "OCCLUDED")]
+# The same queries as ray streams (batches of 256, `Accel::intersect_stream`):
+# only on the Cornell box, the tree small enough for the lane shading to
+# stream; compared with the same per-ray Embree and wavefront Mitsuba timings.
+STREAM_QUERIES = [("closest_hit_stream", "INTERSECT"), ("shadow_stream", "OCCLUDED")]
 
 
 def read_dump(path: Path) -> tuple[np.ndarray, np.ndarray, list[dict]]:
@@ -226,7 +230,8 @@ def main() -> int:
         triangles[scene_name] = len(tris)
         scene = rtcs.EmbreeScene()
         TriangleMesh(scene, verts.astype(np.float32), tris.astype(np.int32))
-        for group, query in QUERIES:
+        streamed = STREAM_QUERIES if scene_name == "Cornell box" else []
+        for group, query in QUERIES + streamed:
             for s in sets:
                 rows.append(bench_row(args, exe, scene, dump, s, group, query))
     meta = {

@@ -50,7 +50,7 @@ pub(crate) use offset::{DEFAULT_REL_ERROR, SHADOW_EPSILON};
 /// pbrt's γ(n), the bound on n rounded f32 operations (the error bounds'
 /// constant, for the lane shading's copy of `triangle_point_with_normal`).
 pub(crate) use primitive::gamma as gamma_bound;
-pub(crate) use stream::RayStream;
+pub use stream::RayStream;
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Mesh, Sphere};

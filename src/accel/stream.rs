@@ -65,7 +65,7 @@ const PLANES: usize = 27;
 
 /// The scratch of stream queries, reused from batch to batch.
 #[derive(Default)]
-pub(crate) struct RayStream {
+pub struct RayStream {
     /// [`PLANES`] planes of `cap` values each (the stream's length rounded
     /// up to eight); grown, never shrunk.
     planes: Vec<f32>,
@@ -113,7 +113,7 @@ impl RayStream {
     }
 
     /// Ray `k`'s closest hit after [`Accel::intersect_stream`].
-    pub(crate) fn hit(&self, accel: &Accel, k: usize) -> Option<Hit> {
+    pub fn hit(&self, accel: &Accel, k: usize) -> Option<Hit> {
         let id = self.id(BEST_ID, k);
         (id != NONE).then(|| {
             let slot = self.id(BEST_SLOT, k);
@@ -127,7 +127,7 @@ impl RayStream {
     }
 
     /// Whether ray `k` is blocked, after [`Accel::occluded_stream`].
-    pub(crate) fn occluded(&self, k: usize) -> bool {
+    pub fn occluded(&self, k: usize) -> bool {
         self.id(BEST_ID, k) != NONE
     }
 }
@@ -141,8 +141,11 @@ impl Accel {
     }
 
     /// [`Accel::intersect`] of the `n` rays `ray(0..n)`, answers read with
-    /// [`RayStream::hit`]. Only where [`Accel::streams`].
-    pub(crate) fn intersect_stream<'r>(
+    /// [`RayStream::hit`].
+    ///
+    /// # Panics
+    /// Where not [`Accel::streams`].
+    pub fn intersect_stream<'r>(
         &self,
         n: usize,
         ray: impl Fn(usize) -> &'r Ray,
@@ -157,13 +160,11 @@ impl Accel {
     }
 
     /// [`Accel::occluded`] of the `n` rays `ray(0..n)`, answers read with
-    /// [`RayStream::occluded`]. Only where [`Accel::streams`].
-    pub(crate) fn occluded_stream<'r>(
-        &self,
-        n: usize,
-        ray: impl Fn(usize) -> &'r Ray,
-        s: &mut RayStream,
-    ) {
+    /// [`RayStream::occluded`].
+    ///
+    /// # Panics
+    /// Where not [`Accel::streams`].
+    pub fn occluded_stream<'r>(&self, n: usize, ray: impl Fn(usize) -> &'r Ray, s: &mut RayStream) {
         assert!(self.streams());
         // SAFETY: as in `intersect_stream`.
         #[cfg(target_arch = "x86_64")]
