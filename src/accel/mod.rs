@@ -1163,7 +1163,7 @@ mod tests {
 
     /// Uniform f32s in [0, 1) from a 64-bit LCG: test data reproducible without a
     /// dependency.
-    fn lcg(mut seed: u64) -> impl FnMut() -> f32 {
+    pub(super) fn lcg(mut seed: u64) -> impl FnMut() -> f32 {
         move || {
             seed = seed
                 .wrapping_mul(6364136223846793005)
@@ -1175,50 +1175,13 @@ mod tests {
     /// A closed, finely tessellated sphere (shared edges and vertices), a
     /// heap of small overlapping quads, and analytic spheres.
     fn scene() -> (Vec<Mesh>, Vec<Sphere>) {
-        let (rings, segments) = (40u32, 60u32);
-        let mut positions = Vec::new();
-        for i in 0..=rings {
-            let theta = std::f32::consts::PI * i as f32 / rings as f32;
-            for j in 0..segments {
-                let phi = std::f32::consts::TAU * j as f32 / segments as f32;
-                positions.push(Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                ));
-            }
-        }
-        let mut triangles = Vec::new();
-        for i in 0..rings {
-            for j in 0..segments {
-                let (a, b) = (i * segments + j, i * segments + (j + 1) % segments);
-                let (c, d) = (a + segments, b + segments);
-                triangles.push([a, b, d]);
-                triangles.push([a, d, c]);
-            }
-        }
-        let globe = Mesh {
-            name: "globe".into(),
-            positions,
-            triangles,
-            ..Default::default()
-        };
+        let globe = globe(40, 60);
         let mut next = lcg(7);
         let mut quads = Mesh {
             name: "quads".into(),
             ..Default::default()
         };
-        for _ in 0..500 {
-            let o = Vec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, next() * 4.0 - 2.0);
-            let (u, v) = (
-                Vec3::new(next(), 0.0, next()) * 0.3,
-                Vec3::new(0.0, next(), next()) * 0.3,
-            );
-            let base = quads.positions.len() as u32;
-            quads.positions.extend([o, o + u, o + u + v, o + v]);
-            quads.triangles.push([base, base + 1, base + 2]);
-            quads.triangles.push([base, base + 2, base + 3]);
-        }
+        add_quads(&mut quads, 500, 0.3, &mut next);
         let spheres = (0..20)
             .map(|k| Sphere {
                 name: format!("s{k}"),
@@ -1286,5 +1249,58 @@ mod tests {
             }
         }
         assert!(hits > 1000, "{hits}");
+    }
+
+    /// A closed unit sphere of `rings` × `segments` quads, each two
+    /// triangles sharing their edges and vertices with their neighbours.
+    pub(super) fn globe(rings: u32, segments: u32) -> Mesh {
+        let mut positions = Vec::new();
+        for i in 0..=rings {
+            let theta = std::f32::consts::PI * i as f32 / rings as f32;
+            for j in 0..segments {
+                let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+                positions.push(Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                ));
+            }
+        }
+        let mut triangles = Vec::new();
+        for i in 0..rings {
+            for j in 0..segments {
+                let (a, b) = (i * segments + j, i * segments + (j + 1) % segments);
+                let (c, d) = (a + segments, b + segments);
+                triangles.push([a, b, d]);
+                triangles.push([a, d, c]);
+            }
+        }
+        Mesh {
+            name: "globe".into(),
+            positions,
+            triangles,
+            ..Default::default()
+        }
+    }
+
+    /// `count` quads (two triangles each) of edges up to `size` at random
+    /// in [−2, 2]³.
+    pub(super) fn add_quads(
+        mesh: &mut Mesh,
+        count: usize,
+        size: f32,
+        next: &mut impl FnMut() -> f32,
+    ) {
+        for _ in 0..count {
+            let o = Vec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, next() * 4.0 - 2.0);
+            let (u, v) = (
+                Vec3::new(next(), 0.0, next()) * size,
+                Vec3::new(0.0, next(), next()) * size,
+            );
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend([o, o + u, o + u + v, o + v]);
+            mesh.triangles.push([base, base + 1, base + 2]);
+            mesh.triangles.push([base, base + 2, base + 3]);
+        }
     }
 }

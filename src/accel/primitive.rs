@@ -475,7 +475,7 @@ impl WatertightRay4 {
 /// the blocks that fill both.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx {
-    use super::{lane_test, Lanes, MaskLanes, Tri4, WatertightRay};
+    use super::{lane_test, LaneTest, Lanes, MaskLanes, Tri4, WatertightRay};
     use std::arch::x86_64::*;
 
     /// Eight f32 lanes; its operators must only run inside an AVX function
@@ -579,6 +579,27 @@ pub(crate) mod avx {
         pub(crate) b2: [f32; 8],
     }
 
+    impl Hits8 {
+        /// The lanes of `lt` with its decisions `(hits, on_edge)`; the
+        /// barycentrics only where some lane hits and not for `ANY`.
+        #[inline(always)]
+        fn new<const ANY: bool>(lt: &LaneTest<F8>, (hits, on_edge): (u32, u32)) -> Self {
+            let (b1, b2) = if ANY || hits == 0 {
+                ([0.0; 8], [0.0; 8])
+            } else {
+                let (b1, b2) = lt.barycentrics();
+                (b1.to_array(), b2.to_array())
+            };
+            Hits8 {
+                hits,
+                fallback: on_edge,
+                t: lt.t.to_array(),
+                b1,
+                b2,
+            }
+        }
+    }
+
     /// [`super::WatertightRay4::intersect`] on the eight lanes of `lo` and `hi`.
     ///
     /// # Safety
@@ -607,25 +628,14 @@ pub(crate) mod avx {
             |k, i| load(k, axes[i]) - super::pick(&org, axes[i]),
             wr.shear.to_array().map(F8::from),
         );
-        let (hits, on_edge) = lt.decide(t_min, t_max);
-        let (b1, b2) = if ANY || hits == 0 {
-            ([0.0; 8], [0.0; 8])
-        } else {
-            let (b1, b2) = lt.barycentrics();
-            (b1.to_array(), b2.to_array())
-        };
-        Hits8 {
-            hits,
-            fallback: on_edge,
-            t: lt.t.to_array(),
-            b1,
-            b2,
-        }
+        let decided = lt.decide(t_min, t_max);
+        Hits8::new::<ANY>(&lt, decided)
     }
 
     /// Eight rays in lanes for [`intersect_rays8`]: each lane's
-    /// [`WatertightRay::lane_setup`] and interval start, gathered once per
-    /// leaf and tested against each of its triangles.
+    /// [`WatertightRay`] (origin along the permuted axes, shear, permutation)
+    /// and interval start, gathered once per leaf and tested against each of
+    /// its triangles.
     pub(crate) struct Rays8 {
         /// The origin along each lane's permuted axes.
         org: [F8; 3],
@@ -691,20 +701,8 @@ pub(crate) mod avx {
             F8(_mm256_blendv_ps(xy, z.0, rays.is_z[i].0))
         };
         let lt = lane_test(|k, i| pick(k, i) - rays.org[i], rays.shear);
-        let (hits, on_edge) = lt.decide_in(rays.t_min, t_max, rays.forward);
-        let (b1, b2) = if ANY || hits == 0 {
-            ([0.0; 8], [0.0; 8])
-        } else {
-            let (b1, b2) = lt.barycentrics();
-            (b1.to_array(), b2.to_array())
-        };
-        Hits8 {
-            hits,
-            fallback: on_edge,
-            t: lt.t.to_array(),
-            b1,
-            b2,
-        }
+        let decided = lt.decide_in(rays.t_min, t_max, rays.forward);
+        Hits8::new::<ANY>(&lt, decided)
     }
 
     impl F8 {

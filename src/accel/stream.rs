@@ -537,52 +537,16 @@ impl Lanes {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::{add_quads, globe, lcg};
     use super::*;
     use crate::math::Vec3;
     use crate::scene::{Mesh, Sphere};
-
-    /// Uniform f32s in [0, 1) from a 64-bit LCG.
-    fn lcg(mut seed: u64) -> impl FnMut() -> f32 {
-        move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / 16_777_216.0
-        }
-    }
 
     /// A small scene: a coarse closed globe (shared edges and vertices), an
     /// axis-aligned unit quad split along its diagonal, a few tilted quads
     /// and, with `spheres`, analytic spheres.
     fn scene(spheres: bool) -> (Vec<Mesh>, Vec<Sphere>) {
-        let (rings, segments) = (6u32, 10u32);
-        let mut positions = Vec::new();
-        for i in 0..=rings {
-            let theta = std::f32::consts::PI * i as f32 / rings as f32;
-            for j in 0..segments {
-                let phi = std::f32::consts::TAU * j as f32 / segments as f32;
-                positions.push(Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                ));
-            }
-        }
-        let mut triangles = Vec::new();
-        for i in 0..rings {
-            for j in 0..segments {
-                let (a, b) = (i * segments + j, i * segments + (j + 1) % segments);
-                let (c, d) = (a + segments, b + segments);
-                triangles.push([a, b, d]);
-                triangles.push([a, d, c]);
-            }
-        }
-        let globe = Mesh {
-            name: "globe".into(),
-            positions,
-            triangles,
-            ..Default::default()
-        };
+        let globe = globe(6, 10);
         let mut quads = Mesh {
             name: "quads".into(),
             positions: vec![
@@ -595,17 +559,7 @@ mod tests {
             ..Default::default()
         };
         let mut next = lcg(3);
-        for _ in 0..12 {
-            let o = Vec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, next() * 4.0 - 2.0);
-            let (u, v) = (
-                Vec3::new(next(), 0.0, next()) * 0.6,
-                Vec3::new(0.0, next(), next()) * 0.6,
-            );
-            let base = quads.positions.len() as u32;
-            quads.positions.extend([o, o + u, o + u + v, o + v]);
-            quads.triangles.push([base, base + 1, base + 2]);
-            quads.triangles.push([base, base + 2, base + 3]);
-        }
+        add_quads(&mut quads, 12, 0.6, &mut next);
         let spheres = if spheres {
             (0..4)
                 .map(|k| Sphere {
