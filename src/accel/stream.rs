@@ -134,7 +134,7 @@ impl RayStream {
 
 impl Accel {
     /// Whether the stream queries run on this tree: an 8-wide one (AVX2) of
-    /// at most [`STREAM_MAX_NODES`] inner nodes.
+    /// at most 64 inner nodes (`STREAM_MAX_NODES`: where streams stop paying).
     pub fn streams(&self) -> bool {
         cfg!(target_arch = "x86_64")
             && matches!(&self.bvh, Tree::Eight(t) if t.nodes.len() <= STREAM_MAX_NODES && t.root != EMPTY)
