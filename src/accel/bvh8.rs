@@ -47,6 +47,47 @@ impl WideNode for Node8 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+impl Node8 {
+    /// The conservative slab test of the eight children against one ray
+    /// splatted (`near`: each axis's near-plane row, 0/1, 2/3, 4/5): the
+    /// children entered within [`t_lo`, `hi`], and their entry distances.
+    /// The one copy of the test, for [`Bvh8::traverse`] and the ray
+    /// streams' [`Bvh8::child_mask`], whose answers must be the same bits.
+    ///
+    /// # Safety
+    /// AVX2; the caller must be an AVX2 function (this inlines into it).
+    #[inline(always)]
+    unsafe fn slab_test(
+        &self,
+        org: &[std::arch::x86_64::__m256; 3],
+        inv: &[std::arch::x86_64::__m256; 3],
+        inv_far: &[std::arch::x86_64::__m256; 3],
+        [nx, ny, nz]: [usize; 3],
+        t_lo: std::arch::x86_64::__m256,
+        hi: std::arch::x86_64::__m256,
+    ) -> (u32, std::arch::x86_64::__m256) {
+        use std::arch::x86_64::*;
+        let b = &self.bounds;
+        // SAFETY: `Node8` is 32-byte aligned and each bounds row is 32 bytes
+        // at a multiple of 32.
+        let slab = |i: usize, a: usize, inv: &[__m256; 3]| {
+            _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b[i].as_ptr()), org[a]), inv[a])
+        };
+        let (tnx, tny, tnz) = (slab(nx, 0, inv), slab(ny, 1, inv), slab(nz, 2, inv));
+        let (tfx, tfy, tfz) = (
+            slab(nx ^ 1, 0, inv_far),
+            slab(ny ^ 1, 1, inv_far),
+            slab(nz ^ 1, 2, inv_far),
+        );
+        // Same operand order as the BVH4's `fast_max`/`fast_min`.
+        let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
+        let t_far = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz), hi);
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far)) as u32;
+        (mask, t_near)
+    }
+}
+
 /// The 8-wide tree.
 pub(super) type Bvh8 = Bvh<Node8>;
 
@@ -95,22 +136,7 @@ impl Bvh8 {
             while cur & LEAF_BIT == 0 {
                 *nodes_visited += 1;
                 let node = &self.nodes[cur as usize];
-                let b = &node.bounds;
-                // SAFETY: `Node8` is 32-byte aligned and each bounds row is
-                // 32 bytes at a multiple of 32.
-                let slab = |i: usize, a: usize, inv: &[__m256; 3]| {
-                    _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b[i].as_ptr()), org[a]), inv[a])
-                };
-                let (tnx, tny, tnz) = (slab(nx, 0, &inv), slab(ny, 1, &inv), slab(nz, 2, &inv));
-                let (tfx, tfy, tfz) = (
-                    slab(nx ^ 1, 0, &inv_far),
-                    slab(ny ^ 1, 1, &inv_far),
-                    slab(nz ^ 1, 2, &inv_far),
-                );
-                // Same operand order as the BVH4's `fast_max`/`fast_min`.
-                let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
-                let t_far = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz), hi_w);
-                let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far)) as u32;
+                let (mask, t_near) = node.slab_test(&org, &inv, &inv_far, [nx, ny, nz], t_lo, hi_w);
                 if mask == 0 {
                     cur = EMPTY;
                     break;
@@ -200,8 +226,6 @@ impl Bvh8 {
 /// One ray's view for [`Bvh8::child_mask`]: what [`Bvh8::traverse`] splats
 /// from its [`BoxRay`], and its fixed upper bound (made by the ray streams'
 /// set-up, `accel::stream`, with [`BoxRay::new`]'s operations).
-#[derive(Clone, Copy, Default)]
-#[repr(C)]
 pub(super) struct NodeRay {
     pub(super) org: [f32; 3],
     pub(super) inv: [f32; 3],
@@ -224,7 +248,6 @@ impl Bvh8 {
     #[inline(always)]
     pub(super) unsafe fn child_mask(&self, node: u32, ray: &NodeRay) -> u32 {
         use std::arch::x86_64::*;
-        let b = &self.nodes[node as usize].bounds;
         let splat = |v: [f32; 3]| {
             [
                 _mm256_set1_ps(v[0]),
@@ -232,28 +255,21 @@ impl Bvh8 {
                 _mm256_set1_ps(v[2]),
             ]
         };
-        let (org, inv, inv_far) = (splat(ray.org), splat(ray.inv), splat(ray.inv_far));
-        let slab = |i: usize, a: usize, inv: &[__m256; 3]| {
-            _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b[i].as_ptr()), org[a]), inv[a])
-        };
-        let [nx, ny, nz] = [
+        let near = [
             ray.near[0] as usize,
             ray.near[1] as usize,
             ray.near[2] as usize,
         ];
-        let (tnx, tny, tnz) = (slab(nx, 0, &inv), slab(ny, 1, &inv), slab(nz, 2, &inv));
-        let (tfx, tfy, tfz) = (
-            slab(nx ^ 1, 0, &inv_far),
-            slab(ny ^ 1, 1, &inv_far),
-            slab(nz ^ 1, 2, &inv_far),
-        );
-        let t_lo = _mm256_set1_ps(ray.t_lo);
-        let t_near = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, t_lo));
-        let t_far = _mm256_min_ps(
-            _mm256_min_ps(_mm256_min_ps(tfx, tfy), tfz),
-            _mm256_set1_ps(ray.hi),
-        );
-        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far)) as u32
+        self.nodes[node as usize]
+            .slab_test(
+                &splat(ray.org),
+                &splat(ray.inv),
+                &splat(ray.inv_far),
+                near,
+                _mm256_set1_ps(ray.t_lo),
+                _mm256_set1_ps(ray.hi),
+            )
+            .0
     }
 
     /// The eight child references of inner node `node`.

@@ -695,8 +695,12 @@ pub(crate) mod avx {
         v: &[[f32; 3]; 3],
         t_max: F8,
     ) -> Hits8 {
+        // Each vertex splatted once, then its coordinate along each lane's
+        // axis i picked by two blends.
+        let splat = |p: [f32; 3]| [F8::from(p[0]), F8::from(p[1]), F8::from(p[2])];
+        let vertices = [splat(v[0]), splat(v[1]), splat(v[2])];
         let pick = |k: usize, i: usize| {
-            let [x, y, z] = [F8::from(v[k][0]), F8::from(v[k][1]), F8::from(v[k][2])];
+            let [x, y, z] = vertices[k];
             let xy = _mm256_blendv_ps(x.0, y.0, rays.is_y[i].0);
             F8(_mm256_blendv_ps(xy, z.0, rays.is_z[i].0))
         };

@@ -335,7 +335,7 @@ impl Accel {
 #[cfg(target_arch = "x86_64")]
 impl RayStream {
     /// The planes of the rays `ray(0..n)`, eight at a time in AVX lanes
-    /// (the single-ray set-up, `node_frame`, [`NodeRay::new`] and
+    /// (the single-ray set-up, `node_ray`, `BoxRay::new` and
     /// [`WatertightRay::new`], with the same operations lane by lane); the
     /// indices of the valid rays (as `Accel::traversable` has them) in `ids`
     /// from 0, their count returned.
@@ -383,7 +383,7 @@ impl RayStream {
                     and(finite(t_min), _mm256_cmp_ps::<_CMP_LE_OQ>(t_min, t_max)),
                 ),
             );
-            // `node_frame`: directions clamped away from 0, origins moved
+            // `node_ray`: directions clamped away from 0, origins moved
             // back for t_min < 0.
             let clamp = |x: __m256| {
                 let tiny = _mm256_blendv_ps(c(1.0e-20), c(-1.0e-20), lt(x, c(0.0)));
@@ -403,7 +403,7 @@ impl RayStream {
             };
             let node_org = [back(0), back(1), back(2)];
             let t_lo = _mm256_blendv_ps(c(0.0), t_min, forward);
-            // `NodeRay::new`.
+            // `BoxRay::new`.
             let inv = [
                 _mm256_div_ps(c(1.0), dir[0]),
                 _mm256_div_ps(c(1.0), dir[1]),
