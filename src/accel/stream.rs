@@ -77,6 +77,14 @@ pub struct RayStream {
 }
 
 impl RayStream {
+    /// Planes for `n` rays (`cap`: `n` rounded up to the eight lanes).
+    fn reserve(&mut self, n: usize) {
+        self.cap = n.next_multiple_of(8);
+        if self.planes.len() < PLANES * self.cap {
+            self.planes.resize(PLANES * self.cap, 0.0);
+        }
+    }
+
     /// Ray `r`'s value in `plane` (below [`PLANES`], `r` below `cap`).
     #[inline(always)]
     fn get(&self, plane: usize, r: usize) -> f32 {
@@ -141,36 +149,55 @@ impl Accel {
     }
 
     /// [`Accel::intersect`] of the `n` rays `ray(0..n)`, answers read with
-    /// [`RayStream::hit`].
-    ///
-    /// # Panics
-    /// Where not [`Accel::streams`].
+    /// [`RayStream::hit`]. Where not [`Accel::streams`], the rays are asked
+    /// one at a time: the answers are the same, only the speed differs.
     pub fn intersect_stream<'r>(
         &self,
         n: usize,
         ray: impl Fn(usize) -> &'r Ray,
         s: &mut RayStream,
     ) {
-        assert!(self.streams());
-        // SAFETY: an 8-wide tree is only built where AVX2 was detected.
-        #[cfg(target_arch = "x86_64")]
-        unsafe {
-            self.stream::<false>(n, &ray, s)
-        };
+        self.query_stream::<false>(n, &ray, s);
     }
 
     /// [`Accel::occluded`] of the `n` rays `ray(0..n)`, answers read with
-    /// [`RayStream::occluded`].
-    ///
-    /// # Panics
-    /// Where not [`Accel::streams`].
+    /// [`RayStream::occluded`]; as [`Accel::intersect_stream`], one ray at a
+    /// time where not [`Accel::streams`].
     pub fn occluded_stream<'r>(&self, n: usize, ray: impl Fn(usize) -> &'r Ray, s: &mut RayStream) {
-        assert!(self.streams());
-        // SAFETY: as in `intersect_stream`.
-        #[cfg(target_arch = "x86_64")]
-        unsafe {
-            self.stream::<true>(n, &ray, s)
-        };
+        self.query_stream::<true>(n, &ray, s);
+    }
+
+    /// The stream traversal where the tree takes it, single-ray queries
+    /// written into the stream's answer planes elsewhere.
+    fn query_stream<'r, const ANY: bool>(
+        &self,
+        n: usize,
+        ray: &impl Fn(usize) -> &'r Ray,
+        s: &mut RayStream,
+    ) {
+        if self.streams() {
+            // SAFETY: an 8-wide tree is only built where AVX2 was detected.
+            #[cfg(target_arch = "x86_64")]
+            unsafe {
+                self.stream::<ANY>(n, ray, s)
+            };
+            return;
+        }
+        s.reserve(n);
+        for k in 0..n {
+            let answer = if ANY {
+                self.occluded(ray(k)).then_some((0.0, 0, Vec2::ZERO, 0))
+            } else {
+                self.intersect(ray(k))
+                    .map(|h| (h.t, self.input_of(h.prim), h.bary, h.slot))
+            };
+            let (t, id, bary, slot) = answer.unwrap_or((0.0, NONE, Vec2::ZERO, 0));
+            s.set(BEST_T, k, t);
+            s.set(BEST_ID, k, f32::from_bits(id));
+            s.set(BEST_B1, k, bary.x);
+            s.set(BEST_B2, k, bary.y);
+            s.set(BEST_SLOT, k, f32::from_bits(slot));
+        }
     }
 
     /// The traversal: each pending node's rays tested against its children
@@ -343,10 +370,7 @@ impl RayStream {
     unsafe fn prepare<'r>(&mut self, n: usize, ray: &impl Fn(usize) -> &'r Ray) -> usize {
         use std::arch::x86_64::*;
         self.stack.clear();
-        self.cap = n.next_multiple_of(8);
-        if self.planes.len() < PLANES * self.cap {
-            self.planes.resize(PLANES * self.cap, 0.0);
-        }
+        self.reserve(n);
         if self.ids.len() < self.cap {
             self.ids.resize(self.cap, 0);
         }
@@ -629,24 +653,23 @@ mod tests {
     /// Every ray of a stream gets the single-ray query's answer, bit for bit
     /// (distance, barycentrics, primitive and leaf slot; occlusion), in
     /// batches of every size around the eight lanes, with and without spheres,
-    /// for leaves of one to eight primitives.
+    /// for leaves of one to eight primitives — and so do the 4-wide trees,
+    /// whose stream queries go ray by ray.
     #[test]
     fn streams_answer_as_single_rays() {
-        if !super::super::bvh8::supported() {
-            return;
-        }
-        let mut tested = 0;
+        let mut tested = [0, 0];
         for spheres in [false, true] {
             let (meshes, spheres) = scene(spheres);
             let rays = rays(&meshes[0]);
-            for max_prims_per_leaf in [1, 4, 8] {
+            for (node_width, max_prims_per_leaf) in [(8, 1), (8, 4), (8, 8), (4, 4)] {
                 let preset = super::super::BuildPreset {
-                    node_width: 8,
+                    node_width,
                     max_prims_per_leaf,
                     ..Default::default()
                 };
                 let accel = Accel::build_with_preset(&meshes, &spheres, &preset);
-                assert!(accel.streams(), "{} nodes", accel.node_count());
+                let streams = node_width == 8 && super::super::bvh8::supported();
+                assert_eq!(accel.streams(), streams, "{} nodes", accel.node_count());
                 let mut s = RayStream::default();
                 let mut start = 0;
                 for batch in [1, 7, 8, 9, 256, 64, 3].into_iter().cycle() {
@@ -674,11 +697,16 @@ mod tests {
                     for (k, ray) in rays.iter().enumerate() {
                         assert_eq!(s.occluded(k), accel.occluded(ray), "{ray:?}");
                     }
-                    tested += rays.len();
+                    tested[usize::from(streams)] += rays.len();
                 }
             }
         }
-        assert!(tested > 20_000, "{tested}");
+        let streamed = if super::super::bvh8::supported() {
+            20_000
+        } else {
+            0
+        };
+        assert!(tested[1] >= streamed && tested[0] > 5_000, "{tested:?}");
     }
 
     /// The bunny's tree is too deep for streams; cornell's is not.
