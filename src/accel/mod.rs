@@ -10,7 +10,7 @@
 //! our own uncompressed wide BVH at least SAH cost (`bvh4::SahCollapse`, the
 //! collapse obvhs does only for its CWBVH) and traverse that: 8-wide with AVX2
 //! where the CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
-//! leaves hold triangle4 blocks ([`LeafBlock`]), and the 8-wide tree tests a
+//! leaves hold triangle4 blocks (`LeafBlock`), and the 8-wide tree tests a
 //! leaf of two blocks as one eight-lane AVX block (`primitive::avx`). On small
 //! trees the lane shading's rays go through as ray streams instead
 //! (`stream.rs`: a batch node by node, each triangle against eight rays). obvhs 0.4
@@ -783,7 +783,7 @@ impl Accel {
     /// found it (the same values as the mesh's, copied at build time), and its
     /// unit geometric normal ([`offset::triangle_normal`], computed at build
     /// time: the same bits as per hit); `None` for spheres, for hits found
-    /// outside the blocks ([`NO_SLOT`]) and for a hit whose slot holds another
+    /// outside the blocks (`NO_SLOT`) and for a hit whose slot holds another
     /// primitive (a hit from another `Accel`).
     #[inline]
     pub fn hit_triangle(&self, hit: &Hit) -> Option<([Vec3; 3], Vec3)> {

@@ -82,7 +82,7 @@ impl Distribution1D {
         (x, self.pdf_cell(cell), cell)
     }
 
-    /// The cell whose CDF interval contains `u` ([`cell_of`]), searched between
+    /// The cell whose CDF interval contains `u` (`cell_of`), searched between
     /// the guide table's bounds for u's bucket. Rounding in the bucket index can
     /// put u just outside them: the answer is checked (the last cell with
     /// cdf ≤ u) and the whole CDF searched when the check fails, so the result

@@ -7,8 +7,8 @@ use super::atomic::{output_error, stage, Staged, RENDER_ID_KEY};
 use crate::math::Vec3;
 use std::path::Path;
 
-/// The sRGB opto-electronic transfer function (IEC 61966-2-1): linear [0,1] →
-/// encoded [0,1]. Linear segment below 0.0031308, a 1/2.4 power above.
+/// The sRGB opto-electronic transfer function (IEC 61966-2-1): linear \[0,1\] →
+/// encoded \[0,1\]. Linear segment below 0.0031308, a 1/2.4 power above.
 pub fn srgb_oetf(linear: f32) -> f32 {
     if linear <= 0.003_130_8 {
         12.92 * linear

@@ -41,7 +41,7 @@ pub struct DiffOptions {
     pub metric: DiffMetric,
     /// Fail (exit status 1) when the metric is above this.
     pub threshold: Option<f32>,
-    /// The error-map PNG [default: `<A's stem>.diff.png` beside A].
+    /// The error-map PNG \[default: `<A's stem>.diff.png` beside A\].
     pub error_map: Option<PathBuf>,
 }
 

@@ -75,7 +75,7 @@ fn check(bytes: u64, limit: Option<u64>, what: &str, hint: &str) -> Result<()> {
     })
 }
 
-/// [`check`] for a render of `scene`, `image_bytes` for its image: when what
+/// `check` for a render of `scene`, `image_bytes` for its image: when what
 /// the scene builds (its triangles and spheres) is the larger part, the error
 /// names the scene file rather than the image's options.
 pub fn check_render(

@@ -4,7 +4,7 @@
 //! fraction of its cost for a frame's coherent primary rays.
 //!
 //! Rasterising only proposes a candidate per sample; the answer always comes from
-//! the accel's own watertight test. Coverage is widened by [`SLACK`] of a sample
+//! the accel's own watertight test. Coverage is widened by `SLACK` of a sample
 //! spacing, so a sample on a shared edge is covered by both triangles and one of
 //! them is kept; where the kept candidate's exact test misses (a sample just off its
 //! edge), the sample is ray-cast. A sample no widened triangle covers sees nothing.

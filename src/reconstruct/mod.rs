@@ -22,8 +22,8 @@
 //! renormalises their weights. Where all contributors share a surface nothing changes.
 //!
 //! **The image border.** Samples whose cells touch the border are mirrored across it
-//! ([`add_border_ghosts`]), so the hull covers every pixel centre of a quadtree or
-//! stratified set. **Gradients** are Barth–Jespersen limited first ([`limit_gradients`])
+//! (`add_border_ghosts`), so the hull covers every pixel centre of a quadtree or
+//! stratified set. **Gradients** are Barth–Jespersen limited first (`limit_gradients`)
 //! so that one noisy Monte Carlo gradient cannot paint a blob.
 //!
 //! **Outside the convex hull** of the samples (only for sets whose cells do not tile
@@ -40,9 +40,9 @@
 //! vertex of the previous pixel's answer), and each row starts from a hint computed
 //! sequentially beforehand. A walk then depends only on the row, never on which thread
 //! ran it, so the image is bit-identical for any thread count. The triangulation's
-//! vertices are nudged by at most 2⁻²⁰ px ([`Node::new`]) so that the lattice of
+//! vertices are nudged by at most 2⁻²⁰ px (`Node::new`) so that the lattice of
 //! quadtree samples has no cocircular quadruples for the in-circle test to resolve
-//! exactly; natural-neighbour weights come from [`natural`] (spade's algorithm with
+//! exactly; natural-neighbour weights come from `natural` (spade's algorithm with
 //! each triangle's circumcircle computed once); a pixel centre that carries a sample
 //! takes its value directly.
 
@@ -175,7 +175,7 @@ pub fn reconstruct(set: &SampleSet, mode: Interpolation) -> Result<Reconstructio
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Options {
     /// Barth–Jespersen limiting of the sample gradients before `Gradient`
-    /// interpolation (see [`limit_gradients`]); off gives Sibson's interpolant with
+    /// interpolation (see `limit_gradients`); off gives Sibson's interpolant with
     /// the gradients exactly as sampled.
     pub slope_limiter: bool,
 }

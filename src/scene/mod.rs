@@ -106,7 +106,7 @@ impl Default for RenderSettings {
     }
 }
 
-/// A rectangle `corner + s·edge_u + t·edge_v`, s,t ∈ [0,1]; kept for rectangular
+/// A rectangle `corner + s·edge_u + t·edge_v`, s,t ∈ \[0,1\]; kept for rectangular
 /// area lights whose analytic form later stages need (solid angle, edges).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rect {

@@ -64,7 +64,7 @@ pub struct GlossySummary {
     pub stats_page: PathBuf,
     pub cached: bool,
     pub precompute_s: f64,
-    /// Wall time of one frame: the fastest of several warm frames ([`time_frame`]).
+    /// Wall time of one frame: the fastest of several warm frames (`time_frame`).
     pub render_ms: f64,
     /// The median of those warm frames.
     pub render_median_ms: f64,

@@ -134,7 +134,7 @@ impl MaterialFit {
         })
     }
 
-    /// Td's direct lobe unoccluded: kd cos θ/π over the hemisphere, E[w] = kd and
+    /// Td's direct lobe unoccluded: kd cos θ/π over the hemisphere, E\[w\] = kd and
     /// mean resultant 2/3 along the normal, exactly.
     pub fn known_diffuse(&self) -> KnownLobe {
         let kd = self.kd.as_dvec3();

@@ -705,7 +705,7 @@ impl Transfer {
         store::encode(self, key)
     }
 
-    /// The key `bytes` were cached under (see [`store::stored_key`]).
+    /// The key `bytes` were cached under (see `store::stored_key`).
     pub fn stored_key(bytes: &[u8]) -> Option<&str> {
         store::stored_key(bytes)
     }

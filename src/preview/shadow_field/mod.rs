@@ -1,6 +1,6 @@
 //! Shadow fields (Zhou et al. 2005; deformable extension): per-entity occlusion and source radiance fields in order-4 spherical harmonics, combined per receiver point.
 //!
-//! scene → [`precompute`] (one OOF per occluder, SRF + OOF per light, self-occlusion
+//! scene → [`precompute`](fn@precompute) (one OOF per occluder, SRF + OOF per light, self-occlusion
 //! at mesh vertices; rays traced with our BVH, in parallel) → [`Fields`] →
 //! [`Fields::combiner`] for a frame's poses → [`shade_image`] (first hit per pixel
 //! sample) or [`shade_vertices`]. Rigid fields are rotated in SH; deforming entities

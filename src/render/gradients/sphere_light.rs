@@ -7,7 +7,7 @@
 //! grows as 1/cos θ_y at the sphere's silhouette as seen from x. Cone sampling puts
 //! samples there with P(cos θ_y < ε) ∝ ε², so the estimate is unbiased but its
 //! variance diverges (logarithmically): single samples with |∇I| 10⁴× the typical
-//! value (issue 12, D2). In cone coordinates u ∈ [0,1]² the cone of directions the
+//! value (issue 12, D2). In cone coordinates u ∈ \[0,1\]² the cone of directions the
 //! sphere subtends is mapped onto itself for every x, so the domain of the integral
 //! ∫ T(ω(x, u)) J(x, u) du does not move, and differentiating under it is unbiased;
 //! ω(x, u) and J(x, u) are smooth in x up to the silhouette, so the estimate is
