@@ -151,11 +151,8 @@ fn bounce_rays(accel: &Accel, mesh: &Mesh, lo: Vec3, hi: Vec3) -> Vec<Ray> {
     use gradtrace::accel::PrimRef;
     let mut rng = Rng(0x6A09_E667_F3BC_C909);
     let eps = (hi - lo).max_element() * 1e-4;
-    let on_bunny: Vec<usize> = (0..RES * RES)
-        .filter(|&i| {
-            let r = camera_ray(lo, hi, (i % RES) as f32 + 0.5, (i / RES) as f32 + 0.5);
-            accel.intersect(&r).is_some()
-        })
+    let on_bunny: Vec<usize> = (coherent_rays(lo, hi).iter().enumerate())
+        .filter_map(|(i, r)| accel.intersect(r).map(|_| i))
         .collect();
     let mut rays = Vec::with_capacity(RES * RES);
     for i in (0..RES).map(|k| on_bunny[k * on_bunny.len() / RES]) {
