@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Ray throughput of gradtrace's BVH against Embree 4 and Mitsuba 3 on the same rays.
+"""Ray throughput of gradtrace's BVH against Embree and Mitsuba 3 on the same rays.
 
     python3 scripts/bench_embree.py [--rounds 5] [--runs 15] [--measurement-time 2] [--profile dist] [--no-cargo] [--no-mitsuba]
 
@@ -12,7 +12,14 @@ xorshift64* generators) to out/bench/accel_rays.bin, and the Cornell box of
 bench_mitsuba with a path tracer's bounce rays (random points inside the box,
 random directions) to out/bench/accel_rays_cornell.bin; then traces the same
 rays with Embree 4 (PyPI `embreex`: one rtcIntersect1 / rtcOccluded1 per ray, in
-a C loop, on the calling thread) and with Mitsuba 3's `llvm_ad_rgb` variant
+a Cython loop, on the calling thread), with Embree called from C++
+(`scripts/embree_rays.cpp`, compiled here with g++ against the Embree 3 that
+Mitsuba's wheel ships, with Mitsuba's scene settings: build quality HIGH; one
+`rtcIntersect1`/`rtcOccluded1` per ray, and `rtcIntersect16`/`rtcOccluded16` on
+16 consecutive rays, the call Mitsuba's `llvm_ad_rgb` makes on AVX-512
+machines; with Mitsuba's scene flags, and again with `RTC_SCENE_FLAG_ROBUST`,
+the watertight tests gradtrace keeps; skipped without g++), and with Mitsuba
+3's `llvm_ad_rgb` variant
 (`ray_intersect_preliminary` / `ray_test` on the whole set as one wavefront, as
 its path tracer traces them, one Dr.Jit thread, in a worker process of its own;
 skipped without libLLVM 19) back to back, checks the hit counts, and prints the
@@ -36,8 +43,10 @@ rounds.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
+import shutil
 import statistics
 import struct
 import subprocess
@@ -65,6 +74,15 @@ QUERIES = [("closest_hit", "INTERSECT"), ("shadow", "OCCLUDED")]
 # only on the Cornell box, the tree small enough for the lane shading to
 # stream; compared with the same per-ray Embree and wavefront Mitsuba timings.
 STREAM_QUERIES = [("closest_hit_stream", "INTERSECT"), ("shadow_stream", "OCCLUDED")]
+# Embree called from C++ (`embree_rays.cpp`): (timer name, rays per call, scene
+# flags, column title). NONE is Mitsuba's setting, Embree's fastest; ROBUST has
+# the watertight triangle and conservative box tests that gradtrace keeps.
+EMBREE_CPP = [
+    ("embree_c1", 1, "NONE", "Embree 3 from C++, 1 ray"),
+    ("embree_c16", 16, "NONE", "Embree 3 from C++, 16-ray packets"),
+    ("embree_c1_robust", 1, "ROBUST", "the same, robust, 1 ray"),
+    ("embree_c16_robust", 16, "ROBUST", "the same, robust, 16-ray packets"),
+]
 
 
 def read_dump(path: Path) -> tuple[np.ndarray, np.ndarray, list[dict]]:
@@ -159,6 +177,30 @@ def time_embree(scene, s: dict, query: str, runs: int, measurement_time: float) 
     return t | {"hits": hits}
 
 
+def build_embree_cpp() -> Path | None:
+    """Compiles `embree_rays.cpp` against Mitsuba's Embree 3 (its wheel's
+    headers and libembree3.so; the package is located, not imported, so that
+    its Embree stays out of this process); None without g++ or Mitsuba."""
+    spec = importlib.util.find_spec("mitsuba")
+    gxx = shutil.which("g++")
+    if spec is None or not spec.submodule_search_locations or gxx is None:
+        print("note: no g++ or no Mitsuba wheel: the Embree-from-C++ columns are skipped", file=sys.stderr)
+        return None
+    pkg = Path(spec.submodule_search_locations[0])
+    src, exe = Path(__file__).with_name("embree_rays.cpp"), OUT / "embree_rays"
+    cmd = [gxx, "-O3", "-std=c++17", "-o", str(exe), str(src), f"-I{pkg / 'include'}", f"-L{pkg}", "-lembree3", f"-Wl,-rpath,{pkg}"]
+    print("$ " + " ".join(cmd), flush=True)
+    subprocess.run(cmd, check=True)
+    return exe
+
+
+def time_embree_cpp(exe: Path, dump: Path, set_name: str, query: str, width: int, flags: str, runs: int, measurement_time: float) -> dict:
+    """`time_embree` for Embree called from C++ (`embree_rays.cpp`)."""
+    cmd = [str(exe), str(dump), set_name, query, str(width), flags, str(runs), str(measurement_time)]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def time_mitsuba(dump: Path, set_name: str, query: str, runs: int, measurement_time: float) -> dict:
     """`time_embree` for Mitsuba's `llvm_ad_rgb`, in a worker process (its own
     Embree must not meet embreex's in one process)."""
@@ -209,7 +251,7 @@ def main() -> int:
     ap.add_argument("--measurement-time", type=float, default=2.0, help="criterion seconds per bench")
     ap.add_argument("--profile", default="dist", help="cargo profile of gradtrace's bench build (dist: the shipped build; bench: release settings)")
     ap.add_argument("--no-cargo", action="store_true", help="skip the full cargo bench run, reusing its ray dump and obvhs figures")
-    ap.add_argument("--no-mitsuba", action="store_true", help="time Embree only")
+    ap.add_argument("--no-mitsuba", action="store_true", help="time Embree through embreex only (no Mitsuba, no Embree from C++)")
     ap.add_argument("--mitsuba-worker", nargs=5, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.mitsuba_worker:
@@ -221,6 +263,7 @@ def main() -> int:
 
     # Mitsuba's rows need libLLVM (looked up once, not per round).
     args.mitsuba = not args.no_mitsuba and ms.find_libllvm() is not None
+    args.embree_cpp = None if args.no_mitsuba else build_embree_cpp()
     if not args.no_cargo:
         run_ours(args.profile, args.measurement_time)
     exe = bench_executable(args.profile)
@@ -248,7 +291,11 @@ def main() -> int:
     table = markdown(rows, meta)
     write_readme(table)
     print(table)
-    mismatch = [r["bench"] for r in rows if r["hits_gradtrace"] != r["hits_embree"]]
+    mismatch = [
+        r["bench"]
+        for r in rows
+        if any(r[k] != r["hits_gradtrace"] for k in r if k.startswith("hits_") and k != "hits_gradtrace")
+    ]
     if mismatch:
         print(f"note: hit counts differ for {mismatch} (see the table)", file=sys.stderr)
     return 0
@@ -262,6 +309,9 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "ours": lambda: time_ours(exe, bench, args.measurement_time),
         "embree": lambda: time_embree(scene, s, query, args.runs, args.measurement_time),
     }
+    if args.embree_cpp:
+        for name, width, flags, _ in EMBREE_CPP:
+            timers[name] = lambda w=width, f=flags: time_embree_cpp(args.embree_cpp, dump, s["name"], query, w, f, args.runs, args.measurement_time)
     if args.mitsuba:
         timers["mitsuba"] = lambda: time_mitsuba(dump, s["name"], query, args.runs, args.measurement_time)
     rounds = []
@@ -270,8 +320,8 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         order = order[k % len(order) :] + order[: k % len(order)]
         got = {name: timers[name]() for name in order}
         rounds.append(got)
-        print(f"{bench} round {k + 1}: Embree {got['embree']['median_s'] / got['ours']:.2f}x"
-              + (f", Mitsuba {got['mitsuba']['median_s'] / got['ours']:.2f}x" if args.mitsuba else ""), flush=True)
+        others = ", ".join(f"{name} {got[name]['median_s'] / got['ours']:.2f}x" for name in order if name != "ours")
+        print(f"{bench} round {k + 1}: {others}", flush=True)
     ratios = [r["embree"]["median_s"] / r["ours"] for r in rounds]
     row = {
         "bench": bench,
@@ -284,6 +334,15 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "hits_embree": rounds[0]["embree"]["hits"],
         "embree_first_pass_s": rounds[0]["embree"]["first_s"],
     }
+    if args.embree_cpp:
+        for name, _, _, _ in EMBREE_CPP:
+            c_ratios = [r[name]["median_s"] / r["ours"] for r in rounds]
+            row |= {
+                f"{name}_mrays_s": statistics.median(n / r[name]["median_s"] * 1e-6 for r in rounds),
+                f"{name}_ratio": statistics.median(c_ratios),
+                f"{name}_ratios_per_round": c_ratios,
+                f"hits_{name}": rounds[0][name]["hits"],
+            }
     if args.mitsuba:
         m_ratios = [r["mitsuba"]["median_s"] / r["ours"] for r in rounds]
         row |= {
@@ -313,29 +372,45 @@ def ms_cpu() -> str:
 
 def markdown(rows: list[dict], meta: dict) -> str:
     scenes = " and ".join(f"the {name} ({n:,} triangles)" for name, n in meta["triangles"].items())
+    cpp = any("embree_c1_ratio" in r for r in rows)
     lines = [
         f"{scenes[0].upper()}{scenes[1:]}, the `accel` bench's rays (65,536 per set), one thread; "
-        f"gradtrace: criterion median, the `{meta.get('profile', 'bench')}` profile; Embree 4 (`embreex`, `rtcIntersect1`/`rtcOccluded1` per ray) and Mitsuba 3 "
+        f"gradtrace: criterion median, the `{meta.get('profile', 'bench')}` profile; "
+        + ("Embree 3 from C++ (`scripts/embree_rays.cpp` against Mitsuba's libembree3, build quality HIGH as Mitsuba sets it: "
+           "one `rtcIntersect1`/`rtcOccluded1` per ray, or `rtcIntersect16`/`rtcOccluded16` on 16 consecutive rays; "
+           "Mitsuba's scene flags, then `RTC_SCENE_FLAG_ROBUST`, the watertight tests gradtrace keeps), " if cpp else "")
+        + "Embree 4 through `embreex` (`rtcIntersect1`/`rtcOccluded1` per ray, in its Cython loop) and Mitsuba 3 "
         f"(`llvm_ad_rgb`, `ray_intersect_preliminary`/`ray_test` on the set as one wavefront, one Dr.Jit thread): median of the passes in "
         f"{meta['measurement_time']:g} s after 1 s of warm-up, as criterion's; "
-        f"{meta['rounds']} rounds, each timing the three back to back on one bench; ratio = median of the per-round ratios (in brackets), throughputs = medians over rounds. "
+        f"{meta['rounds']} rounds, each timing them back to back on one bench, the order turning; ratio = gradtrace's throughput over the peer's, "
+        "median of the per-round ratios (in brackets); throughputs = medians over rounds. "
         f"{meta['cpu']}, measured {meta['date']}, load average {meta['load_avg']:.1f} (shared machine, loaded: compare within a row).",
         "",
-        "| bench | gradtrace (Mrays/s) | Embree (Mrays/s) | gradtrace / Embree | Mitsuba LLVM (Mrays/s) | gradtrace / Mitsuba LLVM | hits (ours / Embree / Mitsuba) | obvhs' own traversal (Mrays/s) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
+    # (row key, column title); the C++ columns first: Embree's best configurations.
+    peers = ([(name, title) for name, _, _, title in EMBREE_CPP] if cpp else []) + [("embree", "Embree 4 via `embreex`"), ("mitsuba", "Mitsuba LLVM")]
+    head = "| bench | gradtrace (Mrays/s) | " + " | ".join(f"{t} (Mrays/s) | gradtrace / it" for _, t in peers)
+    lines += [
+        head + " | hits (gradtrace / " + " / ".join(t for _, t in peers) + ") | obvhs' own traversal (Mrays/s) |",
+        "|---|---:|" + "---:|---:|" * len(peers) + "---:|---:|",
+    ]
+
+    def cells(r: dict, key: str) -> tuple[str, str]:
+        if key == "embree":
+            mrays, ratio, rounds, hits = r["embree_mrays_s"], r["ratio"], r["ratios_per_round"], r["hits_embree"]
+        elif f"{key}_ratio" in r:
+            mrays, ratio, rounds, hits = r[f"{key}_mrays_s"], r[f"{key}_ratio"], r[f"{key}_ratios_per_round"], r[f"hits_{key}"]
+        else:
+            return "— | —", "—"
+        per_round = ", ".join(f"{x:.2f}" for x in rounds)
+        return f"{mrays:.2f} | {ratio:.2f}× [{per_round}]", f"{hits:,}"
+
     for r in rows:
         base = f"{r['obvhs_baseline_mrays_s']:.2f}" if "obvhs_baseline_mrays_s" in r else "—"
-        per_round = ", ".join(f"{x:.2f}" for x in r["ratios_per_round"])
-        if "mitsuba_ratio" in r:
-            m_rounds = ", ".join(f"{x:.2f}" for x in r["mitsuba_ratios_per_round"])
-            mitsuba = f"{r['mitsuba_mrays_s']:.2f} | {r['mitsuba_ratio']:.2f}× [{m_rounds}]"
-            m_hits = f"{r['hits_mitsuba']:,}"
-        else:
-            mitsuba, m_hits = "— | —", "—"
+        got = [cells(r, key) for key, _ in peers]
         lines.append(
-            f"| `{r['bench']}` | {r['gradtrace_mrays_s']:.2f} | {r['embree_mrays_s']:.2f} | {r['ratio']:.2f}× [{per_round}] | {mitsuba} | "
-            f"{r['hits_gradtrace']:,} / {r['hits_embree']:,} / {m_hits} | {base} |"
+            f"| `{r['bench']}` | {r['gradtrace_mrays_s']:.2f} | " + " | ".join(c for c, _ in got)
+            + f" | {r['hits_gradtrace']:,} / " + " / ".join(h for _, h in got) + f" | {base} |"
         )
     return "\n".join(lines)
 
