@@ -194,19 +194,23 @@ def build_embree_cpp() -> Path | None:
     return exe
 
 
+def last_json_line(cmd: list[str]) -> dict:
+    """Runs a timing worker and reads the JSON object on its last stdout line."""
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def time_embree_cpp(exe: Path, dump: Path, set_name: str, query: str, width: int, flags: str, runs: int, measurement_time: float) -> dict:
     """`time_embree` for Embree called from C++ (`embree_rays.cpp`)."""
     cmd = [str(exe), str(dump), set_name, query, str(width), flags, str(runs), str(measurement_time)]
-    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return last_json_line(cmd)
 
 
 def time_mitsuba(dump: Path, set_name: str, query: str, runs: int, measurement_time: float) -> dict:
     """`time_embree` for Mitsuba's `llvm_ad_rgb`, in a worker process (its own
     Embree must not meet embreex's in one process)."""
     cmd = [sys.executable, __file__, "--mitsuba-worker", str(dump), set_name, query, str(runs), str(measurement_time)]
-    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return last_json_line(cmd)
 
 
 def mitsuba_worker(dump: str, set_name: str, query: str, runs: int, measurement_time: float) -> None:
