@@ -74,14 +74,17 @@ QUERIES = [("closest_hit", "INTERSECT"), ("shadow", "OCCLUDED")]
 # only on the Cornell box, the tree small enough for the lane shading to
 # stream; compared with the same per-ray Embree and wavefront Mitsuba timings.
 STREAM_QUERIES = [("closest_hit_stream", "INTERSECT"), ("shadow_stream", "OCCLUDED")]
-# Embree called from C++ (`embree_rays.cpp`): (timer name, rays per call, scene
-# flags, column title). NONE is Mitsuba's setting, Embree's fastest; ROBUST has
-# the watertight triangle and conservative box tests that gradtrace keeps.
+# Embree called from C++ (`embree_rays.cpp`): (timer name, Embree version, rays
+# per call, scene flags, column title). NONE is Mitsuba's setting, Embree's
+# fastest; ROBUST has the watertight triangle and conservative box tests that
+# gradtrace keeps. Embree 3 is Mitsuba's, Embree 4 `embreex`'s library.
 EMBREE_CPP = [
-    ("embree_c1", 1, "NONE", "Embree 3 from C++, 1 ray"),
-    ("embree_c16", 16, "NONE", "Embree 3 from C++, 16-ray packets"),
-    ("embree_c1_robust", 1, "ROBUST", "the same, robust, 1 ray"),
-    ("embree_c16_robust", 16, "ROBUST", "the same, robust, 16-ray packets"),
+    ("embree_c1", 3, 1, "NONE", "Embree 3 from C++, 1 ray"),
+    ("embree_c16", 3, 16, "NONE", "Embree 3 from C++, 16-ray packets"),
+    ("embree_c1_robust", 3, 1, "ROBUST", "the same, robust, 1 ray"),
+    ("embree_c16_robust", 3, 16, "ROBUST", "the same, robust, 16-ray packets"),
+    ("embree4_c1", 4, 1, "NONE", "Embree 4 from C++, 1 ray"),
+    ("embree4_c16", 4, 16, "NONE", "Embree 4 from C++, 16-ray packets"),
 ]
 
 
@@ -177,21 +180,36 @@ def time_embree(scene, s: dict, query: str, runs: int, measurement_time: float) 
     return t | {"hits": hits}
 
 
-def build_embree_cpp() -> Path | None:
+def build_embree_cpp() -> dict[int, Path]:
     """Compiles `embree_rays.cpp` against Mitsuba's Embree 3 (its wheel's
-    headers and libembree3.so; the package is located, not imported, so that
-    its Embree stays out of this process); None without g++ or Mitsuba."""
+    headers and libembree3.so) and, with -DEMBREE4, against the Embree 4 of the
+    `embreex` wheel (its libembree4; the declarations are the harness's own, the
+    ray and hit types Mitsuba's Embree 3 headers'); the packages are located, not
+    imported, so that their Embree stays out of this process. {version: binary}:
+    empty without g++ or Mitsuba, without 4 where `embreex` has no library."""
     spec = importlib.util.find_spec("mitsuba")
     gxx = shutil.which("g++")
     if spec is None or not spec.submodule_search_locations or gxx is None:
         print("note: no g++ or no Mitsuba wheel: the Embree-from-C++ columns are skipped", file=sys.stderr)
-        return None
+        return {}
     pkg = Path(spec.submodule_search_locations[0])
-    src, exe = Path(__file__).with_name("embree_rays.cpp"), OUT / "embree_rays"
-    cmd = [gxx, "-O3", "-std=c++17", "-o", str(exe), str(src), f"-I{pkg / 'include'}", f"-L{pkg}", "-lembree3", f"-Wl,-rpath,{pkg}"]
-    print("$ " + " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True)
-    return exe
+    src = Path(__file__).with_name("embree_rays.cpp")
+    libs = {3: (pkg, ["-lembree3"], [])}
+    e4 = importlib.util.find_spec("embreex")
+    e4_libs = Path(e4.submodule_search_locations[0]).with_name("embreex.libs") if e4 and e4.submodule_search_locations else None
+    found = sorted(e4_libs.glob("libembree4*.so*")) if e4_libs and e4_libs.is_dir() else []
+    if found:
+        libs[4] = (e4_libs, [f"-l:{found[0].name}"], ["-DEMBREE4"])
+    else:
+        print("note: no libembree4 in the embreex wheel: the Embree 4 from C++ columns are skipped", file=sys.stderr)
+    exes = {}
+    for version, (libdir, link, defines) in libs.items():
+        exe = OUT / f"embree{version}_rays"
+        cmd = [gxx, "-O3", "-std=c++17", *defines, "-o", str(exe), str(src), f"-I{pkg / 'include'}", f"-L{libdir}", *link, f"-Wl,-rpath,{libdir}"]
+        print("$ " + " ".join(cmd), flush=True)
+        subprocess.run(cmd, check=True)
+        exes[version] = exe
+    return exes
 
 
 def last_json_line(cmd: list[str]) -> dict:
@@ -267,7 +285,7 @@ def main() -> int:
 
     # Mitsuba's rows need libLLVM (looked up once, not per round).
     args.mitsuba = not args.no_mitsuba and ms.find_libllvm() is not None
-    args.embree_cpp = None if args.no_mitsuba else build_embree_cpp()
+    args.embree_cpp = {} if args.no_mitsuba else build_embree_cpp()
     if not args.no_cargo:
         run_ours(args.profile, args.measurement_time)
     exe = bench_executable(args.profile)
@@ -313,9 +331,10 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "ours": lambda: time_ours(exe, bench, args.measurement_time),
         "embree": lambda: time_embree(scene, s, query, args.runs, args.measurement_time),
     }
-    if args.embree_cpp:
-        for name, width, flags, _ in EMBREE_CPP:
-            timers[name] = lambda w=width, f=flags: time_embree_cpp(args.embree_cpp, dump, s["name"], query, w, f, args.runs, args.measurement_time)
+    cpp = [(name, version, width, flags) for name, version, width, flags, _ in EMBREE_CPP if version in args.embree_cpp]
+    for name, version, width, flags in cpp:
+        exe_cpp = args.embree_cpp[version]
+        timers[name] = lambda e=exe_cpp, w=width, f=flags: time_embree_cpp(e, dump, s["name"], query, w, f, args.runs, args.measurement_time)
     if args.mitsuba:
         timers["mitsuba"] = lambda: time_mitsuba(dump, s["name"], query, args.runs, args.measurement_time)
     rounds = []
@@ -338,15 +357,14 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "hits_embree": rounds[0]["embree"]["hits"],
         "embree_first_pass_s": rounds[0]["embree"]["first_s"],
     }
-    if args.embree_cpp:
-        for name, _, _, _ in EMBREE_CPP:
-            c_ratios = [r[name]["median_s"] / r["ours"] for r in rounds]
-            row |= {
-                f"{name}_mrays_s": statistics.median(n / r[name]["median_s"] * 1e-6 for r in rounds),
-                f"{name}_ratio": statistics.median(c_ratios),
-                f"{name}_ratios_per_round": c_ratios,
-                f"hits_{name}": rounds[0][name]["hits"],
-            }
+    for name, _, _, _ in cpp:
+        c_ratios = [r[name]["median_s"] / r["ours"] for r in rounds]
+        row |= {
+            f"{name}_mrays_s": statistics.median(n / r[name]["median_s"] * 1e-6 for r in rounds),
+            f"{name}_ratio": statistics.median(c_ratios),
+            f"{name}_ratios_per_round": c_ratios,
+            f"hits_{name}": rounds[0][name]["hits"],
+        }
     if args.mitsuba:
         m_ratios = [r["mitsuba"]["median_s"] / r["ours"] for r in rounds]
         row |= {
@@ -376,13 +394,13 @@ def ms_cpu() -> str:
 
 def markdown(rows: list[dict], meta: dict) -> str:
     scenes = " and ".join(f"the {name} ({n:,} triangles)" for name, n in meta["triangles"].items())
-    cpp = any("embree_c1_ratio" in r for r in rows)
+    cpp = [(name, title) for name, _, _, _, title in EMBREE_CPP if any(f"{name}_ratio" in r for r in rows)]
     lines = [
         f"{scenes[0].upper()}{scenes[1:]}, the `accel` bench's rays (65,536 per set), one thread; "
         f"gradtrace: criterion median, the `{meta.get('profile', 'bench')}` profile; "
-        + ("Embree 3 from C++ (`scripts/embree_rays.cpp` against Mitsuba's libembree3, build quality HIGH as Mitsuba sets it: "
+        + ("Embree from C++ (`scripts/embree_rays.cpp` against Mitsuba's libembree3 and `embreex`'s libembree4, build quality HIGH as Mitsuba sets it: "
            "one `rtcIntersect1`/`rtcOccluded1` per ray, or `rtcIntersect16`/`rtcOccluded16` on 16 consecutive rays; "
-           "Mitsuba's scene flags, then `RTC_SCENE_FLAG_ROBUST`, the watertight tests gradtrace keeps), " if cpp else "")
+           "Mitsuba's scene flags, and for Embree 3 also `RTC_SCENE_FLAG_ROBUST`, the watertight tests gradtrace keeps), " if cpp else "")
         + "Embree 4 through `embreex` (`rtcIntersect1`/`rtcOccluded1` per ray, in its Cython loop) and Mitsuba 3 "
         f"(`llvm_ad_rgb`, `ray_intersect_preliminary`/`ray_test` on the set as one wavefront, one Dr.Jit thread): median of the passes in "
         f"{meta['measurement_time']:g} s after 1 s of warm-up, as criterion's; "
@@ -392,7 +410,7 @@ def markdown(rows: list[dict], meta: dict) -> str:
         "",
     ]
     # (row key, column title); the C++ columns first: Embree's best configurations.
-    peers = ([(name, title) for name, _, _, title in EMBREE_CPP] if cpp else []) + [("embree", "Embree 4 via `embreex`"), ("mitsuba", "Mitsuba LLVM")]
+    peers = cpp + [("embree", "Embree 4 via `embreex`"), ("mitsuba", "Mitsuba LLVM")]
     head = "| bench | gradtrace (Mrays/s) | " + " | ".join(f"{t} (Mrays/s) | gradtrace / it" for _, t in peers)
     lines += [
         head + " | hits (gradtrace / " + " / ".join(t for _, t in peers) + ") | obvhs' own traversal (Mrays/s) |",
