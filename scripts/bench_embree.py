@@ -14,11 +14,13 @@ random directions) to out/bench/accel_rays_cornell.bin; then traces the same
 rays with Embree 4 (PyPI `embreex`: one rtcIntersect1 / rtcOccluded1 per ray, in
 a Cython loop, on the calling thread), with Embree called from C++
 (`scripts/embree_rays.cpp`, compiled here with g++ against the Embree 3 that
-Mitsuba's wheel ships, with Mitsuba's scene settings: build quality HIGH; one
+Mitsuba's wheel ships and, with -DEMBREE4, against the Embree 4 library of the
+`embreex` wheel, with Mitsuba's scene settings: build quality HIGH; one
 `rtcIntersect1`/`rtcOccluded1` per ray, and `rtcIntersect16`/`rtcOccluded16` on
 16 consecutive rays, the call Mitsuba's `llvm_ad_rgb` makes on AVX-512
-machines; with Mitsuba's scene flags, and again with `RTC_SCENE_FLAG_ROBUST`,
-the watertight tests gradtrace keeps; skipped without g++), and with Mitsuba
+machines; with Mitsuba's scene flags, and for Embree 3 again with
+`RTC_SCENE_FLAG_ROBUST`, the watertight tests gradtrace keeps; skipped without
+g++), and with Mitsuba
 3's `llvm_ad_rgb` variant
 (`ray_intersect_preliminary` / `ray_test` on the whole set as one wavefront, as
 its path tracer traces them, one Dr.Jit thread, in a worker process of its own;
@@ -358,28 +360,28 @@ def bench_row(args, exe: str, scene, dump: Path, s: dict, group: str, query: str
         "embree_first_pass_s": rounds[0]["embree"]["first_s"],
     }
     for name, _, _, _ in cpp:
-        c_ratios = [r[name]["median_s"] / r["ours"] for r in rounds]
-        row |= {
-            f"{name}_mrays_s": statistics.median(n / r[name]["median_s"] * 1e-6 for r in rounds),
-            f"{name}_ratio": statistics.median(c_ratios),
-            f"{name}_ratios_per_round": c_ratios,
-            f"hits_{name}": rounds[0][name]["hits"],
-        }
+        row |= peer_fields(name, rounds, n)
     if args.mitsuba:
-        m_ratios = [r["mitsuba"]["median_s"] / r["ours"] for r in rounds]
-        row |= {
-            "mitsuba_mrays_s": statistics.median(n / r["mitsuba"]["median_s"] * 1e-6 for r in rounds),
-            "mitsuba_ratio": statistics.median(m_ratios),
-            "mitsuba_ratios_per_round": m_ratios,
-            "hits_mitsuba": rounds[0]["mitsuba"]["hits"],
-            "mitsuba_first_pass_s": rounds[0]["mitsuba"]["first_s"],
-        }
+        row |= peer_fields("mitsuba", rounds, n) | {"mitsuba_first_pass_s": rounds[0]["mitsuba"]["first_s"]}
     if group == "closest_hit":
         try:
             row["obvhs_baseline_mrays_s"] = n / criterion_median_s("obvhs_baseline_closest_hit", s["name"]) * 1e-6
         except FileNotFoundError:
             pass
     return row
+
+
+def peer_fields(name: str, rounds: list[dict], n: int) -> dict:
+    """A peer's figures in a row under the `{name}_*` keys that `markdown()`
+    reads: its median throughput over the rounds, the median and per-round
+    ratios of its time over ours, its hit count."""
+    ratios = [r[name]["median_s"] / r["ours"] for r in rounds]
+    return {
+        f"{name}_mrays_s": statistics.median(n / r[name]["median_s"] * 1e-6 for r in rounds),
+        f"{name}_ratio": statistics.median(ratios),
+        f"{name}_ratios_per_round": ratios,
+        f"hits_{name}": rounds[0][name]["hits"],
+    }
 
 
 def ms_cpu() -> str:

@@ -179,11 +179,11 @@ int main(int argc, char **argv) {
         auto occluded16 = [&](const int *v, RTCRay16 *r) { rtc::rtcOccluded16(v, scene, r, nullptr); };
 #else
         RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        auto intersect1 = [&](RTCRayHit *rh) { rtcIntersect1(scene, &ctx, rh); };
-        auto occluded1 = [&](RTCRay *r) { rtcOccluded1(scene, &ctx, r); };
-        auto intersect16 = [&](const int *v, RTCRayHit16 *rh) { rtcIntersect16(v, scene, &ctx, rh); };
-        auto occluded16 = [&](const int *v, RTCRay16 *r) { rtcOccluded16(v, scene, &ctx, r); };
+        rtc::rtcInitIntersectContext(&ctx);
+        auto intersect1 = [&](RTCRayHit *rh) { rtc::rtcIntersect1(scene, &ctx, rh); };
+        auto occluded1 = [&](RTCRay *r) { rtc::rtcOccluded1(scene, &ctx, r); };
+        auto intersect16 = [&](const int *v, RTCRayHit16 *rh) { rtc::rtcIntersect16(v, scene, &ctx, rh); };
+        auto occluded16 = [&](const int *v, RTCRay16 *r) { rtc::rtcOccluded16(v, scene, &ctx, r); };
 #endif
         size_t hits = 0;
         if (width == 1) {
