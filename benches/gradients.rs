@@ -4,7 +4,7 @@
 //! against casting the same shadow rays without it.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use gradtrace::accel::Accel;
+use gradtrace::accel::{Accel, SurfacePoint};
 use gradtrace::math::{Frame, Ray, Vec3};
 use gradtrace::render::gradients::visibility::{trace_line, Domain};
 use gradtrace::render::{render, RenderOptions};
@@ -93,8 +93,7 @@ fn visibility_alone(c: &mut Criterion) {
                 let est = trace_line(
                     &scene,
                     &accel,
-                    x,
-                    Vec3::Y,
+                    SurfacePoint::with_default_error(x, Vec3::Y),
                     &domain,
                     i as f32 * 0.7,
                     0.5,

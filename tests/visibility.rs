@@ -8,7 +8,7 @@
 //! exact solid angle of a quad (Van Oosterom–Strackee), differentiated by central
 //! differences.
 
-use gradtrace::accel::Accel;
+use gradtrace::accel::{Accel, SurfacePoint};
 use gradtrace::brdf::Material;
 use gradtrace::math::{Frame, Vec3};
 use gradtrace::render::gradients::visibility::{
@@ -50,8 +50,7 @@ fn semianalytic(s: &Scene, accel: &Accel, x: Vec3, n_theta: u32, refine: u32) ->
         trace_line(
             s,
             accel,
-            x,
-            Vec3::Y,
+            SurfacePoint::with_default_error(x, Vec3::Y),
             &domain,
             phi,
             0.5,
@@ -194,8 +193,7 @@ fn overlapping_sphere_blockers_are_merged() {
             let semi = trace_line(
                 &s,
                 &accel,
-                x,
-                Vec3::Y,
+                SurfacePoint::with_default_error(x, Vec3::Y),
                 &domain,
                 phi,
                 0.5,
@@ -387,8 +385,7 @@ fn line_and_ring_cover_every_edge_orientation() {
                     let a = trace_line_and_ring(
                         &s,
                         &accel,
-                        x,
-                        Vec3::Y,
+                        SurfacePoint::with_default_error(x, Vec3::Y),
                         &domain,
                         args.0,
                         args.1,
@@ -401,8 +398,7 @@ fn line_and_ring_cover_every_edge_orientation() {
                     let b = trace_line(
                         &s,
                         &accel,
-                        x,
-                        Vec3::Y,
+                        SurfacePoint::with_default_error(x, Vec3::Y),
                         &domain,
                         args.0,
                         args.1,

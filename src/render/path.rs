@@ -587,8 +587,7 @@ impl PathTracer<'_> {
         let est = trace_line_and_ring(
             scene,
             self.accel,
-            p,
-            si.ng,
+            si.surface(),
             &domain,
             u.x * std::f32::consts::TAU,
             u.y,

@@ -25,7 +25,7 @@
 //! balance heuristic on their crossing densities ([`trace_line_and_ring`]).
 
 use super::sphere_light::{cone_flow, ConeLaw};
-use crate::accel::{Accel, PrimRef};
+use crate::accel::{offset_ray_origin_with_error, Accel, PrimRef, SurfacePoint};
 use crate::math::quadrature::GaussLegendre;
 use crate::math::{cross, Frame, Ray, Vec3};
 use crate::scene::Scene;
@@ -90,8 +90,7 @@ pub struct LinePoint {
 pub fn trace_line(
     scene: &Scene,
     accel: &Accel,
-    x: Vec3,
-    ng: Vec3,
+    at: SurfacePoint,
     domain: &Domain,
     phi: f32,
     theta_jitter: f32,
@@ -101,7 +100,7 @@ pub fn trace_line(
     transport: &dyn Fn(Vec3) -> Vec3,
     on_point: &mut dyn FnMut(&LinePoint),
 ) -> LineEstimate {
-    let m = Marcher::new(scene, accel, x, ng, domain, refine_steps, dx, transport);
+    let m = Marcher::new(scene, accel, at, domain, refine_steps, dx, transport);
     m.line(phi, theta_jitter, n_theta, Families::Line, on_point)
 }
 
@@ -125,8 +124,7 @@ pub fn trace_line(
 pub fn trace_line_and_ring(
     scene: &Scene,
     accel: &Accel,
-    x: Vec3,
-    ng: Vec3,
+    at: SurfacePoint,
     domain: &Domain,
     phi: f32,
     theta_jitter: f32,
@@ -136,7 +134,7 @@ pub fn trace_line_and_ring(
     transport: &dyn Fn(Vec3) -> Vec3,
     on_point: &mut dyn FnMut(&LinePoint),
 ) -> LineEstimate {
-    let m = Marcher::new(scene, accel, x, ng, domain, refine_steps, dx, transport);
+    let m = Marcher::new(scene, accel, at, domain, refine_steps, dx, transport);
     let ring_max = m.ring_extent();
     if ring_max.is_nan() || ring_max <= 0.0 {
         return m.line(phi, theta_jitter, n_theta, Families::Line, on_point);
@@ -201,8 +199,7 @@ fn ring_rays(n_line: u32, theta_r: f32, big: f32) -> u32 {
 pub fn trace_ring(
     scene: &Scene,
     accel: &Accel,
-    x: Vec3,
-    ng: Vec3,
+    at: SurfacePoint,
     domain: &Domain,
     phi0: f32,
     u_theta: f32,
@@ -211,7 +208,7 @@ pub fn trace_ring(
     dx: [Vec3; 2],
     transport: &dyn Fn(Vec3) -> Vec3,
 ) -> LineEstimate {
-    let m = Marcher::new(scene, accel, x, ng, domain, refine_steps, dx, transport);
+    let m = Marcher::new(scene, accel, at, domain, refine_steps, dx, transport);
     let big = m.ring_extent();
     if big.is_nan() || big <= 0.0 {
         return LineEstimate::default();
@@ -226,6 +223,9 @@ struct Marcher<'a> {
     accel: &'a Accel,
     x: Vec3,
     ng: Vec3,
+    /// `x`'s error bound: shadow rays leave by the one spawning rule
+    /// (`accel::offset`), with the hit's own bound, not a default.
+    p_error: Vec3,
     domain: &'a Domain,
     frame: Frame,
     refine: u32,
@@ -238,8 +238,7 @@ impl<'a> Marcher<'a> {
     fn new(
         scene: &'a Scene,
         accel: &'a Accel,
-        x: Vec3,
-        ng: Vec3,
+        at: SurfacePoint,
         domain: &'a Domain,
         refine: u32,
         dx: [Vec3; 2],
@@ -251,8 +250,9 @@ impl<'a> Marcher<'a> {
         Self {
             scene,
             accel,
-            x,
-            ng,
+            x: at.p,
+            ng: at.n_geo,
+            p_error: at.p_error,
             domain,
             frame,
             refine,
@@ -270,7 +270,7 @@ impl<'a> Marcher<'a> {
         }
         // The segment must end short of the light as seen from the offset origin,
         // not from x: the offset moves the origin toward the light.
-        let o = crate::accel::offset_ray_origin(self.x, self.ng, w);
+        let o = offset_ray_origin_with_error(self.x, self.p_error, self.ng, w);
         let t_o = light_extent(self.domain, o, w).0;
         Some((Ray::segment(o, w, t_o * (1.0 - 1e-4)), lp))
     }
