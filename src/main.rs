@@ -75,7 +75,7 @@ fn main() -> ExitCode {
         }
     };
     match std::panic::catch_unwind(|| run(cli)) {
-        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Ok(code)) => code,
         Ok(Err(e)) => {
             eprintln!("error: {}", error_line(e.chain()));
             ExitCode::FAILURE
@@ -85,7 +85,12 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> anyhow::Result<()> {
+/// The exit status of a render that Ctrl-C ended early after writing what it
+/// had (the shell's 128 + SIGINT), so that a script can tell it from a render
+/// that ran to its end.
+const EXIT_INTERRUPTED: u8 = 130;
+
+fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     let _doing = {
         let (path, activity) = match &cli.command {
             Command::Render(a) => (&a.scene, "rendering"),
@@ -102,9 +107,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Render(args) => {
             let quiet = args.common.quiet;
-            let summary = pipeline::render::run(&args.into_job())?;
+            let job = args.into_job();
+            let summary = pipeline::render::run(&job)?;
             if !quiet {
                 println!("{summary}");
+            }
+            if job.passes.interrupted() {
+                eprintln!(
+                    "interrupted: wrote the passes finished before Ctrl-C (exit status {EXIT_INTERRUPTED})"
+                );
+                return Ok(ExitCode::from(EXIT_INTERRUPTED));
             }
         }
         Command::Info(args) => print!("{}", pipeline::info(&args.scene)?),
@@ -201,5 +213,5 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
     }
-    Ok(())
+    Ok(ExitCode::SUCCESS)
 }

@@ -143,13 +143,24 @@ pub struct MergeSummary {
     pub png: PathBuf,
 }
 
+/// "s" unless there is exactly one.
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
 impl std::fmt::Display for MergeSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         write!(
             f,
-            "merged {} parts ({} tiles) into {}x{}, {} spp, wrote {} and {}",
+            "merged {} part{} ({} tile{}) into {}x{}, {} spp, wrote {} and {}",
             self.parts,
+            plural(self.parts),
             self.tiles,
+            plural(self.tiles),
             self.width,
             self.height,
             self.spp,
@@ -619,4 +630,36 @@ fn combine_gradient_terms(merged: &mut BTreeMap<String, Vec<f64>>) {
         })
         .collect();
     merged.insert(GRAD_TERMS[6].into(), ratio);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_summary_counts_in_the_singular_and_the_plural() {
+        let s = |parts, tiles| {
+            MergeSummary {
+                parts,
+                tiles,
+                width: 4,
+                height: 2,
+                spp: 8,
+                exr: "m.exr".into(),
+                png: "m.png".into(),
+            }
+            .to_string()
+        };
+        assert!(
+            s(2, 1).starts_with("merged 2 parts (1 tile) into 4x2"),
+            "{}",
+            s(2, 1)
+        );
+        assert!(s(1, 1).starts_with("merged 1 part (1 tile)"), "{}", s(1, 1));
+        assert!(
+            s(4, 4).starts_with("merged 4 parts (4 tiles)"),
+            "{}",
+            s(4, 4)
+        );
+    }
 }

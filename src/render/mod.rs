@@ -427,6 +427,16 @@ pub struct Passes {
     pub cancel: Option<Arc<AtomicBool>>,
 }
 
+impl Passes {
+    /// Whether Ctrl-C set the cancel flag: the render then holds the passes
+    /// finished before it, not the samples asked for.
+    pub fn interrupted(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(std::sync::atomic::Ordering::SeqCst))
+    }
+}
+
 /// Renders the scene (or the crop and sample range `opts` asks for) in one pass.
 /// Deterministic for a fixed seed, whatever the thread count: every random number
 /// is addressed by (pixel, sample, dimension, seed).

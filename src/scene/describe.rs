@@ -64,6 +64,22 @@ impl Scene {
             s.meshes.len(),
             s.meshes.len() - with_normals
         )?;
+        // World space, after each shape's transform: where a mesh ended up is
+        // what a misplaced model needs to be found by.
+        for m in &s.meshes {
+            let (lo, hi) = m.positions.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &p| (lo.min(p), hi.max(p)),
+            );
+            writeln!(
+                o,
+                "  {}: {} triangles, bounds {} to {}",
+                m.name,
+                m.triangles.len(),
+                V3(lo),
+                V3(hi)
+            )?;
+        }
         writeln!(o, "materials: {}", s.materials.len())?;
         for (i, m) in s.materials.iter().enumerate() {
             let name = s.material_names.get(i).map(String::as_str).unwrap_or("?");
