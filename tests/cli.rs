@@ -649,7 +649,7 @@ fn ctrl_c_writes_what_it_has_and_exits_130() {
     let dir = temp_dir("ctrl-c");
     std::fs::write(dir.join("s.toml"), TINY_SCENE).unwrap();
     let exr = dir.join("s.exr");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gradtrace"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_gradtrace"))
         .args([
             "render",
             "s.toml",
