@@ -66,6 +66,21 @@ pub(crate) struct MergeArgs {
     pub(crate) quiet: bool,
 }
 
+/// Upper bounds of the counts a user gives, each refused with one line before
+/// any work (issue 54: `--frames 4294967295` wrote files until it was killed).
+/// Frames of an animation: two files each, 20,000 files at most.
+const MAX_FRAMES: i64 = 10_000;
+/// Views on the glossy preview's orbit: one every 0.1°.
+const MAX_ORBIT: i64 = 3_600;
+/// Seeds of `compare`: its 95 % intervals stop narrowing usefully long before.
+const MAX_SEEDS: i64 = 1_000;
+/// Shadow rays per visibility line: 1024 strata along θ are finer than 0.1° of
+/// a hemisphere; each costs about 3.5 rays with the ring.
+const MAX_VIS_SAMPLES: i64 = 1_024;
+/// Bisection steps per visibility jump: an f32 angle has 24 bits, so a 25th
+/// step cannot move the jump.
+const MAX_VIS_REFINE: i64 = 24;
+
 #[derive(Subcommand, Debug)]
 pub(crate) enum PreviewCommand {
     /// Precompute (cached) a shadow field per object and light, shade every pixel,
@@ -85,11 +100,13 @@ pub(crate) struct PreviewArgs {
     /// Output folder [default: out/preview-<method>/<scene-stem>].
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
-    /// shadow-field: render N frames of the scene's [animation] (0: the block's count).
-    #[arg(long, value_name = "N")]
+    /// shadow-field: render N frames of the scene's [animation] (0: the block's
+    /// count; at most 10000, two files each).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_FRAMES))]
     pub(crate) frames: Option<u32>,
-    /// glossy: also render N views on an orbit around the scene.
-    #[arg(long, value_name = "N")]
+    /// glossy: also render N views on an orbit around the scene (at most 3600,
+    /// a view every 0.1°).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_ORBIT))]
     pub(crate) orbit: Option<u32>,
     /// glossy: split every triangle 1-to-4 N times (4^N times the faces) and make
     /// no adaptive spatial splits (the uniform mesh the adaptive one is compared
@@ -105,6 +122,25 @@ pub(crate) struct PreviewArgs {
     /// No progress output and no summary.
     #[arg(long, short)]
     pub(crate) quiet: bool,
+}
+
+impl PreviewArgs {
+    /// The options that belong to the other preview, refused rather than
+    /// silently ignored (issue 54): `--frames` is shadow-field's, `--orbit`,
+    /// `--uniform` and `--max-vertices` are glossy's.
+    pub(crate) fn only_for(&self, glossy: bool) -> anyhow::Result<()> {
+        let given = [
+            ("--frames", self.frames.is_some(), false),
+            ("--orbit", self.orbit.is_some(), true),
+            ("--uniform", self.uniform.is_some(), true),
+            ("--max-vertices", self.max_vertices.is_some(), true),
+        ];
+        if let Some((flag, _, of_glossy)) = given.iter().find(|(_, set, g)| *set && *g != glossy) {
+            let owner = if *of_glossy { "glossy" } else { "shadow-field" };
+            anyhow::bail!("{flag} is an option of `preview {owner}` only");
+        }
+        Ok(())
+    }
 }
 
 #[derive(Args, Debug)]
@@ -145,16 +181,16 @@ pub(crate) struct CompareArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) reference_spp: Option<u32>,
     /// Shadow rays per line for the samples' visibility gradients; 0 samples the
-    /// lights by points and drops the visibility term [default: 4].
-    #[arg(long, value_name = "N")]
+    /// lights by points and drops the visibility term [default: 4; at most 1024].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_VIS_SAMPLES))]
     pub(crate) vis_samples: Option<u32>,
     /// How many of each adaptive sample's camera samples carry the analytic
     /// gradient; the rest only refine its radiance [default: min(spp, 16)].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) gradient_spp: Option<u32>,
     /// Repeat every run with this many independent seeds; the report gives means
-    /// and 95% intervals (use 4 or more for conclusions) [default: 1].
-    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    /// and 95% intervals (use 4 or more for conclusions; at most 1000).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SEEDS))]
     pub(crate) seeds: u32,
     /// Keep every run's image as an EXR under <out>/runs/.
     #[arg(long)]
@@ -206,13 +242,13 @@ pub(crate) struct RenderArgs {
     pub(crate) denoise: bool,
     /// With --gradients: shadow rays per azimuth line for the first hit's direct
     /// light; the same rays give the radiance and the visibility (soft-shadow)
-    /// gradient [default: 32; 4 with --strategy]. 0: point light sampling and no
-    /// visibility term.
-    #[arg(long, value_name = "N")]
+    /// gradient [default: 32; 4 with --strategy; at most 1024]. 0: point light
+    /// sampling and no visibility term.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_VIS_SAMPLES))]
     pub(crate) vis_samples: Option<u32>,
     /// With --gradients: bisection steps refining each visibility jump (extra
-    /// shadow rays per jump) [default: 0].
-    #[arg(long, value_name = "N")]
+    /// shadow rays per jump) [default: 0; at most 24].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_VIS_REFINE))]
     pub(crate) vis_refine: Option<u32>,
     /// With --gradients: treat a near light as distant (no SV term) where
     /// 2|n_x|·d exceeds F, the far-light criterion of the first-order paper, Sec. 5.2.
@@ -249,14 +285,14 @@ pub(crate) struct RenderArgs {
 pub(crate) struct SplitArgs {
     /// Render only tile K of N (0-based; N bands of rows); the EXR's data window
     /// is the tile inside the full image, for `gradtrace merge`.
-    #[arg(long, value_name = "K/N", value_parser = parse_tile, conflicts_with_all = ["crop", "strategy"])]
+    #[arg(long, value_name = "K/N", value_parser = parse_tile, allow_hyphen_values = true, conflicts_with_all = ["crop", "strategy"])]
     pub(crate) tile: Option<(u32, u32)>,
     /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 (like pbrt-v4's --pixelbounds).
-    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop, conflicts_with = "strategy")]
+    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop, allow_hyphen_values = true, conflicts_with = "strategy")]
     pub(crate) crop: Option<Crop>,
     /// Render only sample indices A..B−1 of every pixel (of --spp); disjoint
     /// ranges are pieces of one render, combined by `gradtrace merge`.
-    #[arg(long, value_name = "A:B", value_parser = parse_spp_range, conflicts_with = "strategy")]
+    #[arg(long, value_name = "A:B", value_parser = parse_spp_range, allow_hyphen_values = true, conflicts_with = "strategy")]
     pub(crate) spp_range: Option<(u32, u32)>,
     /// Render in passes of doubling sample count until SECONDS have passed (at most
     /// --spp, default 2^20), then write the samples reached; Ctrl-C writes the
@@ -307,7 +343,9 @@ pub(crate) fn parse_spp_range(s: &str) -> Result<(u32, u32), String> {
 pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(t) if t.is_finite() && t > 0.0 && t < 1e9 => Ok(t),
-        _ => Err(format!("{s:?}: expected a positive number of seconds")),
+        _ => Err(format!(
+            "{s:?}: expected a number of seconds in (0, 1e9) (1e9 s is 31 years)"
+        )),
     }
 }
 
@@ -333,7 +371,7 @@ pub(crate) struct CommonArgs {
     pub(crate) threads: Option<u32>,
     /// Refuse a run estimated to need more memory than this many GiB
     /// [default: 90% of the memory available].
-    #[arg(long, value_name = "GIB", value_parser = positive)]
+    #[arg(long, value_name = "GIB", value_parser = gibibytes)]
     pub(crate) max_memory: Option<f32>,
     /// No progress output and no summary.
     #[arg(long, short)]
@@ -351,6 +389,17 @@ pub(crate) fn positive(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a finite number > 0, got {s:?}")),
+    }
+}
+
+/// A memory limit in GiB: at least 1 MiB, which no run fits in anyway; below
+/// it a message would have to speak of "0 MiB allowed".
+pub(crate) fn gibibytes(s: &str) -> Result<f32, String> {
+    match positive(s) {
+        Ok(v) if v >= 1.0 / 1024.0 => Ok(v),
+        _ => Err(format!(
+            "expected a number of GiB ≥ 0.0009765625 (1 MiB), got {s:?}"
+        )),
     }
 }
 

@@ -141,6 +141,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Command::Preview(PreviewCommand::ShadowField(a)) => {
             use pipeline::preview::shadow_field::{run, ShadowFieldOptions};
+            a.only_for(false)?;
             let mut opts = ShadowFieldOptions::new(&a.scene);
             opts.out_dir = a
                 .out
@@ -163,6 +164,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Command::Preview(PreviewCommand::Glossy(a)) => {
             use pipeline::preview::glossy::{run, GlossyOptions};
+            a.only_for(true)?;
             let mut opts = GlossyOptions::new(&a.scene);
             opts.out_dir = a.out.unwrap_or_else(|| preview_dir("glossy", &a.scene));
             (opts.orbit, opts.reference_spp, opts.quiet) = (a.orbit, a.reference_spp, a.quiet);

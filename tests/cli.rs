@@ -94,6 +94,30 @@ fn render_help_documents_every_option() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("<SCENE>"));
 }
 
+/// No option's help states its default twice (clap adds `[default: …]` for a
+/// `default_value`; a doc comment that says it too doubles it: issue 54, 20).
+#[test]
+fn no_help_states_a_default_twice() {
+    let commands: [&[&str]; 7] = [
+        &["render"],
+        &["compare"],
+        &["preview", "shadow-field"],
+        &["preview", "glossy"],
+        &["merge"],
+        &["diff"],
+        &["info"],
+    ];
+    for cmd in commands {
+        let out = run_in(&std::env::temp_dir(), &[cmd, &["--help"]].concat());
+        for line in String::from_utf8_lossy(&out.stdout).lines() {
+            assert!(
+                line.matches("[default:").count() <= 1,
+                "{cmd:?} --help: {line}"
+            );
+        }
+    }
+}
+
 #[test]
 fn missing_scene_file_is_one_error_line_and_creates_nothing() {
     let dir = temp_dir("missing");
@@ -119,6 +143,70 @@ fn bad_arguments_are_one_error_line_with_status_1() {
         ),
         (&["render", "tiny.toml", "--threads", "0"][..], "--threads"),
         (&["render", "tiny.toml", "--bogus"][..], "--bogus"),
+        // Counts are bounded up front, options of the other preview refused and
+        // negative tiles reach their own parser (issue 54, defects 3, 18, 19).
+        (
+            &["render", "tiny.toml", "--tile", "-1/2"][..],
+            "expected K/N",
+        ),
+        (
+            &["render", "tiny.toml", "--crop", "-1,0,4,4"][..],
+            "x0,y0,x1,y1",
+        ),
+        (
+            &["render", "tiny.toml", "--time-limit", "1e9"][..],
+            "(0, 1e9)",
+        ),
+        (
+            &["render", "tiny.toml", "--max-memory", "1e-9"][..],
+            "1 MiB",
+        ),
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--gradients",
+                "--vis-samples",
+                "4294967295",
+            ][..],
+            "0..=1024",
+        ),
+        (
+            &[
+                "render",
+                "tiny.toml",
+                "--gradients",
+                "--vis-refine",
+                "4294967295",
+            ][..],
+            "0..=24",
+        ),
+        (
+            &["compare", "tiny.toml", "--seeds", "1000000"][..],
+            "1..=1000",
+        ),
+        (
+            &[
+                "preview",
+                "shadow-field",
+                "tiny.toml",
+                "--frames",
+                "4294967295",
+            ][..],
+            "0..=10000",
+        ),
+        (
+            &["preview", "glossy", "tiny.toml", "--orbit", "4294967295"][..],
+            "0..=3600",
+        ),
+        (
+            &["preview", "glossy", "tiny.toml", "--frames", "2"][..],
+            "--frames is an option of `preview shadow-field` only",
+        ),
+        (
+            &["preview", "shadow-field", "tiny.toml", "--orbit", "2"][..],
+            "--orbit is an option of `preview glossy` only",
+        ),
         (&["render", "tiny.toml", "--out", "img.png"][..], "img.png"),
         // Every numeric flag is checked like its scene key (issue 18, defect 7 and 12).
         (
