@@ -309,7 +309,7 @@ pub(crate) struct SplitArgs {
     #[arg(long, value_name = "F", conflicts_with_all = ["strategy", "spp_range", "tile", "crop"])]
     pub(crate) noise_threshold: Option<f32>,
     /// With --noise-threshold: samples every pixel takes before its first check
-    /// [default: Cycles' max(4, 16 / threshold^0.3)].
+    /// [default: Cycles' max(4, 16 / threshold^0.3), at most max(4, --spp / 4)].
     #[arg(long, value_name = "N", requires = "noise_threshold", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) min_spp: Option<u32>,
 }

@@ -440,9 +440,9 @@ fn other_baselines(
     } = equal;
     use crate::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
     let mut runs = Vec::new();
-    // Blender's default threshold; a first round small enough to fit the time.
-    let mut cycles = NoiseAdaptive::new(0.01, (8 * spp_eq).max(16));
-    cycles.min_spp = cycles.min_spp.min((spp_eq / 2).max(4));
+    // Blender's default threshold, the minimum and the step sized for the spp
+    // the time affords (a pixel may take 8 times that), the time limit held.
+    let mut cycles = NoiseAdaptive::with_budget(0.01, (8 * spp_eq).max(16), spp_eq);
     cycles.time_limit = Some(std::time::Duration::from_secs_f64(target));
     let t = Instant::now();
     let out = render_noise_adaptive(plan.scene, plan.accel, base, &cycles, &|_, _| {})?;

@@ -25,6 +25,11 @@ use std::time::{Duration, Instant};
 /// what it means in Blender's "Noise Threshold".
 pub const THRESHOLD_SCALE: f64 = 5.0;
 
+/// Where a limited run's noise floor starts (scaled units): Cycles' progressive
+/// noise floor (`render_scheduler.cpp`, `adaptive_sampling_threshold = 0.4`,
+/// halved each time every pixel is below it).
+const FIRST_FLOOR: f64 = 0.4;
+
 /// The sampler's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseAdaptive {
@@ -34,29 +39,50 @@ pub struct NoiseAdaptive {
     pub min_spp: u32,
     /// Samples no pixel exceeds.
     pub max_spp: u32,
-    /// Samples between two checks (Cycles: 16).
+    /// Samples between two checks (Cycles: 16; fewer at small budgets).
     pub check_every: u32,
-    /// Stop at this wall time: the round under way is abandoned (only the first
-    /// round always completes). The image then depends on the machine's speed,
-    /// no longer on the seed alone.
+    /// Stop at this wall time: the round under way is abandoned (only the first,
+    /// one sample per pixel, always completes). The image then depends on the
+    /// machine's speed, no longer on the seed alone.
     pub time_limit: Option<Duration>,
+    /// Stop before a round would take the whole image past this many samples: the
+    /// time limit's deterministic stand-in (equal-sample comparisons, tests).
+    pub sample_limit: Option<u64>,
 }
 
 impl NoiseAdaptive {
-    /// Cycles' defaults: min spp max(4, ⌈16 / threshold^0.3⌉) ("threshold 0.1 →
-    /// 32, 0.01 → 64"), a check every 16 samples.
+    /// The settings for a run that may take up to `max_spp` per pixel and is
+    /// expected to afford `max_spp` on average (no time limit).
     pub fn new(threshold: f32, max_spp: u32) -> Self {
-        let auto = if threshold > 0.0 {
+        Self::with_budget(threshold, max_spp, max_spp)
+    }
+
+    /// The settings for a run that affords about `budget_spp` per pixel on
+    /// average (under a time limit, the spp a uniform render fits in it) and
+    /// lets a pixel take up to `max_spp`. Cycles' automatic minimum, max(4,
+    /// ⌈16 / threshold^0.3⌉) ("0.1 → 32, 0.01 → 64"), and its check every 16
+    /// samples assume budgets of hundreds of spp; at 16 they would spend the
+    /// whole budget before the first check (Cycles then renders uniformly), so
+    /// both are capped by the budget: the minimum at a quarter of it (at least 4,
+    /// the first block of four samples that holds both halves), the step at an
+    /// eighth (a power of two, at least 2).
+    pub fn with_budget(threshold: f32, max_spp: u32, budget_spp: u32) -> Self {
+        let budget = budget_spp.clamp(1, max_spp.max(1));
+        let cycles = if threshold > 0.0 {
             (16.0 / threshold.powf(0.3)).ceil().min(u32::MAX as f32) as u32
         } else {
             max_spp
         };
+        let min_spp = cycles.min((budget / 4).max(4)).max(4).min(max_spp.max(1));
+        let step = (budget / 8).max(1);
+        let check_every = (1u32 << (31 - step.leading_zeros())).clamp(2, 16);
         Self {
             threshold,
-            min_spp: auto.max(4).min(max_spp.max(1)),
+            min_spp,
             max_spp,
-            check_every: 16,
+            check_every,
             time_limit: None,
+            sample_limit: None,
         }
     }
 
@@ -103,10 +129,26 @@ pub fn pixel_error(i: [f64; 3], a: [f64; 3]) -> f64 {
     diff / (1e-4 + normalize)
 }
 
+/// How many of samples 0..n are class A: half of every aligned block of four,
+/// and of the last, partial block those [`super::is_class_a`] picks (so that a
+/// check after any number of samples weighs the half-estimate right).
+fn class_a_count(n: u32) -> u32 {
+    let whole = n / 4 * 4;
+    whole / 2 + (whole..n).filter(|&s| super::is_class_a(s)).count() as u32
+}
+
 /// Renders the whole image with per-pixel adaptive sample counts (`opts.spp` is
 /// ignored: `settings.max_spp` caps every pixel). The output's `spp` is the
 /// most any pixel took and `spp_map` each pixel's count (`samples.spp`).
 /// `progress` gets (samples traced, pixels × max_spp).
+///
+/// Every pixel first takes `min_spp` (in passes of 1, 2, 4, … under a limit, so
+/// that the limit holds from the first sample on), then every `check_every`
+/// samples the pixels whose error is below the floor stop. Without a limit the
+/// floor is the threshold; with one it starts at 0.4 and halves, down to the
+/// threshold, each time every pixel is below it (Cycles' progressive noise
+/// floor), so that a budget too small to reach the threshold still goes to the
+/// noisiest pixels first.
 pub fn render_noise_adaptive(
     scene: &Scene,
     accel: &Accel,
@@ -135,14 +177,27 @@ pub fn render_noise_adaptive(
         first_hits: opts.keeps_first_hits(),
     };
     let mut film = Film::new(Crop::full(w as u32, h as u32), w, ctx.gradients);
+    let max = settings.max_spp;
     let mut counts = vec![0u32; w * h];
     let mut active = vec![true; w * h];
     let step = settings.check_every;
-    let first = settings.min_spp.div_ceil(step) * step;
-    let mut next: Vec<u32> = vec![first.min(settings.max_spp); w * h];
-    let traced = AtomicUsize::new(0);
-    let budget = w * h * settings.max_spp as usize;
+    // The first check: the minimum rounded up to the step.
+    let first = settings
+        .min_spp
+        .div_ceil(step)
+        .saturating_mul(step)
+        .min(max);
+    let limited = settings.time_limit.is_some() || settings.sample_limit.is_some();
+    let mut next: Vec<u32> = vec![if limited { 1 } else { first }; w * h];
     let threshold = settings.threshold as f64 * THRESHOLD_SCALE;
+    let mut floor = if limited && threshold > 0.0 {
+        threshold.max(FIRST_FLOOR)
+    } else {
+        threshold
+    };
+    let traced = AtomicUsize::new(0);
+    let budget = w * h * max as usize;
+    let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() > t);
     loop {
         let plan = |p: usize| {
             if active[p] {
@@ -153,10 +208,18 @@ pub fn render_noise_adaptive(
         };
         let report = |_: usize| {};
         let planned: usize = (0..w * h).map(|p| plan(p).len()).sum();
-        // Every round but the first is abandoned when it overruns the time limit,
-        // so that an equal-time comparison is one.
-        let first_round = counts.iter().all(|&c| c == 0);
-        let over = || !first_round && settings.time_limit.is_some_and(|t| start.elapsed() > t);
+        let done = traced.load(Ordering::Relaxed);
+        // The first pass (one sample per pixel, or `first` without a limit) always
+        // completes; every later one is skipped or abandoned past a limit, so
+        // that an equal-time (or equal-sample) comparison is one.
+        let first_pass = done == 0;
+        let over_samples = settings
+            .sample_limit
+            .is_some_and(|n| (done + planned) as u64 > n);
+        if !first_pass && over_samples {
+            break;
+        }
+        let over = || !first_pass && out_of_time();
         if !film.add_samples(&ctx, &plan, &over, &report) {
             break;
         }
@@ -169,21 +232,44 @@ pub fn render_noise_adaptive(
                 counts[p] = next[p];
             }
         }
+        if out_of_time() {
+            break;
+        }
+        // Before the first check every pixel has the same count: double it.
+        if counts[0] < first {
+            next.fill((counts[0] * 2).min(first));
+            continue;
+        }
         let mut unconverged = vec![false; w * h];
         film.for_each(|p, acc, _| {
-            if active[p] && counts[p] < settings.max_spp {
-                let (i, a) = acc.mean_and_half();
-                unconverged[p] = pixel_error(i, a) >= threshold;
+            if active[p] && counts[p] < max {
+                let (i, half) = acc.mean_and_half();
+                // `mean_and_half` assumes that half of the samples are class A.
+                let scale = counts[p] as f64 / (2 * class_a_count(counts[p])).max(1) as f64;
+                let a = half.map(|v| v * scale);
+                unconverged[p] = pixel_error(i, a) >= floor;
             }
         });
         active = dilate(&unconverged, w, h);
         for p in 0..w * h {
-            active[p] &= counts[p] < settings.max_spp;
-            next[p] = (counts[p] + step).min(settings.max_spp);
+            active[p] &= counts[p] < max;
         }
-        let out_of_time = settings.time_limit.is_some_and(|t| start.elapsed() > t);
-        if out_of_time || !active.contains(&true) {
-            break;
+        if !active.contains(&true) {
+            if floor <= threshold {
+                break;
+            }
+            // Every pixel is below the floor: lower it and wake every pixel that
+            // has samples left.
+            floor = (floor / 2.0).max(threshold);
+            for p in 0..w * h {
+                active[p] = counts[p] < max;
+            }
+            if !active.contains(&true) {
+                break;
+            }
+        }
+        for p in 0..w * h {
+            next[p] = (counts[p] + step).min(max);
         }
     }
     let mut out = film.output(&opts, 0, (w as u32, h as u32));
@@ -247,6 +333,30 @@ mod tests {
         let d = dilate(&m, w, h);
         let set: Vec<usize> = (0..w * h).filter(|&i| d[i]).collect();
         assert_eq!(set, vec![1, 2, 3, 6, 7, 8, 11, 12, 13]);
+    }
+
+    #[test]
+    fn small_budgets_check_early_and_often() {
+        // At 16 spp Cycles' minimum (64 at 0.01) left nothing to adapt.
+        let s = NoiseAdaptive::new(0.01, 16);
+        assert_eq!((s.min_spp, s.check_every), (4, 2));
+        let s = NoiseAdaptive::with_budget(0.01, 128, 16);
+        assert_eq!((s.min_spp, s.max_spp, s.check_every), (4, 128, 2));
+        let s = NoiseAdaptive::with_budget(0.01, 512, 64);
+        assert_eq!((s.min_spp, s.check_every), (16, 8));
+        // Large budgets keep Cycles' own values; tiny ones at most the budget.
+        let s = NoiseAdaptive::new(0.01, 1024);
+        assert_eq!((s.min_spp, s.check_every), (64, 16));
+        let s = NoiseAdaptive::new(0.01, 2);
+        assert_eq!((s.min_spp, s.check_every), (2, 2));
+    }
+
+    #[test]
+    fn class_a_count_matches_the_samples() {
+        for n in 0..200u32 {
+            let direct = (0..n).filter(|&s| is_class_a(s)).count() as u32;
+            assert_eq!(class_a_count(n), direct, "n = {n}");
+        }
     }
 
     #[test]
