@@ -1,7 +1,8 @@
 //! Comparison report: metric known answers (RMSE, relMSE and its trimmed form,
 //! FLIP, the 95 % interval), the colour map, and `write_report`'s files (HTML with
-//! a headline and linked assets, `report.json` in its documented schema, one
-//! Markdown table per budget, sample maps) and its all-or-nothing behaviour.
+//! a headline and linked assets, `report.json` in its documented schema, two
+//! Markdown tables per budget, sample maps, error bars, equal-time marks, per-budget
+//! error scales) and its all-or-nothing behaviour.
 
 use gradtrace::math::{Vec2, Vec3};
 use gradtrace::output::colormap::viridis;
