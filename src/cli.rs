@@ -174,9 +174,9 @@ pub(crate) struct CompareArgs {
         long,
         value_name = "LIST",
         value_delimiter = ',',
-        value_parser = budget
+        value_parser = compare_budget
     )]
-    pub(crate) budgets: Vec<f32>,
+    pub(crate) budgets: Vec<f64>,
     /// Samples per pixel of the reference (cached in the output folder) [default: 8 × spp].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) reference_spp: Option<u32>,
@@ -407,6 +407,18 @@ pub(crate) fn gibibytes(s: &str) -> Result<f32, String> {
 pub(crate) fn budget(s: &str) -> Result<f32, String> {
     match positive(s) {
         Ok(v) if v <= 16.0 => Ok(v),
+        _ => Err(format!(
+            "expected samples per pixel in (0, 16], e.g. 0.17, got {s:?}"
+        )),
+    }
+}
+
+/// A budget of `compare`: as [`budget`], but kept as the f64 of what was written,
+/// which `report.json` prints back unchanged (0.17, not 0.17000000178813934).
+pub(crate) fn compare_budget(s: &str) -> Result<f64, String> {
+    budget(s)?;
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 16.0 => Ok(v),
         _ => Err(format!(
             "expected samples per pixel in (0, 16], e.g. 0.17, got {s:?}"
         )),

@@ -1,7 +1,8 @@
 //! Comparison report: metric known answers (RMSE, relMSE and its trimmed form,
 //! FLIP, the 95 % interval), the colour map, and `write_report`'s files (HTML with
-//! a headline and linked assets, `report.json` in its documented schema, one
-//! Markdown table per budget, sample maps) and its all-or-nothing behaviour.
+//! a headline and linked assets, `report.json` in its documented schema, two
+//! Markdown tables per budget, sample maps, error bars, equal-time marks, per-budget
+//! error scales) and its all-or-nothing behaviour.
 
 use gradtrace::math::{Vec2, Vec3};
 use gradtrace::output::colormap::viridis;
@@ -246,8 +247,12 @@ const W: usize = 32;
 const H: usize = 24;
 
 /// A reference and runs: two adaptive strategies at two budgets, each with two
-/// seeds, a full render, the uniform baselines at each budget's time, and the
-/// Sec. 8 interpolation pair.
+/// seeds (the second slower by 30 %, so that a mean is not the first seed's
+/// time), a full render, the uniform baselines at each budget's time (at 5 %,
+/// seed 1 takes 4 % longer: within the tolerance), a one-seed cycles-adaptive
+/// baseline at 25 % that took 20 % longer than its target, and the Sec. 8
+/// interpolation pair. `uniform` at 5 % has one seed twice as noisy as the
+/// other: its interval reaches below 0.
 fn sample_input() -> ReportInput {
     let reference = texture(W, H);
     let positions = |n: usize| -> Vec<Vec2> {
@@ -262,6 +267,7 @@ fn sample_input() -> ReportInput {
         samples,
         wall_time_s: time,
         overhead_s: time * 0.1,
+        target_s: None,
         image: add_noise(&reference, noise, samples as u64 + 97 * seed as u64),
         sample_positions: if matches!(kind, RunKind::Baseline { .. } | RunKind::Full { .. }) {
             vec![]
@@ -271,31 +277,54 @@ fn sample_input() -> ReportInput {
     };
     let mut runs = Vec::new();
     for seed in 0..2 {
+        let slow = 1.0 + 0.3 * f64::from(seed);
         runs.push(run(
             "full",
             RunKind::Full { spp: 4 },
             seed,
             0.04,
-            2.0,
+            2.0 * slow,
             W * H * 4,
         ));
         for (budget, noise, time, n) in [(0.05, 0.08, 0.5, 38), (0.25, 0.03, 1.5, 192)] {
-            let b = RunKind::Adaptive { budget };
+            let time = time * slow;
+            let b = RunKind::Adaptive { budget, spp: 4 };
             runs.push(run("gradient", b, seed, noise, time, n));
-            runs.push(run("uniform", b, seed, noise * 1.5, time * 0.8, n));
+            let wide = if budget == 0.05 {
+                1.0 + seed as f32
+            } else {
+                1.0
+            };
+            runs.push(run("uniform", b, seed, noise * 1.5 * wide, time * 0.8, n));
             let spp = (4.0 * time / 2.0).round().max(1.0) as u32;
             let kind = RunKind::Baseline { budget, spp };
-            runs.push(run(
+            let late = if budget == 0.05 && seed == 1 {
+                1.04
+            } else {
+                1.0
+            };
+            let mut baseline = run(
                 "uniform-all-pixels",
                 kind,
                 seed,
                 noise * 1.2,
-                time,
+                time * late,
                 W * H * spp as usize,
-            ));
+            );
+            baseline.target_s = Some(time);
+            runs.push(baseline);
+            if budget == 0.25 && seed == 0 {
+                let kind = RunKind::Baseline { budget, spp: 2 };
+                let mut cycles = run("cycles-adaptive", kind, 0, 0.04, time * 1.2, W * H * 2);
+                cycles.target_s = Some(time);
+                runs.push(cycles);
+            }
         }
     }
-    let interp = RunKind::Interpolation { budget: 0.01 };
+    let interp = RunKind::Interpolation {
+        budget: 0.01,
+        spp: 64,
+    };
     runs.push(run(
         "1% grid, gradient interpolation",
         interp,
@@ -340,8 +369,9 @@ fn report_writes_three_files_and_assets() {
     let input = sample_input();
     let rows = write_report(&dir, &input).unwrap();
     println!("{}", markdown_table(&rows));
-    // One row per (method, setting): 1 full + 2 budgets × 3 + 2 interpolation.
-    assert_eq!(rows.len(), 1 + 6 + 2);
+    // One row per (method, setting): 1 full + 2 budgets × 3 + cycles-adaptive + 2
+    // interpolation.
+    assert_eq!(rows.len(), 1 + 6 + 1 + 2);
     // Rows carry the mean over the seeds of each run's figures, and its interval.
     for row in &rows {
         let members: Vec<&Run> = input
@@ -350,7 +380,7 @@ fn report_writes_three_files_and_assets() {
             .filter(|r| {
                 r.name == row.name && r.kind.name() == row.kind && {
                     let b = match r.kind {
-                        RunKind::Adaptive { budget } | RunKind::Baseline { budget, .. } => {
+                        RunKind::Adaptive { budget, .. } | RunKind::Baseline { budget, .. } => {
                             Some(budget)
                         }
                         _ => None,
@@ -420,8 +450,11 @@ fn report_writes_three_files_and_assets() {
     let baseline = jruns.iter().find(|j| j["kind"] == "baseline").unwrap();
     assert!(baseline["budget"].is_null());
     assert!(baseline["spp"].as_u64().unwrap() >= 1);
+    // Adaptive runs carry their samples per point, and what that spends per pixel.
     let adaptive = jruns.iter().find(|j| j["kind"] == "adaptive").unwrap();
-    assert!(adaptive["spp"].is_null());
+    assert_eq!(adaptive["spp"], 4);
+    let per_pixel = adaptive["samples"].as_f64().unwrap() * 4.0 / (W * H) as f64;
+    assert!((adaptive["spp_per_pixel"].as_f64().unwrap() - per_pixel).abs() < 1e-12);
     assert_eq!(adaptive["seeds"], 2);
 
     // The headline names the lowest equal-time RMSE at the budget nearest 17%.
@@ -457,9 +490,10 @@ fn report_writes_three_files_and_assets() {
     );
     assert!(html.contains("class=\"headline\""));
 
-    // Markdown: one table per budget, plus the full and interpolation tables.
+    // Markdown: two tables (time and RMSE; the other metrics) per budget, and for
+    // the full and interpolation runs.
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    assert_eq!(md.matches("| method |").count(), 4, "{md}");
+    assert_eq!(md.matches("| method |").count(), 2 * 4, "{md}");
 
     // HTML: nothing external; images are the asset files, each written once.
     for bad in [
@@ -484,8 +518,8 @@ fn report_writes_three_files_and_assets() {
         assert!(dir.join(src).exists(), "{src}");
     }
     // Images of the first seed at the headline budget (25%, the nearest to 17%),
-    // of the full render and of the interpolation runs: 3 + 1 + 2 cards.
-    let cards = 3 + 1 + 2;
+    // of the full render and of the interpolation runs: 4 + 1 + 2 cards.
+    let cards = 4 + 1 + 2;
     let with_samples = 2 + 2;
     assert_eq!(srcs.len(), 1 + 2 * cards + with_samples);
     assert_eq!(
@@ -498,8 +532,11 @@ fn report_writes_three_files_and_assets() {
     for label in ["gradient", "uniform", "uniform-all-pixels"] {
         assert!(html.contains(&format!(">{label}<")), "{label}");
     }
+    // The linked images and the two plots (which the HTML inlines).
     let assets = std::fs::read_dir(dir.join(ASSET_DIR)).unwrap().count();
-    assert_eq!(assets, srcs.len());
+    assert_eq!(assets, srcs.len() + 2);
+    assert!(md.contains(&format!("({ASSET_DIR}/speed_rmse.svg)")));
+    assert!(dir.join(ASSET_DIR).join("speed_rmse.svg").exists());
     // No temporary files left behind.
     for d in [dir.clone(), dir.join(ASSET_DIR)] {
         for e in std::fs::read_dir(d).unwrap() {
@@ -576,7 +613,12 @@ fn bad_input_writes_nothing() {
         ("negative time", Box::new(|i| i.runs[3].wall_time_s = -1.0)),
         (
             "zero budget",
-            Box::new(|i| i.runs[1].kind = RunKind::Adaptive { budget: 0.0 }),
+            Box::new(|i| {
+                i.runs[1].kind = RunKind::Adaptive {
+                    budget: 0.0,
+                    spp: 4,
+                }
+            }),
         ),
         ("exposure", Box::new(|i| i.exposure = f32::INFINITY)),
     ];
@@ -615,5 +657,379 @@ fn report_with_no_runs_or_zero_error_still_writes() {
     assert!(write_report(&dir, &input).unwrap().is_empty());
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     assert!(html.contains("no positive data to plot"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The value of attribute `name` in one SVG tag.
+fn attr(tag: &str, name: &str) -> f64 {
+    let key = format!(" {name}=\"");
+    let at = tag.find(&key).unwrap_or_else(|| panic!("{name} in {tag}")) + key.len();
+    tag[at..at + tag[at..].find('"').unwrap()].parse().unwrap()
+}
+
+/// Every `<NAME …>` tag of `svg`.
+fn tags<'a>(svg: &'a str, name: &str) -> Vec<&'a str> {
+    let open = format!("<{name} ");
+    svg.match_indices(&open)
+        .map(|(i, _)| &svg[i..i + svg[i..].find('>').unwrap()])
+        .collect()
+}
+
+/// Every point of both speed plots has its error bar — the widest too, whose
+/// lower end (≤ 0) a log axis cannot show — except a one-seed point, which is
+/// hollow and explained under the plot.
+#[test]
+fn every_plotted_point_has_an_error_bar() {
+    let dir = temp_dir("bars");
+    let input = sample_input();
+    let rows = write_report(&dir, &input).unwrap();
+    let plotted: Vec<&ReportRow> = rows.iter().filter(|r| r.kind != "interpolation").collect();
+    // The input has an interval reaching below zero, and a one-seed row.
+    assert!(plotted
+        .iter()
+        .any(|r| r.rmse_ci95.is_some_and(|c| c >= r.rmse)));
+    let one_seed = plotted.iter().filter(|r| r.seeds == 1).count();
+    assert_eq!(one_seed, 1);
+    for plot in ["speed_rmse.svg", "speed_flip.svg"] {
+        let svg = std::fs::read_to_string(dir.join(ASSET_DIR).join(plot)).unwrap();
+        // A point: its outline circle; a hollow one is filled white.
+        let circles = tags(&svg, "circle");
+        let points: Vec<&&str> = circles
+            .iter()
+            .filter(|c| c.contains("fill=\"none\""))
+            .collect();
+        assert_eq!(points.len(), plotted.len(), "{plot}");
+        let lines = tags(&svg, "line");
+        let mut hollow = 0;
+        let mut cut = 0;
+        for p in points {
+            let (x, y) = (attr(p, "cx"), attr(p, "cy"));
+            let white = circles.iter().any(|c| {
+                c.contains("fill=\"#FFFFFF\"") && attr(c, "cx") == x && attr(c, "cy") == y
+            });
+            if white {
+                hollow += 1;
+                continue;
+            }
+            let bar = lines.iter().find(|l| {
+                attr(l, "x1") == x
+                    && attr(l, "x2") == x
+                    && attr(l, "y1").min(attr(l, "y2")) <= y
+                    && attr(l, "y1").max(attr(l, "y2")) >= y
+            });
+            let bar = bar.unwrap_or_else(|| panic!("{plot}: no error bar at ({x}, {y})"));
+            // An arrowhead: two slanted lines meeting at one end of the bar.
+            let ends = [
+                (attr(bar, "x1"), attr(bar, "y1")),
+                (attr(bar, "x2"), attr(bar, "y2")),
+            ];
+            cut += ends
+                .iter()
+                .filter(|(ex, ey)| {
+                    lines
+                        .iter()
+                        .filter(|l| {
+                            attr(l, "x2") == *ex && attr(l, "y2") == *ey && attr(l, "x1") != *ex
+                        })
+                        .count()
+                        == 2
+                })
+                .count();
+        }
+        assert_eq!(hollow, one_seed, "{plot}");
+        assert!(
+            svg.contains("Hollow point: one seed, no interval."),
+            "{plot}"
+        );
+        if plot == "speed_rmse.svg" {
+            assert!(cut >= 1, "the interval below zero is drawn as an arrow");
+            assert!(svg.contains("Arrow: the interval goes on past"));
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The `<td>` texts of every row of every HTML table, per table.
+fn html_tables(html: &str) -> Vec<Vec<Vec<String>>> {
+    html.split("<table>")
+        .skip(1)
+        .map(|t| {
+            t[..t.find("</table>").unwrap()]
+                .split("<tr")
+                .skip(1)
+                .map(|row| {
+                    row.split("<td>")
+                        .skip(1)
+                        .map(|c| c[..c.find("</td>").unwrap()].to_string())
+                        .collect::<Vec<_>>()
+                })
+                .filter(|cells: &Vec<String>| !cells.is_empty())
+                .collect()
+        })
+        .collect()
+}
+
+/// A run's setting as the report prints it: "25%" or "3 spp".
+fn setting_of(kind: RunKind) -> String {
+    match kind {
+        RunKind::Adaptive { budget, .. } | RunKind::Interpolation { budget, .. } => {
+            let p = format!("{:.2}", budget * 100.0);
+            format!("{}%", p.trim_end_matches('0').trim_end_matches('.'))
+        }
+        RunKind::Baseline { spp, .. } | RunKind::Full { spp } => format!("{spp} spp"),
+    }
+}
+
+/// An image card gives its row's mean wall time, as the table prints it, not the
+/// time of the seed whose image it shows.
+#[test]
+fn image_cards_show_the_tables_mean_time() {
+    let dir = temp_dir("cards");
+    let mut input = sample_input();
+    input.all_images = true;
+    write_report(&dir, &input).unwrap();
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let tables = html_tables(&html);
+    let mut checked = 0;
+    let mut differs_from_seed0 = 0;
+    for card in html.split("<div class=\"card\">").skip(1) {
+        let title = &card[4..card.find("</h4>").unwrap()];
+        let (name, setting) = title.rsplit_once(" (").unwrap();
+        let setting = setting.trim_end_matches(')');
+        let p = &card[card.find("<p>").unwrap() + 3..];
+        let time = &p[..p.find(" s;").unwrap()];
+        // The time table's rows of this method and setting (9 cells; name, kind,
+        // setting, …, wall time in the sixth).
+        let cells: Vec<&String> = tables
+            .iter()
+            .flatten()
+            .filter(|r| r.len() == 9 && r[0] == name && r[2] == setting)
+            .map(|r| &r[5])
+            .collect();
+        assert!(!cells.is_empty(), "no table row for {title}");
+        assert!(
+            cells.iter().all(|c| *c == time),
+            "{title}: card {time}, table {cells:?}"
+        );
+        checked += 1;
+        let seed0 = input
+            .runs
+            .iter()
+            .find(|r| r.name == name && r.seed == 0 && setting_of(r.kind) == setting);
+        // (A baseline whose seeds differ in spp has none: the card gives the mean.)
+        if let Some(seed0) = seed0 {
+            differs_from_seed0 += usize::from(format!("{:.3}", seed0.wall_time_s) != time);
+        }
+    }
+    assert_eq!(checked, 1 + 2 * 3 + 1 + 2);
+    assert!(
+        differs_from_seed0 >= 6,
+        "the test input must tell a mean from seed 0"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Rows whose time is off their target by more than 5 % are marked in the HTML
+/// and Markdown tables, in `report.json` and in the headline; a row 4 % off is not.
+#[test]
+fn rows_off_equal_time_are_marked() {
+    let dir = temp_dir("equal-time");
+    let rows = write_report(&dir, &sample_input()).unwrap();
+    let find = |name: &str, budget: f64| {
+        rows.iter()
+            .find(|r| r.name == name && r.equal_time_budget == Some(budget))
+            .unwrap()
+    };
+    let cycles = find("cycles-adaptive", 0.25);
+    assert!((cycles.time_vs_target.unwrap() - 0.2).abs() < 1e-9);
+    assert_eq!(cycles.equal_time, Some(false));
+    let uniform = find("uniform-all-pixels", 0.05);
+    assert!((uniform.time_vs_target.unwrap() - 0.04).abs() < 1e-9);
+    assert_eq!(uniform.equal_time, Some(true));
+    assert_eq!(find("uniform-all-pixels", 0.25).equal_time, Some(true));
+    assert_eq!(find("gradient", 0.25).time_vs_target, None);
+
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let off_rows: Vec<&str> = html
+        .split("<tr class=\"off\">")
+        .skip(1)
+        .map(|r| &r[..r.find("</tr>").unwrap()])
+        .collect();
+    // Both tables of the section mark the row.
+    assert_eq!(off_rows.len(), 2, "{off_rows:?}");
+    assert!(off_rows.iter().all(|r| r.contains(">cycles-adaptive<")));
+    assert!(off_rows[0].contains("+20.0% †"));
+    assert!(html.contains("† beyond ±5%: not an equal-time result"));
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let md_row = |name: &str, setting: &str| -> String {
+        md.lines()
+            .find(|l| l.starts_with(&format!("| {name} | baseline | {setting} |")))
+            .unwrap()
+            .to_string()
+    };
+    assert!(md_row("cycles-adaptive", "2 spp").contains("| +20.0% † |"));
+    let u = md_row("uniform-all-pixels", "1 spp");
+    assert!(u.contains("| +4.0% |") && !u.contains('†'), "{u}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let j = json["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["name"] == "cycles-adaptive")
+        .unwrap();
+    assert_eq!(j["equal_time"], false);
+    assert!(json["headline"]
+        .as_str()
+        .unwrap()
+        .contains("Not at equal time (beyond ±5%): cycles-adaptive +20.0% †"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `report.json` documents each of its top-level keys in `fields` and each key of
+/// a run in `run_fields`, one line each: a key added without its line fails.
+#[test]
+fn report_json_documents_every_field() {
+    let dir = temp_dir("fields");
+    write_report(&dir, &sample_input()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let keys = |v: &serde_json::Value| -> Vec<String> {
+        let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+        k.sort();
+        k
+    };
+    assert_eq!(keys(&json), keys(&json["fields"]));
+    for run in json["runs"].as_array().unwrap() {
+        assert_eq!(keys(run), keys(&json["run_fields"]));
+    }
+    for doc in [&json["fields"], &json["run_fields"]] {
+        for (k, line) in doc.as_object().unwrap() {
+            let line = line.as_str().unwrap();
+            assert!(line.len() > 10 && !line.contains('\n'), "{k}: {line:?}");
+        }
+    }
+    for k in ["width", "height", "exposure", "error_map_scale"] {
+        assert!(json["fields"][k].is_string(), "{k}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The 99th percentile of |Δ luminance| of one run, as the report's scale takes it.
+fn p99_error(run: &Run, reference: &[Vec3]) -> f32 {
+    let lum = |c: Vec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let mut e: Vec<f32> = run
+        .image
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (lum(*a) - lum(*b)).abs())
+        .collect();
+    e.sort_by(f32::total_cmp);
+    e[((e.len() as f64 * 0.99) as usize).min(e.len() - 1)]
+}
+
+/// Each budget's error maps (and the full render's, and the interpolation runs')
+/// have their own colour scale, the largest 99th percentile among their maps, and
+/// its maximum is printed under each of them.
+#[test]
+fn error_maps_have_one_scale_per_budget() {
+    let dir = temp_dir("scales");
+    let mut input = sample_input();
+    input.all_images = true;
+    write_report(&dir, &input).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let scales = json["error_map_scale"].as_array().unwrap();
+    let labels: Vec<&str> = scales.iter().map(|s| s["maps"].as_str().unwrap()).collect();
+    assert_eq!(
+        labels,
+        [
+            "full render",
+            "budget 5%",
+            "budget 25%",
+            "interpolation, 1%"
+        ]
+    );
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let mut maxima = Vec::new();
+    for s in scales {
+        let group = |r: &&Run| {
+            r.seed == 0
+                && match (s["budget"].as_f64(), r.kind) {
+                    (None, RunKind::Full { .. }) => true,
+                    (
+                        Some(b),
+                        RunKind::Adaptive { budget, .. } | RunKind::Baseline { budget, .. },
+                    ) => budget == b && s["maps"] != "interpolation, 1%",
+                    (Some(b), RunKind::Interpolation { budget, .. }) => {
+                        budget == b && s["maps"] == "interpolation, 1%"
+                    }
+                    _ => false,
+                }
+        };
+        let expected = input
+            .runs
+            .iter()
+            .filter(group)
+            .map(|r| p99_error(r, &input.reference))
+            .fold(0.0f32, f32::max);
+        let max = s["max"].as_f64().unwrap() as f32;
+        assert!(
+            (max - expected).abs() <= 1e-6 * expected,
+            "{}: {max} vs {expected}",
+            s["maps"]
+        );
+        // Printed on the legend under each of its maps.
+        assert!(html.contains(&format!("≥ {max:.2e}<")), "{max:.2e}");
+        maxima.push(max);
+    }
+    assert!(
+        maxima[1] > 1.5 * maxima[2],
+        "the two budgets' errors differ, so must their scales: {maxima:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// End to end through the command line: budgets reach `report.json` as written
+/// (0.17, not the f32's 0.17000000178813934), adaptive runs carry their spp.
+#[test]
+fn compare_writes_budgets_as_given() {
+    let dir = temp_dir("cli-budgets");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_gradtrace"))
+        .args([
+            "compare",
+            "scenes/cornell.toml",
+            "--width",
+            "24",
+            "--height",
+            "16",
+        ])
+        .args([
+            "--spp",
+            "2",
+            "--reference-spp",
+            "4",
+            "--strategies",
+            "gradient",
+        ])
+        .args(["--budgets", "0.17,0.3", "--quiet", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    assert!(text.contains("\"budget\": 0.17,"), "{text}");
+    assert!(text.contains("\"equal_time_budget\": 0.3,"), "{text}");
+    assert!(!text.contains("0.1700000") && !text.contains("0.3000000"));
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for run in json["runs"].as_array().unwrap() {
+        if run["kind"] == "adaptive" {
+            assert_eq!(run["spp"], 2, "{run}");
+        }
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

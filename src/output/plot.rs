@@ -5,17 +5,64 @@
 //! as `<text>` elements that the browser renders with its own fonts, so no font
 //! file is needed at build or run time.
 
+use plotters::element::{Drawable, PointCollection};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters_backend::{BackendCoord, DrawingErrorKind};
 
 /// One line of a plot: a strategy's points `(x, y, point label)`, and for each
-/// point optionally the interval `(y_lo, y_hi)` drawn as an error bar.
+/// point its interval `(y_lo, y_hi)`, drawn as an error bar.
 #[derive(Clone, Debug)]
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64, String)>,
-    /// Empty, or one interval per point.
+    /// One per point (missing ones count as `None`). `None`: the point has no
+    /// interval (one seed); it is drawn hollow and the plot's note says why, so
+    /// that a missing bar never reads as a tiny one.
     pub bars: Vec<Option<(f64, f64)>>,
+}
+
+/// A vertical error bar in pixel coordinates, drawn as SVG `<line>`s (the plot's
+/// only ones, so a reader or a test can find every bar): a cap at an end inside
+/// the plot, an arrowhead at an end the plot cuts off.
+struct Bar {
+    /// (x, y) of the upper and the lower end, in chart coordinates.
+    ends: [(f64, f64); 2],
+    /// Whether the upper / lower end was cut at the plot's edge.
+    cut: [bool; 2],
+    style: ShapeStyle,
+}
+
+impl<'a> PointCollection<'a, (f64, f64)> for &'a Bar {
+    type Point = &'a (f64, f64);
+    type IntoIter = &'a [(f64, f64); 2];
+    fn point_iter(self) -> Self::IntoIter {
+        &self.ends
+    }
+}
+
+impl<DB: DrawingBackend> Drawable<DB> for Bar {
+    fn draw<I: Iterator<Item = BackendCoord>>(
+        &self,
+        pos: I,
+        backend: &mut DB,
+        _: (u32, u32),
+    ) -> Result<(), DrawingErrorKind<DB::ErrorType>> {
+        let p: Vec<BackendCoord> = pos.take(2).collect();
+        let [top, bottom] = [p[0], p[1]];
+        backend.draw_line(top, bottom, &self.style)?;
+        // Upper end: the arrow points up (y grows downwards), lower end down.
+        for (end, cut, dir) in [(top, self.cut[0], -1), (bottom, self.cut[1], 1)] {
+            let (x, y) = end;
+            if cut {
+                backend.draw_line((x - 4, y - 5 * dir), end, &self.style)?;
+                backend.draw_line((x + 4, y - 5 * dir), end, &self.style)?;
+            } else {
+                backend.draw_line((x - 4, y), (x + 4, y), &self.style)?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Distinguishable line colours (Tableau 10), picked in series order.
@@ -37,7 +84,11 @@ const PALETTE: [RGBColor; 10] = [
 ///
 /// Points with a non-positive or non-finite coordinate cannot be shown on a log
 /// axis and are left out (a perfect RMSE of 0 has no place on the plot); when no
-/// point remains the plot says so instead of failing. Returns the SVG document.
+/// point remains the plot says so instead of failing. Every other point gets its
+/// error bar: an end beyond a decade past the points (a lower end ≤ 0 above all,
+/// which a log axis cannot show) is cut at the plot's edge and drawn as an arrow,
+/// and a note under the plot explains arrows and hollow (one-seed) points.
+/// Returns the SVG document.
 pub fn loglog_svg(
     title: &str,
     x_desc: &str,
@@ -54,7 +105,7 @@ pub fn loglog_svg(
                 .iter()
                 .enumerate()
                 .filter(|(_, p)| ok(p.0) && ok(p.1))
-                .map(|(i, p)| (p.clone(), bar(i).filter(|b| ok(b.0) && ok(b.1))))
+                .map(|(i, p)| (p.clone(), bar(i).filter(|b| b.0.is_finite() && ok(b.1))))
                 .collect();
             kept.sort_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
             Series {
@@ -83,13 +134,20 @@ pub fn loglog_svg(
             // spanning less than a decade without any number; so the chart is linear
             // in log10 space and the 1-2-5 ticks are drawn here.
             let (x0, x1) = padded_log_range(all().map(|p| p.0));
+            // Bar ends stretch the axis by at most a decade past the points; beyond
+            // that (or at a lower end ≤ 0) a bar is cut and drawn as an arrow.
+            let lowest = all().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            let highest = all().map(|p| p.1).fold(0.0, f64::max);
+            let shown = |v: f64| ok(v) && v >= lowest / 10.0 && v <= highest * 10.0;
             let bar_ends = series
                 .iter()
-                .flat_map(|s| s.bars.iter().flatten().flat_map(|b| [b.0, b.1]));
+                .flat_map(|s| s.bars.iter().flatten().flat_map(|b| [b.0, b.1]))
+                .filter(|&v| shown(v));
             let (y0, y1) = padded_log_range(all().map(|p| p.1).chain(bar_ends));
             let mut chart = ChartBuilder::on(&root)
                 .caption(title, ("sans-serif", 20))
                 .margin(12)
+                .margin_bottom(30)
                 .x_label_area_size(40)
                 .y_label_area_size(70)
                 .build_cartesian_2d(x0.log10()..x1.log10(), y0.log10()..y1.log10())
@@ -104,6 +162,7 @@ pub fn loglog_svg(
                 .draw()
                 .map_err(|e| e.to_string())?;
             draw_ticks(&root, &mut chart, (x0, x1), (y0, y1))?;
+            let (mut cut_any, mut hollow_any) = (false, false);
             for (i, s) in series.iter().enumerate() {
                 let color = PALETTE[i % PALETTE.len()];
                 let xy: Vec<(f64, f64)> = s
@@ -118,21 +177,28 @@ pub fn loglog_svg(
                     .legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                     });
-                for (p, b) in s.points.iter().zip(&s.bars) {
-                    if let Some((lo, hi)) = b {
-                        let x = p.0.log10();
-                        chart
-                            .draw_series(LineSeries::new(
-                                [(x, lo.log10()), (x, hi.log10())],
-                                color.stroke_width(1),
-                            ))
-                            .map_err(|e| e.to_string())?;
-                    }
-                }
+                let bars = s.points.iter().zip(&s.bars).filter_map(|(p, b)| {
+                    let (lo, hi) = (*b)?;
+                    let (top, bottom) = (hi.min(y1), if lo > y0 { lo } else { y0 });
+                    cut_any |= hi > y1 || lo <= y0;
+                    Some(Bar {
+                        ends: [(p.0.log10(), top.log10()), (p.0.log10(), bottom.log10())],
+                        cut: [hi > y1, lo <= y0],
+                        style: color.stroke_width(1),
+                    })
+                });
+                chart.draw_series(bars).map_err(|e| e.to_string())?;
+                hollow_any |= s.bars.iter().any(Option::is_none);
                 chart
-                    .draw_series(s.points.iter().map(|p| {
+                    .draw_series(s.points.iter().zip(&s.bars).map(|(p, b)| {
+                        let style = if b.is_some() {
+                            color.filled()
+                        } else {
+                            WHITE.filled()
+                        };
                         EmptyElement::at((p.0.log10(), p.1.log10()))
-                            + Circle::new((0, 0), 4, color.filled())
+                            + Circle::new((0, 0), 4, style)
+                            + Circle::new((0, 0), 4, color.stroke_width(1))
                             + Text::new(p.2.clone(), (6, -14), ("sans-serif", 13).into_font())
                     }))
                     .map_err(|e| e.to_string())?;
@@ -144,6 +210,20 @@ pub fn loglog_svg(
                 .border_style(BLACK)
                 .draw()
                 .map_err(|e| e.to_string())?;
+            let mut note = String::from("Bars: 95% interval over the seeds.");
+            if cut_any {
+                note += " Arrow: the interval goes on past the plot's edge.";
+            }
+            if hollow_any {
+                note += " Hollow point: one seed, no interval.";
+            }
+            let (_, height) = root.dim_in_pixel();
+            root.draw(&Text::new(
+                note,
+                (12, height as i32 - 20),
+                ("sans-serif", 13).into_font(),
+            ))
+            .map_err(|e| e.to_string())?;
             root.present().map_err(|e| e.to_string())?;
         }
     }

@@ -38,18 +38,20 @@ const JPEG_QUALITY: u8 = 90;
 /// How a run spent its samples, which decides what it is compared with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RunKind {
-    /// Adaptive sampling at `budget` samples per pixel (0.05 = 5 % of the pixels);
-    /// strategies compare at equal sample count.
-    Adaptive { budget: f32 },
+    /// Adaptive sampling at `budget` samples per pixel (0.05 = 5 % of the pixels),
+    /// `spp` camera samples per evaluated point; strategies compare at equal
+    /// sample count. Budgets are f64 as the user wrote them, so that `report.json`
+    /// prints 0.17, not a widened f32.
+    Adaptive { budget: f64, spp: u32 },
     /// What a user would run instead, every pixel rendered (uniformly, adaptively
     /// per pixel, or denoised), at about the wall time of the `gradient` strategy
     /// at `budget`: the equal-time comparison. `spp`: samples per pixel (mean).
-    Baseline { budget: f32, spp: u32 },
+    Baseline { budget: f64, spp: u32 },
     /// Every pixel at `spp`, the same samples per point as the adaptive runs.
     Full { spp: u32 },
-    /// An interpolation experiment at `budget` samples per pixel (Sec. 8: gradient
-    /// vs linear interpolation of soft shadows).
-    Interpolation { budget: f32 },
+    /// An interpolation experiment at `budget` samples per pixel, `spp` per point
+    /// (Sec. 8: gradient vs linear interpolation of soft shadows).
+    Interpolation { budget: f64, spp: u32 },
 }
 
 impl RunKind {
@@ -64,32 +66,39 @@ impl RunKind {
     }
 
     /// The budget an adaptive or interpolation run spends (`null` for the others).
-    fn budget(self) -> Option<f32> {
+    fn budget(self) -> Option<f64> {
         match self {
-            RunKind::Adaptive { budget } | RunKind::Interpolation { budget } => Some(budget),
+            RunKind::Adaptive { budget, .. } | RunKind::Interpolation { budget, .. } => {
+                Some(budget)
+            }
             _ => None,
         }
     }
 
     /// The budget whose time a run is measured against (adaptive and baselines).
-    fn group(self) -> Option<f32> {
+    fn group(self) -> Option<f64> {
         match self {
-            RunKind::Adaptive { budget } | RunKind::Baseline { budget, .. } => Some(budget),
+            RunKind::Adaptive { budget, .. } | RunKind::Baseline { budget, .. } => Some(budget),
             _ => None,
         }
     }
 
-    fn spp(self) -> Option<u32> {
+    /// Camera samples per evaluated point (adaptive, interpolation) or per pixel.
+    fn spp(self) -> u32 {
         match self {
-            RunKind::Baseline { spp, .. } | RunKind::Full { spp } => Some(spp),
-            _ => None,
+            RunKind::Adaptive { spp, .. }
+            | RunKind::Baseline { spp, .. }
+            | RunKind::Full { spp }
+            | RunKind::Interpolation { spp, .. } => spp,
         }
     }
 
     /// Short text for tables and plot points: "5%" or "4 spp".
     fn short(self) -> String {
         match self {
-            RunKind::Adaptive { budget } | RunKind::Interpolation { budget } => percent(budget),
+            RunKind::Adaptive { budget, .. } | RunKind::Interpolation { budget, .. } => {
+                percent(budget)
+            }
             RunKind::Baseline { spp, .. } | RunKind::Full { spp } => format!("{spp} spp"),
         }
     }
@@ -112,6 +121,9 @@ pub struct Run {
     /// The part of `wall_time_s` spent outside the renderer (quadtree and
     /// reconstruction, or the denoiser).
     pub overhead_s: f64,
+    /// For a run meant to take the time of another (the baselines, `gradient+oidn`):
+    /// that run's wall time at the same seed, which its own is measured against.
+    pub target_s: Option<f64>,
     /// Linear RGB, row-major, top row first, `width × height` pixels.
     pub image: Vec<Vec3>,
     /// Sample positions in continuous pixel coordinates (`[0, W] × [0, H]`, origin
@@ -167,17 +179,26 @@ pub struct ReportRow {
     pub kind: String,
     /// Samples per pixel of an adaptive / interpolation run (0.05 = 5 %); null for
     /// baselines and full renders.
-    pub budget: Option<f32>,
+    pub budget: Option<f64>,
     /// For adaptive runs and baselines: the budget of the `gradient` run whose
     /// wall time the baselines match.
-    pub equal_time_budget: Option<f32>,
+    pub equal_time_budget: Option<f64>,
     pub seeds: u32,
-    /// Samples per pixel of a baseline or full render (the mean, for per-pixel
-    /// adaptive ones); null for adaptive and interpolation runs.
-    pub spp: Option<u32>,
+    /// Camera samples per evaluated point (adaptive, interpolation) or per pixel
+    /// (baselines — the mean for per-pixel adaptive ones — and full renders).
+    pub spp: u32,
+    /// Camera samples per image pixel, what the run spent: samples × spp / pixels
+    /// for adaptive and interpolation runs, samples / pixels for the others.
+    pub spp_per_pixel: f64,
     pub samples: usize,
     pub wall_s: f64,
     pub overhead_s: f64,
+    /// For runs meant to take another's time (baselines, `gradient+oidn`): the
+    /// seeds' largest relative deviation from that time, signed (0.12 = 12 % longer).
+    pub time_vs_target: Option<f64>,
+    /// Whether `time_vs_target` lies within ±[`EQUAL_TIME_TOLERANCE`]; rows where it
+    /// does not are marked in the tables. Null where there is no target.
+    pub equal_time: Option<bool>,
     pub rmse: f32,
     /// Half-width of the 95 % interval of the mean RMSE over the seeds (Student t);
     /// null with one seed.
@@ -187,7 +208,16 @@ pub struct ReportRow {
     pub relmse_trimmed: f32,
     /// Mean LDR-FLIP on the shared tone mapping.
     pub flip: f32,
+    /// As `rmse_ci95`, for FLIP.
+    pub flip_ci95: Option<f32>,
 }
+
+/// How far an equal-time run's wall time may stray from its target before its
+/// row is marked: beyond it, "equal time" would be a claim the timings do not back.
+pub const EQUAL_TIME_TOLERANCE: f64 = 0.05;
+
+/// The mark of such a row, explained under each table.
+const OFF_TIME_MARK: &str = "†";
 
 /// The figures of one run (one seed).
 #[derive(Clone, Copy, Debug)]
@@ -251,16 +281,45 @@ pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
     };
     let shown = shown_runs(input);
     let errors: Vec<Vec<f32>> = shown.iter().map(|&i| error_of(&input.runs[i])).collect();
-    let error_scale = shared_error_scale(&errors);
+    // One colour scale per budget (and one for the full render, one for the
+    // interpolation runs): a scale shared with a coarser budget would leave a fine
+    // budget's maps uniformly dark.
+    let mut scales: Vec<ErrorScale> = Vec::new();
+    let card_scale: Vec<usize> = shown
+        .iter()
+        .map(|&i| {
+            let (label, budget) = scale_group(input.runs[i].kind);
+            match scales.iter().position(|g| g.label == label) {
+                Some(k) => k,
+                None => {
+                    scales.push(ErrorScale {
+                        label,
+                        budget,
+                        max: 0.0,
+                    });
+                    scales.len() - 1
+                }
+            }
+        })
+        .collect();
+    for (k, scale) in scales.iter_mut().enumerate() {
+        let members: Vec<&Vec<f32>> = errors
+            .iter()
+            .zip(&card_scale)
+            .filter(|(_, &g)| g == k)
+            .map(|(e, _)| e)
+            .collect();
+        scale.max = error_scale(&members);
+    }
     let mut cards = Vec::with_capacity(shown.len());
-    for (&i, err) in shown.iter().zip(&errors) {
+    for ((&i, err), &scale) in shown.iter().zip(&errors).zip(&card_scale) {
         let run = &input.runs[i];
         let stem = format!("run-{i:03}-{}", slug(&run.name));
         let img8 = metrics::tone_map_srgb8(&run.image, input.exposure)?;
         let image = format!("{stem}.jpg");
         assets.push((image.clone(), jpeg_bytes(&img8, w, h).map_err(fail)?));
         let error = format!("{stem}-error.jpg");
-        let map = error_map(err, error_scale);
+        let map = error_map(err, scales[scale].max);
         assets.push((error.clone(), jpeg_bytes(&map, w, h).map_err(fail)?));
         let samples = (!run.sample_positions.is_empty()).then(|| format!("{stem}-samples.png"));
         if let Some(name) = &samples {
@@ -272,13 +331,17 @@ pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
             image,
             error,
             samples,
+            scale,
         });
     }
 
     let plots = speed_plots(input, &rows).map_err(fail)?;
-    let html = html(input, &rows, &cards, &plots, error_scale);
-    let markdown = markdown(input, &rows, &cards);
-    let json = json(input, &rows, error_scale).map_err(fail)?;
+    for (name, svg) in &plots {
+        assets.push((name.clone(), svg.clone().into_bytes()));
+    }
+    let html = html(input, &rows, &cards, &plots, &scales);
+    let markdown = markdown(input, &rows, &cards, &scales);
+    let json = json(input, &rows, &scales).map_err(fail)?;
 
     // Stage everything, then commit: a failure before the first rename leaves the
     // old report (if any) intact; the staged temporaries are removed on drop.
@@ -305,11 +368,37 @@ struct Card {
     image: String,
     error: String,
     samples: Option<String>,
+    /// Index of its error map's scale.
+    scale: usize,
+}
+
+/// The colour scale of one group of error maps.
+#[derive(Serialize)]
+struct ErrorScale {
+    /// "budget 17%", "full render" or "interpolation, 1%".
+    #[serde(rename = "maps")]
+    label: String,
+    budget: Option<f64>,
+    /// |Δ luminance| at the top of the scale.
+    max: f32,
+}
+
+/// The error-scale group of a run and its budget.
+fn scale_group(kind: RunKind) -> (String, Option<f64>) {
+    match kind {
+        RunKind::Adaptive { budget, .. } | RunKind::Baseline { budget, .. } => {
+            (format!("budget {}", percent(budget)), Some(budget))
+        }
+        RunKind::Full { .. } => ("full render".into(), None),
+        RunKind::Interpolation { budget, .. } => {
+            (format!("interpolation, {}", percent(budget)), Some(budget))
+        }
+    }
 }
 
 /// The budget the headline and the default images are about: the one closest to
 /// 17 % (the paper's Fig. 14/15), among those with a `gradient` run.
-fn headline_budget(input: &ReportInput) -> Option<f32> {
+fn headline_budget(input: &ReportInput) -> Option<f64> {
     input
         .runs
         .iter()
@@ -446,28 +535,47 @@ fn summarise(input: &ReportInput, measured: &[Measured]) -> Vec<ReportRow> {
                 mean_ci95(&members.iter().map(|&i| f(i)).collect::<Vec<_>>())
             };
             let (rmse, rmse_ci) = stat(&|i| f64::from(measured[i].rmse));
+            let (flip, flip_ci) = stat(&|i| f64::from(measured[i].flip));
             let mean = |f: &dyn Fn(usize) -> f64| stat(f).0;
-            let spp = match run.kind {
-                RunKind::Baseline { .. } => {
-                    Some(mean(&|i| input.runs[i].kind.spp().unwrap_or(0) as f64).round() as u32)
+            let samples = mean(&|i| input.runs[i].samples as f64);
+            let spp_mean = mean(&|i| f64::from(input.runs[i].kind.spp()));
+            let pixels = (input.width * input.height) as f64;
+            let spp_per_pixel = match run.kind {
+                RunKind::Adaptive { .. } | RunKind::Interpolation { .. } => {
+                    samples * spp_mean / pixels
                 }
-                k => k.spp(),
+                _ => samples / pixels,
             };
+            // The seed furthest from its target decides: a mean could hide a seed
+            // at half the time behind one at one and a half.
+            let time_vs_target = members
+                .iter()
+                .filter_map(|&i| {
+                    let r = &input.runs[i];
+                    r.target_s
+                        .filter(|t| *t > 0.0)
+                        .map(|t| r.wall_time_s / t - 1.0)
+                })
+                .max_by(|a, b| a.abs().total_cmp(&b.abs()));
             ReportRow {
                 name: run.name.clone(),
                 kind: run.kind.name().into(),
                 budget: run.kind.budget(),
                 equal_time_budget: run.kind.group(),
                 seeds: members.len() as u32,
-                spp,
-                samples: mean(&|i| input.runs[i].samples as f64).round() as usize,
+                spp: spp_mean.round() as u32,
+                spp_per_pixel,
+                samples: samples.round() as usize,
                 wall_s: mean(&|i| input.runs[i].wall_time_s),
                 overhead_s: mean(&|i| input.runs[i].overhead_s),
+                time_vs_target,
+                equal_time: time_vs_target.map(|d| d.abs() <= EQUAL_TIME_TOLERANCE),
                 rmse: rmse as f32,
                 rmse_ci95: rmse_ci.map(|c| c as f32),
                 relmse: mean(&|i| f64::from(measured[i].relmse)) as f32,
                 relmse_trimmed: mean(&|i| f64::from(measured[i].relmse_trimmed)) as f32,
-                flip: mean(&|i| f64::from(measured[i].flip)) as f32,
+                flip: flip as f32,
+                flip_ci95: flip_ci.map(|c| c as f32),
             }
         })
         .collect()
@@ -475,9 +583,9 @@ fn summarise(input: &ReportInput, measured: &[Measured]) -> Vec<ReportRow> {
 
 /// For each budget: the equal-time contenders (the `gradient` run, `gradient+oidn`
 /// and every baseline matched to it) and the one with the lowest mean RMSE.
-fn equal_time_groups(rows: &[ReportRow]) -> Vec<(f32, Vec<&ReportRow>)> {
-    let mut budgets: Vec<f32> = rows.iter().filter_map(|r| r.equal_time_budget).collect();
-    budgets.sort_by(f32::total_cmp);
+fn equal_time_groups(rows: &[ReportRow]) -> Vec<(f64, Vec<&ReportRow>)> {
+    let mut budgets: Vec<f64> = rows.iter().filter_map(|r| r.equal_time_budget).collect();
+    budgets.sort_by(f64::total_cmp);
     budgets.dedup();
     budgets
         .into_iter()
@@ -547,6 +655,20 @@ fn headline(input: &ReportInput, rows: &[ReportRow]) -> Option<String> {
             ));
         }
     }
+    // A contender that missed the time is named, so the sentence claims no more
+    // than the timings hold.
+    let off: Vec<String> = members
+        .iter()
+        .filter(|r| r.equal_time == Some(false))
+        .map(|r| format!("{} {}", r.name, time_vs_target_cell(r)))
+        .collect();
+    if !off.is_empty() {
+        dissent.push_str(&format!(
+            " Not at equal time (beyond ±{}%): {}.",
+            100.0 * EQUAL_TIME_TOLERANCE,
+            off.join(", ")
+        ));
+    }
     Some(format!(
         "At equal time on {} (budget {}, about {time:.2} s per image, {seeds} seed{}), {} has the lowest RMSE: {} ({:.2} s); then {others}.{dissent}",
         input.scene,
@@ -597,11 +719,6 @@ fn speed_plots(
             names.push(&r.name);
         }
     }
-    let point_label = |r: &ReportRow| match (r.budget, r.spp) {
-        (Some(b), _) => percent(b),
-        (None, Some(spp)) => format!("{spp} spp"),
-        _ => String::new(),
-    };
     let series = |metric: fn(&ReportRow) -> (f64, Option<f64>)| -> Vec<Series> {
         names
             .iter()
@@ -614,7 +731,7 @@ fn speed_plots(
                     name: (*n).to_string(),
                     points: members
                         .iter()
-                        .map(|r| (r.wall_s, metric(r).0, point_label(r)))
+                        .map(|r| (r.wall_s, metric(r).0, setting(r)))
                         .collect(),
                     bars: members
                         .iter()
@@ -643,8 +760,8 @@ fn speed_plots(
             loglog_svg(
                 &title("FLIP"),
                 "wall time (s)",
-                "mean FLIP",
-                &series(|r| (f64::from(r.flip), None)),
+                "mean FLIP (95% interval over seeds)",
+                &series(|r| (f64::from(r.flip), r.flip_ci95.map(f64::from))),
             )?,
         ),
     ])
@@ -653,7 +770,7 @@ fn speed_plots(
 fn json(
     input: &ReportInput,
     rows: &[ReportRow],
-    error_scale: f32,
+    scales: &[ErrorScale],
 ) -> std::result::Result<String, String> {
     let value = serde_json::json!({
         "scene": input.scene,
@@ -673,16 +790,71 @@ fn json(
             "ci95": "half-width of the 95% Student-t interval of the mean over the seeds",
             "flip": { "variant": "LDR-FLIP (flip-rs, FLIP v1.7)", "pixels_per_degree": FLIP_PPD,
                       "input": "8-bit sRGB of linear x 2^exposure, as the images" },
+            "equal_time_tolerance": EQUAL_TIME_TOLERANCE,
         },
         "exposure": input.exposure,
-        "error_map_scale": error_scale,
+        "error_map_scale": scales,
         "notes": input.notes,
+        "fields": documentation(&JSON_FIELDS),
+        "run_fields": documentation(&RUN_FIELDS),
     });
     serde_json::to_string_pretty(&value).map_err(|e| e.to_string())
 }
 
-/// The header of every table (Markdown and HTML).
-const COLUMNS: [&str; 11] = [
+/// A JSON object of (key, one line) pairs.
+fn documentation(fields: &[(&str, &str)]) -> serde_json::Value {
+    fields
+        .iter()
+        .map(|(k, v)| ((*k).to_string(), serde_json::Value::from(*v)))
+        .collect::<serde_json::Map<_, _>>()
+        .into()
+}
+
+/// `report.json`'s own documentation of its top-level keys (its `fields`), so that
+/// a reader of the file alone knows what each number means.
+const JSON_FIELDS: [(&str, &str); 16] = [
+    ("scene", "name of the compared scene"),
+    ("scene_hash", "SHA-256 of the scene file and every file it references"),
+    ("command", "the command line that wrote this report"),
+    ("version", "gradtrace's version and git commit"),
+    ("threads", "worker threads every run used"),
+    ("width", "image width in pixels, of the reference and of every run"),
+    ("height", "image height in pixels, of the reference and of every run"),
+    ("reference", "{spp, time_s (its render time, also when reused), cache_key, reused (from the cache)}"),
+    ("runs", "one row per method and setting, its figures the mean over its seeds; keys in run_fields"),
+    ("headline", "the sentence naming the lowest RMSE at equal time at the budget nearest 17% (null without one)"),
+    ("metrics", "how the errors are defined: relMSE's epsilon, the trimmed fraction, FLIP's variant, the equal-time tolerance"),
+    ("exposure", "display exposure in stops applied to every image and to FLIP's input (0 = none)"),
+    ("error_map_scale", "per group of error maps ({maps, budget, max}): the |luminance(run) - luminance(reference)| at the top of its colour scale, the largest 99th percentile of its maps"),
+    ("notes", "setup and caveats, as the report's Notes"),
+    ("fields", "this object: one line per top-level key"),
+    ("run_fields", "one line per key of an entry of runs"),
+];
+
+/// `report.json`'s documentation of a row's keys (its `run_fields`).
+const RUN_FIELDS: [(&str, &str); 18] = [
+    ("name", "method: a strategy, a baseline, full, or a Sec. 8 interpolation run"),
+    ("kind", "adaptive, baseline, full or interpolation"),
+    ("budget", "samples per pixel of an adaptive or interpolation run as given (0.17 = 17% of the pixels); null otherwise"),
+    ("equal_time_budget", "for adaptive runs and baselines: the budget whose gradient run's time the baselines match"),
+    ("seeds", "repetitions with independent random numbers; the figures are their mean"),
+    ("spp", "camera samples per evaluated point (adaptive, interpolation) or per pixel (baselines: the mean; full)"),
+    ("spp_per_pixel", "camera samples per image pixel the run spent (adaptive: samples x spp / pixels)"),
+    ("samples", "points evaluated (adaptive, interpolation) or camera samples (full renders, baselines), mean over the seeds"),
+    ("wall_s", "wall time in seconds, overhead included, mean over the seeds"),
+    ("overhead_s", "the part of wall_s outside the renderer: quadtree and reconstruction, or the denoiser"),
+    ("time_vs_target", "runs meant to take the gradient run's time: the seeds' largest relative deviation from it, signed; null otherwise"),
+    ("equal_time", "whether |time_vs_target| <= metrics.equal_time_tolerance (false rows are marked in the report); null without a target"),
+    ("rmse", "root mean squared error against the reference, mean over the seeds"),
+    ("rmse_ci95", "half-width of its 95% Student-t interval over the seeds; null with one seed"),
+    ("relmse", "mean relative squared error, (x - ref)^2 / (ref^2 + relmse_eps)"),
+    ("relmse_trimmed", "relmse without the relmse_trimmed_fraction pixels of highest error"),
+    ("flip", "mean LDR-FLIP on the displayed images"),
+    ("flip_ci95", "half-width of FLIP's 95% interval over the seeds; null with one seed"),
+];
+
+/// The first table of a section: what each run cost, and its RMSE.
+const TIME_COLUMNS: [&str; 9] = [
     "method",
     "kind",
     "budget / spp",
@@ -690,32 +862,97 @@ const COLUMNS: [&str; 11] = [
     "samples",
     "wall time (s)",
     "overhead (s)",
+    "time vs target",
     "RMSE (± 95%)",
-    "relMSE",
-    "relMSE, 0.01% trimmed",
-    "FLIP",
 ];
 
-/// A row's cells, in [`COLUMNS`] order.
-fn cells(r: &ReportRow) -> [String; 11] {
-    let setting = match (r.budget, r.spp) {
-        (Some(b), _) => percent(b),
-        (None, Some(spp)) => format!("{spp} spp"),
-        _ => "–".into(),
-    };
-    [
+/// The second table of a section: the other metrics of the same rows (one table
+/// of fourteen columns did not fit an 800-pixel window).
+const METRIC_COLUMNS: [&str; 5] = [
+    "method",
+    "budget / spp",
+    "relMSE",
+    "relMSE, 0.01% trimmed",
+    "FLIP (± 95%)",
+];
+
+/// A row's setting: "17%" or "16 spp".
+fn setting(r: &ReportRow) -> String {
+    match r.budget {
+        Some(b) => percent(b),
+        None => format!("{} spp", r.spp),
+    }
+}
+
+/// A wall time as the tables and the image cards print it (one format, so that
+/// both show the same number).
+fn seconds(s: f64) -> String {
+    format!("{s:.3}")
+}
+
+/// A mean with its interval, or with "(1 seed)" where there is none.
+fn cell_ci(v: f32, ci: Option<f32>, digits: usize) -> String {
+    match ci {
+        Some(c) => format!("{v:.digits$e} ± {c:.1e}"),
+        None => format!("{v:.digits$e} (1 seed)"),
+    }
+}
+
+/// "+12.3% †" (beyond the tolerance), "−1.0%", or "–" without a target.
+fn time_vs_target_cell(r: &ReportRow) -> String {
+    match r.time_vs_target {
+        Some(d) => {
+            let mark = if r.equal_time == Some(false) {
+                format!(" {OFF_TIME_MARK}")
+            } else {
+                String::new()
+            };
+            format!("{:+.1}%{mark}", 100.0 * d)
+        }
+        None => "–".into(),
+    }
+}
+
+/// A row's cells, in [`TIME_COLUMNS`] order.
+fn time_cells(r: &ReportRow) -> Vec<String> {
+    vec![
         r.name.clone(),
         r.kind.clone(),
-        setting,
+        setting(r),
         r.seeds.to_string(),
         r.samples.to_string(),
-        format!("{:.3}", r.wall_s),
-        format!("{:.3}", r.overhead_s),
-        value_ci(r.rmse, r.rmse_ci95),
+        seconds(r.wall_s),
+        seconds(r.overhead_s),
+        time_vs_target_cell(r),
+        cell_ci(r.rmse, r.rmse_ci95, 3),
+    ]
+}
+
+/// A row's cells, in [`METRIC_COLUMNS`] order.
+fn metric_cells(r: &ReportRow) -> Vec<String> {
+    vec![
+        r.name.clone(),
+        setting(r),
         format!("{:.3e}", r.relmse),
         format!("{:.3e}", r.relmse_trimmed),
-        format!("{:.4}", r.flip),
+        cell_ci(r.flip, r.flip_ci95, 3),
     ]
+}
+
+/// The lines under a section's tables that explain what its cells may show.
+fn table_notes(members: &[&ReportRow]) -> Vec<String> {
+    let mut notes = Vec::new();
+    if members.iter().any(|r| r.time_vs_target.is_some()) {
+        notes.push(format!(
+            "time vs target: the wall time against the gradient run's at the same seed, the seed furthest off; \
+             {OFF_TIME_MARK} beyond ±{}%: not an equal-time result.",
+            100.0 * EQUAL_TIME_TOLERANCE
+        ));
+    }
+    if members.iter().any(|r| r.seeds == 1) {
+        notes.push("(1 seed): a single run, so no interval (a hollow point in the plots).".into());
+    }
+    notes
 }
 
 /// Rows as tables: the full render, one table per budget (its strategies at equal
@@ -729,8 +966,8 @@ fn tables(rows: &[ReportRow]) -> Vec<(String, Vec<&ReportRow>)> {
             full,
         ));
     }
-    let mut budgets: Vec<f32> = rows.iter().filter_map(|r| r.equal_time_budget).collect();
-    budgets.sort_by(f32::total_cmp);
+    let mut budgets: Vec<f64> = rows.iter().filter_map(|r| r.equal_time_budget).collect();
+    budgets.sort_by(f64::total_cmp);
     budgets.dedup();
     for b in budgets {
         let mut members: Vec<&ReportRow> = rows
@@ -761,44 +998,73 @@ fn tables(rows: &[ReportRow]) -> Vec<(String, Vec<&ReportRow>)> {
     out
 }
 
-/// The tables as Markdown (the CLI prints them; closing notes quote them).
+/// The tables as Markdown (the CLI prints them; closing notes quote them): per
+/// section, time and RMSE first, then the other metrics.
 pub fn markdown_table(rows: &[ReportRow]) -> String {
     let mut s = String::new();
-    for (title, members) in tables(rows) {
-        let _ = writeln!(s, "**{title}**\n\n| {} |", COLUMNS.join(" | "));
-        let _ = writeln!(s, "|---|---|{}", "---:|".repeat(COLUMNS.len() - 2));
+    let table = |s: &mut String,
+                 columns: &[&str],
+                 cells: &dyn Fn(&ReportRow) -> Vec<String>,
+                 members: &[&ReportRow],
+                 text_columns: usize| {
+        let _ = writeln!(s, "| {} |", columns.join(" | "));
+        let _ = writeln!(
+            s,
+            "|{}{}",
+            "---|".repeat(text_columns),
+            "---:|".repeat(columns.len() - text_columns)
+        );
         for r in members {
-            let c = cells(r).map(|c| c.replace('|', "\\|"));
+            let c: Vec<String> = cells(r).iter().map(|c| c.replace('|', "\\|")).collect();
             let _ = writeln!(s, "| {} |", c.join(" | "));
         }
-        s += "\n";
+        *s += "\n";
+    };
+    for (title, members) in tables(rows) {
+        let _ = writeln!(s, "**{title}**\n");
+        table(&mut s, &TIME_COLUMNS, &time_cells, &members, 2);
+        table(&mut s, &METRIC_COLUMNS, &metric_cells, &members, 1);
+        for n in table_notes(&members) {
+            let _ = writeln!(s, "{n}\n");
+        }
     }
     s
 }
 
-fn markdown(input: &ReportInput, rows: &[ReportRow], cards: &[Card]) -> String {
+fn markdown(
+    input: &ReportInput,
+    rows: &[ReportRow],
+    cards: &[Card],
+    scales: &[ErrorScale],
+) -> String {
     let mut s = format!("# Comparison: {}\n\n", input.scene);
     if let Some(line) = headline(input, rows) {
         let _ = writeln!(s, "**{line}**\n");
     }
     let _ = writeln!(s, "{}\n", meta_line(input));
     s += &markdown_table(rows);
-    s += "![RMSE against time](report-assets/speed_rmse.svg)\n";
-    let _ = writeln!(s, "\n![reference]({ASSET_DIR}/reference.jpg)\n");
-    for card in cards {
-        let run = &input.runs[card.run];
-        let _ = write!(
-            s,
-            "- {} ({}): [image]({ASSET_DIR}/{}) · [error]({ASSET_DIR}/{})",
-            run.name,
-            run.kind.short(),
-            card.image,
-            card.error
-        );
-        if let Some(m) = &card.samples {
-            let _ = write!(s, " · [samples]({ASSET_DIR}/{m})");
+    let _ = writeln!(
+        s,
+        "![RMSE against time]({ASSET_DIR}/speed_rmse.svg)\n![FLIP against time]({ASSET_DIR}/speed_flip.svg)"
+    );
+    let _ = writeln!(s, "\n![reference]({ASSET_DIR}/reference.jpg)");
+    for (k, scale) in scales.iter().enumerate() {
+        let _ = writeln!(s, "\n{}\n", scale_caption(scale));
+        for card in cards.iter().filter(|c| c.scale == k) {
+            let run = &input.runs[card.run];
+            let _ = write!(
+                s,
+                "- {} ({}): [image]({ASSET_DIR}/{}) · [error]({ASSET_DIR}/{})",
+                run.name,
+                run.kind.short(),
+                card.image,
+                card.error
+            );
+            if let Some(m) = &card.samples {
+                let _ = write!(s, " · [samples]({ASSET_DIR}/{m})");
+            }
+            s += "\n";
         }
-        s += "\n";
     }
     if !input.notes.is_empty() {
         s += "\n## Notes\n\n";
@@ -807,6 +1073,14 @@ fn markdown(input: &ReportInput, rows: &[ReportRow], cards: &[Card]) -> String {
         }
     }
     s
+}
+
+/// "Error maps, budget 17%: |Δ luminance| from 0 to 1.48e-1 …".
+fn scale_caption(scale: &ErrorScale) -> String {
+    format!(
+        "Error maps, {}: |luminance(run) − luminance(reference)|, linear, from 0 to {:.2e} (this group's scale: the largest 99th percentile of its maps).",
+        scale.label, scale.max
+    )
 }
 
 fn meta_line(input: &ReportInput) -> String {
@@ -832,19 +1106,47 @@ fn meta_line(input: &ReportInput) -> String {
 
 const CSS: &str = "body{font-family:sans-serif;margin:1em auto;color:#222;max-width:78em;padding:0 1em}\
 .table{overflow-x:auto}table{border-collapse:collapse;margin:.6em 0;font-size:.9em}\
-td,th{border:1px solid #bbb;padding:.2em .5em;text-align:right;white-space:nowrap}\
+td,th{border:1px solid #bbb;padding:.2em .4em;text-align:right;white-space:nowrap}\
+th{white-space:normal;vertical-align:bottom}td:first-child{white-space:normal;min-width:7em}\
 td:first-child,th:first-child,td:nth-child(2){text-align:left}th{background:#eee}\
+tr.off td{background:#fdecea}.tnote{font-size:.85em;color:#444;margin:.2em 0 .8em}\
 .headline{font-size:1.15em;background:#f4f7ee;border-left:4px solid #6a3;padding:.5em .8em}\
 .grid{display:flex;flex-wrap:wrap;gap:1em}.card{flex:1 1 24em;border:1px solid #ccc;padding:.5em;border-radius:4px}\
 .imgs{display:flex;gap:.4em;flex-wrap:wrap}figure{margin:0;flex:1 1 0;min-width:9em}figcaption{font-size:.8em;color:#555}\
 img{max-width:100%;height:auto;image-rendering:auto}svg{max-width:100%;height:auto}.plots{display:flex;flex-wrap:wrap;gap:1em}";
+
+/// One HTML table of `members`; rows off the equal time are marked by class too.
+fn html_table(
+    s: &mut String,
+    columns: &[&str],
+    cells: &dyn Fn(&ReportRow) -> Vec<String>,
+    members: &[&ReportRow],
+) {
+    *s += "<div class=\"table\"><table><tr>";
+    for c in columns {
+        let _ = write!(s, "<th>{}</th>", esc(c));
+    }
+    *s += "</tr>\n";
+    for r in members {
+        *s += if r.equal_time == Some(false) {
+            "<tr class=\"off\">"
+        } else {
+            "<tr>"
+        };
+        for c in cells(r) {
+            let _ = write!(s, "<td>{}</td>", esc(&c));
+        }
+        *s += "</tr>\n";
+    }
+    *s += "</table></div>\n";
+}
 
 fn html(
     input: &ReportInput,
     rows: &[ReportRow],
     cards: &[Card],
     plots: &[(String, String)],
-    error_scale: f32,
+    scales: &[ErrorScale],
 ) -> String {
     let (w, h) = (input.width, input.height);
     // Thumbnails scale smoothly; a click opens the full-size file.
@@ -868,29 +1170,19 @@ fn html(
     }
     let _ = writeln!(s, "<p>{}</p>", esc(&meta_line(input)));
     for (title, members) in tables(rows) {
-        let _ = write!(
-            s,
-            "<h2>{}</h2>\n<div class=\"table\"><table><tr>",
-            esc(&title)
-        );
-        for c in COLUMNS {
-            let _ = write!(s, "<th>{}</th>", esc(c));
+        let _ = writeln!(s, "<h2>{}</h2>", esc(&title));
+        html_table(&mut s, &TIME_COLUMNS, &time_cells, &members);
+        html_table(&mut s, &METRIC_COLUMNS, &metric_cells, &members);
+        for n in table_notes(&members) {
+            let _ = writeln!(s, "<p class=\"tnote\">{}</p>", esc(&n));
         }
-        s += "</tr>\n";
-        for r in members {
-            s += "<tr>";
-            for c in cells(r) {
-                let _ = write!(s, "<td>{}</td>", esc(&c));
-            }
-            s += "</tr>\n";
-        }
-        s += "</table></div>\n";
     }
     s += "<p>Strategies compare at equal sample count. Baselines are what a user would run instead — every pixel \
           uniformly, a per-pixel adaptive sampler, a denoised render — at about the wall time of the gradient \
           strategy at the same budget: the comparison any speed-up claim must win.</p>\n";
     s += "<h2>Speed against error</h2>\n<p>Log-log; one line per method, points labelled by budget or samples per \
-          pixel; bars: 95% interval over the seeds.</p>\n<div class=\"plots\">\n";
+          pixel; bars: 95% interval over the seeds (an arrow where it goes on past the plot's edge; a hollow \
+          point: one seed, no interval).</p>\n<div class=\"plots\">\n";
     for (_, svg) in plots {
         s += &inline_svg(svg);
         s += "\n";
@@ -900,40 +1192,58 @@ fn html(
         "reference.jpg",
         &format!("reference, {} spp", input.reference_info.spp),
     );
-    let legend = legend_svg(error_scale);
-    s += "<p>Error maps: |luminance(run) − luminance(reference)|, linear units, one scale for all maps.</p>\n<div class=\"grid\">\n";
-    for card in cards {
-        let run = &input.runs[card.run];
-        // The run's own row: same method, kind and setting (a name alone would
-        // find the method at another budget).
-        let row = rows.iter().find(|r| {
-            r.name == run.name
-                && r.kind == run.kind.name()
-                && r.budget == run.kind.budget()
-                && r.equal_time_budget == run.kind.group()
-        });
-        let name = format!("{} ({})", run.name, run.kind.short());
-        let _ = write!(s, "<div class=\"card\"><h3>{}</h3>", esc(&name));
-        if let Some(row) = row {
-            let _ = write!(
-                s,
-                "<p>{:.3} s; RMSE {}</p>",
-                run.wall_time_s,
-                value_ci(row.rmse, row.rmse_ci95)
+    for (k, scale) in scales.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "<h3>Error maps, {}</h3>\n<p>{}</p>\n<div class=\"grid\">",
+            esc(&scale.label),
+            esc(&scale_caption(scale))
+        );
+        for (n, card) in cards.iter().enumerate().filter(|(_, c)| c.scale == k) {
+            let run = &input.runs[card.run];
+            // The run's own row: same method, kind and setting (a name alone would
+            // find the method at another budget).
+            let row = rows.iter().find(|r| {
+                r.name == run.name
+                    && r.kind == run.kind.name()
+                    && r.budget == run.kind.budget()
+                    && r.equal_time_budget == run.kind.group()
+            });
+            // The row's setting too: a baseline's spp is the seeds' mean there.
+            let name = format!(
+                "{} ({})",
+                run.name,
+                row.map_or_else(|| run.kind.short(), setting)
             );
+            let _ = write!(s, "<div class=\"card\"><h4>{}</h4>", esc(&name));
+            if let Some(row) = row {
+                // The row's mean, as the table prints it; the images are one seed's.
+                let _ = write!(
+                    s,
+                    "<p>{} s; RMSE {} ({}; images: seed {})</p>",
+                    seconds(row.wall_s),
+                    value_ci(row.rmse, row.rmse_ci95),
+                    if row.seeds == 1 {
+                        "1 seed".to_string()
+                    } else {
+                        format!("mean of {} seeds", row.seeds)
+                    },
+                    run.seed
+                );
+            }
+            s += "<div class=\"imgs\">";
+            s += &img(&card.image, &name);
+            s += &figure(&card.error, "error map", &legend_svg(scale.max, n));
+            if let Some(m) = &card.samples {
+                s += &img(
+                    m,
+                    &format!("{} sample positions", run.sample_positions.len()),
+                );
+            }
+            s += "</div></div>\n";
         }
-        s += "<div class=\"imgs\">";
-        s += &img(&card.image, &name);
-        s += &figure(&card.error, "error map", &legend);
-        if let Some(m) = &card.samples {
-            s += &img(
-                m,
-                &format!("{} sample positions", run.sample_positions.len()),
-            );
-        }
-        s += "</div></div>\n";
+        s += "</div>\n";
     }
-    s += "</div>\n";
     if !input.notes.is_empty() {
         s += "<h2>Notes</h2>\n<ul>\n";
         for n in &input.notes {
@@ -945,10 +1255,11 @@ fn html(
     s
 }
 
-/// Horizontal viridis bar from 0 to `scale` with three ticks (one under each map).
-fn legend_svg(scale: f32) -> String {
-    let mut s = String::from(
-        "<svg width=\"240\" height=\"34\" viewBox=\"0 0 240 34\"><defs><linearGradient id=\"viridis\">",
+/// Horizontal viridis bar from 0 to `scale` with three ticks (one under each map);
+/// `n` keeps its gradient's id unique in the page.
+fn legend_svg(scale: f32, n: usize) -> String {
+    let mut s = format!(
+        "<svg width=\"240\" height=\"34\" viewBox=\"0 0 240 34\"><defs><linearGradient id=\"viridis{n}\">"
     );
     for k in 0..=16 {
         let t = k as f32 / 16.0;
@@ -958,7 +1269,10 @@ fn legend_svg(scale: f32) -> String {
             viridis_hex(t)
         );
     }
-    s += "</linearGradient></defs><rect x=\"6\" y=\"2\" width=\"228\" height=\"12\" fill=\"url(#viridis)\" stroke=\"#444\"/>";
+    let _ = write!(
+        s,
+        "</linearGradient></defs><rect x=\"6\" y=\"2\" width=\"228\" height=\"12\" fill=\"url(#viridis{n})\" stroke=\"#444\"/>"
+    );
     for k in 0..=2 {
         let x = 6.0 + 114.0 * k as f32;
         let v = scale * k as f32 / 2.0;
@@ -973,10 +1287,10 @@ fn legend_svg(scale: f32) -> String {
     s
 }
 
-/// The luminance error that maps to the top of the colour scale, shared by all
-/// runs so that their maps compare: the largest per-run 99th percentile (a
+/// The luminance error that maps to the top of one group's colour scale, shared
+/// by its maps so that they compare: the largest per-map 99th percentile (a
 /// maximum would let a few firefly pixels make every map black).
-fn shared_error_scale(errors: &[Vec<f32>]) -> f32 {
+fn error_scale(errors: &[&Vec<f32>]) -> f32 {
     let p99 = |e: &Vec<f32>| {
         let mut v = e.clone();
         let k = ((v.len() as f64 * 0.99) as usize).min(v.len() - 1);
@@ -985,7 +1299,7 @@ fn shared_error_scale(errors: &[Vec<f32>]) -> f32 {
     let s = errors
         .iter()
         .filter(|e| !e.is_empty())
-        .map(p99)
+        .map(|e| p99(e))
         .fold(0.0_f32, f32::max);
     if s > 0.0 && s.is_finite() {
         s
@@ -1031,8 +1345,8 @@ fn inline_svg(svg: &str) -> String {
 }
 
 /// Budget in samples per pixel as a percentage of the pixels: 0.05 → "5%".
-fn percent(budget: f32) -> String {
-    let p = f64::from(budget) * 100.0;
+fn percent(budget: f64) -> String {
+    let p = budget * 100.0;
     let s = format!("{p:.2}");
     format!("{}%", s.trim_end_matches('0').trim_end_matches('.'))
 }

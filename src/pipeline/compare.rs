@@ -27,7 +27,9 @@ use std::time::Instant;
 #[derive(Clone, Debug)]
 pub struct CompareOptions {
     pub strategies: Vec<Strategy>,
-    pub budgets: Vec<f32>,
+    /// Samples per pixel, as the user wrote them (f64, so that the report prints
+    /// 0.17 and not 0.17000000178813934); the quadtree gets them as f32.
+    pub budgets: Vec<f64>,
     /// Samples per evaluated point (adaptive samples and full-render pixels);
     /// default: the scene's spp.
     pub spp: Option<u32>,
@@ -88,7 +90,12 @@ impl CompareOptions {
         if self.budgets.is_empty() {
             return bad("--budgets", "needs at least one budget".into());
         }
-        if let Some(b) = self.budgets.iter().find(|b| !(**b > 0.0 && **b <= 16.0)) {
+        // Also > 0 as the f32 the quadtree takes.
+        if let Some(b) = self
+            .budgets
+            .iter()
+            .find(|b| !(**b > 0.0 && **b <= 16.0 && (**b as f32) > 0.0))
+        {
             return bad(
                 "--budgets",
                 format!("{b}: a budget is samples per pixel in (0, 16], e.g. 0.17"),
@@ -310,7 +317,7 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
         let mut gradient_time = None;
         let mut denoiser_time = None;
         for &strategy in &plan.opts.strategies {
-            let settings = Settings::new(strategy, budget);
+            let settings = Settings::new(strategy, budget as f32);
             let out = render_adaptive(
                 plan.scene,
                 plan.accel,
@@ -341,7 +348,10 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
             }
             runs.push(adaptive_run(
                 strategy.name(),
-                RunKind::Adaptive { budget },
+                RunKind::Adaptive {
+                    budget,
+                    spp: plan.spp,
+                },
                 k,
                 out,
             ));
@@ -362,7 +372,9 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
             budget,
             spp: spp_eq,
         };
-        runs.push(full_run("uniform-all-pixels", kind, k, out, secs));
+        let mut run = full_run("uniform-all-pixels", kind, k, out, secs);
+        run.target_s = Some(target);
+        runs.push(run);
         let equal = EqualTime {
             budget,
             spp: spp_eq,
@@ -370,7 +382,10 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
             denoiser_s: denoiser_time,
         };
         let (baselines, discarded_s) = other_baselines(plan, &base, &equal, k, progress)?;
-        runs.extend(baselines);
+        runs.extend(baselines.into_iter().map(|r| Run {
+            target_s: Some(target),
+            ..r
+        }));
         extra_s += discarded_s;
     }
     let rendering_s = runs
@@ -389,7 +404,7 @@ fn denoised_run(
     plan: &Plan,
     base: &RenderOptions,
     out: &AdaptiveRender,
-    budget: f32,
+    budget: f64,
     k: u32,
 ) -> Result<(Run, f64, f64)> {
     let t = Instant::now();
@@ -401,11 +416,16 @@ fn denoised_run(
     let extra = gbuffer_s + denoiser_s;
     let run = Run {
         name: GRADIENT_OIDN.into(),
-        kind: RunKind::Adaptive { budget },
+        kind: RunKind::Adaptive {
+            budget,
+            spp: plan.spp,
+        },
         seed: k,
         samples: out.samples.samples.len(),
         wall_time_s: out.stats.wall_s + extra,
         overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s + extra,
+        // An equal-time contender: measured against the run it denoises.
+        target_s: Some(out.stats.wall_s),
         image: clean,
         sample_positions: out.samples.samples.iter().map(|s| s.pos).collect(),
     };
@@ -416,7 +436,7 @@ fn denoised_run(
 /// (`target`), the spp a full render fits in it, and the denoiser's time on this
 /// image when it ran (the denoised baseline renders less to leave room for it).
 struct EqualTime {
-    budget: f32,
+    budget: f64,
     spp: u32,
     target: f64,
     denoiser_s: Option<f64>,
@@ -547,7 +567,10 @@ fn interpolation_runs(plan: &Plan, reference: &[Vec3]) -> Result<(Vec<Run>, Opti
         let name = format!("1% grid, {} interpolation", interp.name());
         runs.push(adaptive_run(
             &name,
-            RunKind::Interpolation { budget: 0.01 },
+            RunKind::Interpolation {
+                budget: 0.01,
+                spp: plan.reference_spp,
+            },
             0,
             out,
         ));
@@ -730,6 +753,7 @@ fn full_run(name: &str, kind: RunKind, seed: u32, out: RenderOutput, secs: f64) 
         samples: out.width * out.height * spp as usize,
         wall_time_s: secs,
         overhead_s: 0.0,
+        target_s: None,
         image: out.beauty,
         sample_positions: Vec::new(),
     }
@@ -744,6 +768,7 @@ fn adaptive_run(name: &str, kind: RunKind, seed: u32, out: AdaptiveRender) -> Ru
         samples: out.samples.samples.len(),
         wall_time_s: out.stats.wall_s,
         overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s,
+        target_s: None,
         image: out.reconstruction.image,
         sample_positions: out.samples.samples.iter().map(|s| s.pos).collect(),
     }
@@ -759,7 +784,7 @@ fn keep_exrs(plan: &Plan, runs: &[Run]) -> Result<()> {
     let (w, h) = plan.size;
     for r in runs {
         let setting = match r.kind {
-            RunKind::Adaptive { budget } | RunKind::Interpolation { budget } => {
+            RunKind::Adaptive { budget, .. } | RunKind::Interpolation { budget, .. } => {
                 format!("b{budget}")
             }
             RunKind::Baseline { budget, spp } => format!("t{budget}-{spp}spp"),
