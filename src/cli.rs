@@ -116,9 +116,17 @@ pub(crate) struct PreviewArgs {
     /// glossy: vertex budget of the adaptive spatial refinement [default: 20000].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_vertices: Option<u32>,
-    /// Samples per pixel of the path-traced reference [default: the method's].
+    /// Samples per pixel the path-traced reference starts at [default: 256]; raised
+    /// until its noise is at most half the preview's RMSE (the bias resolved).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) reference_spp: Option<u32>,
+    /// The most spp the reference is raised to [default: 4096]; beyond it the bias
+    /// and speed-ups are reported unresolved (null, with the reason).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) reference_spp_max: Option<u32>,
+    /// Frames the precompute is amortised over in `speedup_with_precompute` [default: 100].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) amortise_frames: Option<u32>,
     /// No progress output and no summary.
     #[arg(long, short)]
     pub(crate) quiet: bool,

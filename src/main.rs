@@ -147,17 +147,19 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 .out
                 .unwrap_or_else(|| preview_dir("shadow-field", &a.scene));
             (opts.frames, opts.reference_spp, opts.quiet) = (a.frames, a.reference_spp, a.quiet);
+            (opts.reference_spp_max, opts.amortise_frames) =
+                (a.reference_spp_max, a.amortise_frames);
             let s = run(&opts)?;
             if !a.quiet {
                 println!(
-                    "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), ≥ {:.0}× faster than the path tracer at equal error; wrote {}",
+                    "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {}",
                     s.entities,
                     s.precompute_s,
                     if s.precompute_cached { " (cached)" } else { "" },
                     s.render_s,
                     s.rmse,
                     100.0 * s.rmse_relative,
-                    s.speedup_equal_error_lower_bound,
+                    s.figures.summary(),
                     s.exr.display()
                 );
             }
@@ -168,6 +170,8 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             let mut opts = GlossyOptions::new(&a.scene);
             opts.out_dir = a.out.unwrap_or_else(|| preview_dir("glossy", &a.scene));
             (opts.orbit, opts.reference_spp, opts.quiet) = (a.orbit, a.reference_spp, a.quiet);
+            (opts.reference_spp_max, opts.amortise_frames) =
+                (a.reference_spp_max, a.amortise_frames);
             if let Some(n) = a.uniform {
                 (opts.settings.uniform_levels, opts.settings.spatial) = (n, false);
             }
@@ -177,7 +181,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             let s = run(&opts)?;
             if !a.quiet {
                 println!(
-                    "glossy: {} → {} vertices, precompute {:.1} s{}, frame {:.1} ms, RMSE {:.3e} ({:.1}% of the mean); wrote {} and {}",
+                    "glossy: {} → {} vertices, precompute {:.1} s{}, frame {:.1} ms, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {} and {}",
                     s.vertices_initial,
                     s.vertices_final,
                     s.precompute_s,
@@ -185,6 +189,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                     s.render_ms,
                     s.rmse,
                     100.0 * s.rmse / s.reference_mean.max(1e-12),
+                    s.figures.summary(),
                     s.exr.display(),
                     s.stats_page.display()
                 );

@@ -292,6 +292,7 @@ fn run_end_to_end_on_a_small_scene() {
     opts.quiet = true;
     opts.orbit = Some(2);
     opts.reference_spp = Some(64);
+    opts.reference_spp_max = Some(256);
     opts.settings = Settings {
         samples: 32,
         diffuse_samples: 128,

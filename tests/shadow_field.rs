@@ -120,6 +120,7 @@ fn preview_agrees_with_the_path_tracer_on_the_bunny_scene() {
     opts.quiet = true;
     opts.resolution = Some((96, 72));
     opts.reference_spp = Some(64);
+    opts.reference_spp_max = Some(256);
     opts.settings = Settings {
         rays: 16,
         self_rays: 8,
@@ -167,9 +168,11 @@ fn preview_agrees_with_the_path_tracer_on_the_bunny_scene() {
         "image_mean",
         "rmse",
         "rmse_lowfreq",
-        "reference_spp_equal_error",
-        "reference_s_equal_error",
-        "speedup_equal_error",
+        "reference_spp",
+        "reference_noise_rmse",
+        "path_tracer_s_equal_error",
+        "speedup_per_frame",
+        "speedup_with_precompute",
     ] {
         assert!(json.get(key).is_some(), "preview.json lacks {key}");
     }
@@ -350,6 +353,7 @@ fn deforming_sequence_renders_every_frame() {
     opts.frames = Some(3);
     opts.resolution = Some((64, 48));
     opts.reference_spp = Some(32);
+    opts.reference_spp_max = Some(64);
     opts.settings = Settings {
         rays: 12,
         self_rays: 6,

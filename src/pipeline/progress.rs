@@ -44,6 +44,8 @@ pub struct Phase {
     start: Instant,
     last_log: Mutex<Instant>,
     mode: ProgressMode,
+    /// The step now running ([`Phase::step`]), named in the log lines.
+    step: Mutex<String>,
 }
 
 impl Phase {
@@ -68,6 +70,7 @@ impl Phase {
             start: Instant::now(),
             last_log: Mutex::new(Instant::now()),
             mode,
+            step: Mutex::new(String::new()),
         }
     }
 
@@ -106,6 +109,17 @@ impl Phase {
         }
     }
 
+    /// Names the step now running without a line of its own: beside the bar's
+    /// name, or in the next periodic log line (steps too short to log are many).
+    pub fn step(&self, msg: &str) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!("{}: {msg}", self.name));
+        }
+        if let Ok(mut step) = self.step.lock() {
+            msg.clone_into(&mut step);
+        }
+    }
+
     fn maybe_log(&self, done: u64, total: u64) {
         if self.mode != ProgressMode::Log {
             return;
@@ -123,8 +137,12 @@ impl Phase {
         } else {
             String::new()
         };
+        let step = match self.step.lock() {
+            Ok(s) if !s.is_empty() => format!(" ({s})"),
+            _ => String::new(),
+        };
         eprintln!(
-            "{}: {done}/{total} {} ({:.0}%), {secs:.0} s{eta}",
+            "{}{step}: {done}/{total} {} ({:.0}%), {secs:.0} s{eta}",
             self.name,
             self.unit,
             100.0 * done as f64 / total.max(1) as f64

@@ -3,7 +3,9 @@
 //! `preview.json`: `render_ms` is the wall time of one frame at the scene's
 //! resolution from the cached transfer (the fastest of several warm frames),
 //! `render_median_ms` their median (what a shared machine gives in practice),
-//! `render_cpu_ms` their mean process CPU time over `render_threads` threads.
+//! `render_cpu_ms` their mean process CPU time over `render_threads` threads;
+//! the speed-ups (`figures`) time the scored image itself (`frame_s`:
+//! `subpixels`² positions per pixel).
 //!
 //! The reference is the path tracer with `max_depth = 3` (camera, first surface,
 //! one bounce, then the environment): exactly the light paths the transfer holds
@@ -12,12 +14,13 @@
 use crate::accel::Accel;
 use crate::math::{luminance, Vec2, Vec3};
 use crate::output::{self, OutputImage};
+use crate::pipeline::preview::figures::{self, Figures, Timing};
+use crate::pipeline::progress::{Phase, ProgressMode};
 use crate::preview::glossy::{self, PrefilteredEnv, Settings, Transfer};
 use crate::render::{self, RenderOptions};
 use crate::scene::{Camera, Integrator, Scene};
-use indicatif::{ProgressBar, ProgressStyle};
 use sha2::{Digest, Sha256};
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -28,8 +31,13 @@ pub struct GlossyOptions {
     pub out_dir: PathBuf,
     /// Also render N views on a circle around the scene (`orbit_NNN.png`).
     pub orbit: Option<u32>,
-    /// Samples per pixel of the path-traced reference (default 256).
+    /// Samples per pixel the path-traced reference starts at (default 256);
+    /// raised until it resolves the preview's bias, up to `reference_spp_max`
+    /// (default [`figures::REFERENCE_SPP_MAX`]).
     pub reference_spp: Option<u32>,
+    pub reference_spp_max: Option<u32>,
+    /// Frames the precompute is amortised over (default [`figures::AMORTISE_FRAMES`]).
+    pub amortise_frames: Option<u32>,
     /// Override of the camera resolution (width, height).
     pub resolution: Option<(u32, u32)>,
     pub quiet: bool,
@@ -47,6 +55,8 @@ impl GlossyOptions {
             out_dir: PathBuf::from("out"),
             orbit: None,
             reference_spp: None,
+            reference_spp_max: None,
+            amortise_frames: None,
             resolution: None,
             quiet: false,
             subpixels: 2,
@@ -80,6 +90,8 @@ pub struct GlossySummary {
     /// RMSE over pixels whose corners and centre see the same object (no edge).
     pub rmse_interior: f64,
     pub reference_s: f64,
+    /// Bias, equal-error time and speed-ups against the path tracer.
+    pub figures: Figures,
 }
 
 fn out_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
@@ -87,18 +99,6 @@ fn out_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
         path: path.to_path_buf(),
         message: e.to_string(),
     }
-}
-
-fn progress_bar(quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new(1);
-    pb.set_style(
-        ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} ({eta} left)")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    pb
 }
 
 fn hex(bytes: &[u8]) -> String {
@@ -133,26 +133,46 @@ fn transfer(scene: &Scene, accel: &Accel, opts: &GlossyOptions) -> crate::Result
             return Ok(t);
         }
     }
-    let pb = progress_bar(opts.quiet);
-    let progress = |phase: &str, done: u64, total: u64| {
-        pb.set_message(phase.to_string());
-        pb.set_length(total);
-        pb.set_position(done);
+    // One phase over every step's vertices (each refinement step adds its own
+    // count to the total as it starts); the bar names the step.
+    let phase = Phase::new(
+        ProgressMode::detect(opts.quiet),
+        "glossy precompute",
+        0,
+        "vertices",
+    );
+    let steps = std::sync::Mutex::new((String::new(), 0u64, 0u64));
+    let progress = |step: &str, done: u64, total: u64| {
+        let Ok(mut s) = steps.lock() else {
+            return;
+        };
+        let (name, base, step_total) = &mut *s;
+        if name != step {
+            *base += *step_total;
+            *name = step.to_string();
+            phase.step(step);
+        }
+        *step_total = total;
+        phase.set(*base + done, *base + total);
     };
     let t = glossy::precompute(scene, accel, &opts.settings, &progress)?;
-    pb.finish_and_clear();
+    drop(phase);
     write_bytes(&path, &t.encode(&key))?;
     Ok(t)
 }
 
-/// The path-traced reference (direct + one bounce), cached as an EXR.
+/// The path-traced reference (direct + one bounce) at `spp` and the seed of
+/// index `seed` (0: the renderer's default, the image written; 1, 2: the noise
+/// measurement's), cached as an EXR.
 fn reference(
     scene: &Scene,
     accel: &Accel,
     camera: &Camera,
     opts: &GlossyOptions,
+    spp: u32,
+    seed: u32,
 ) -> crate::Result<(Vec<Vec3>, f64)> {
-    let spp = opts.reference_spp.unwrap_or(256);
+    let seed = (seed > 0).then_some(0x6c05_5000 + seed);
     let mut h = Sha256::new();
     h.update(scene.content_hash()?.as_bytes());
     h.update(
@@ -164,6 +184,9 @@ fn reference(
         )
         .as_bytes(),
     );
+    if let Some(seed) = seed {
+        h.update(format!(" seed {seed}").as_bytes());
+    }
     let path = opts
         .out_dir
         .join("cache")
@@ -175,23 +198,24 @@ fn reference(
             }
         }
     }
-    let pb = progress_bar(opts.quiet);
-    pb.set_message("reference");
-    let progress = |done: usize, total: usize| {
-        pb.set_length(total as u64);
-        pb.set_position(done as u64);
-    };
+    let phase = Phase::new(
+        ProgressMode::detect(opts.quiet),
+        &format!("reference at {spp} spp"),
+        0,
+        "pixels",
+    );
     let ropts = RenderOptions {
         spp: Some(spp),
+        seed,
         max_depth: Some(3),
         integrator: Some(Integrator::Path),
         resolution: Some((camera.width, camera.height)),
         ..Default::default()
     };
     let start = Instant::now();
-    let out = render::render(scene, accel, &ropts, &progress)?;
+    let out = render::render(scene, accel, &ropts, &phase.callback())?;
     let secs = start.elapsed().as_secs_f64();
-    pb.finish_and_clear();
+    drop(phase);
     let mut img = OutputImage::new(out.width, out.height);
     img.push_vec3("", ["R", "G", "B"], &out.beauty);
     img.push_scalar("time.s", vec![secs as f32; out.width * out.height]);
@@ -291,9 +315,24 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         })?;
     let env = PrefilteredEnv::new(env);
     let frame = time_frame(&transfer, &env, &scene, &accel, &camera);
-    let image =
-        glossy::render_supersampled(&transfer, &env, &scene, &accel, &camera, opts.subpixels);
-    let (reference, reference_s) = reference(&scene, &accel, &camera, opts)?;
+    // The scored image's own time (its subpixel positions), for the speed-ups:
+    // the fastest of three, as `render_ms` is of its frames.
+    let mut frame_s = f64::INFINITY;
+    let mut image = Vec::new();
+    for _ in 0..3 {
+        let start = Instant::now();
+        image =
+            glossy::render_supersampled(&transfer, &env, &scene, &accel, &camera, opts.subpixels);
+        frame_s = frame_s.min(start.elapsed().as_secs_f64());
+    }
+    let spp_max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
+    let refs = figures::converge_reference(
+        &image,
+        opts.reference_spp.unwrap_or(256),
+        spp_max,
+        |spp, seed| reference(&scene, &accel, &camera, opts, spp, seed),
+    )?;
+    let reference = refs.beauty.clone();
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| out_err(&opts.out_dir, e))?;
     let name = scene.name();
     let (w, h) = (camera.width as usize, camera.height as usize);
@@ -342,6 +381,11 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
     let levels = level_image(&transfer, &accel, &camera);
     output::write_png(&levels_png, &levels, w, h)?;
     let s = &transfer.stats;
+    let timing = Timing {
+        precompute_s: s.precompute_s,
+        frame_s,
+        frames: opts.amortise_frames.unwrap_or(figures::AMORTISE_FRAMES),
+    };
     let summary = GlossySummary {
         json: opts.out_dir.join("preview.json"),
         stats_page: opts.out_dir.join(format!("{name}_stats.md")),
@@ -360,7 +404,8 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         reference_mean: mean_luminance(&reference),
         rmse,
         rmse_interior,
-        reference_s,
+        reference_s: refs.seconds,
+        figures: figures::figures(rmse, &refs, spp_max, timing),
     };
     write_json(&summary, opts, &scene, &orbit)?;
     write_stats_page(&summary, &levels_png, &transfer)?;
@@ -485,12 +530,17 @@ fn write_json(
         "rmse_interior": s.rmse_interior,
         "subpixels": opts.subpixels,
         "rmse_over_mean": s.rmse / s.reference_mean.max(1e-12),
-        "reference_s": s.reference_s,
-        "reference_spp": opts.reference_spp.unwrap_or(256),
         "reference_max_depth": 3,
         "orbit": orbit.iter().map(|(f, ms)| serde_json::json!({"file": f, "render_ms": ms})).collect::<Vec<_>>(),
         "settings": format!("{:?}", opts.settings),
     });
+    // The shared figures (reference_spp, reference_s, speedup_*, …) at the top level.
+    let mut json = json;
+    if let (Some(map), Ok(serde_json::Value::Object(figures))) =
+        (json.as_object_mut(), serde_json::to_value(&s.figures))
+    {
+        map.extend(figures);
+    }
     let text = serde_json::to_string_pretty(&json).map_err(|e| out_err(&s.json, e))?;
     write_bytes(&s.json, text.as_bytes())
 }

@@ -9,6 +9,8 @@ use crate::accel::Accel;
 use crate::math::sh::ShF;
 use crate::math::Vec3;
 use crate::output::{self, metrics, OutputImage};
+use crate::pipeline::preview::figures::{self, Figures, Reference, Timing};
+use crate::pipeline::progress::{Phase, ProgressMode};
 use crate::preview::shadow_field::{self as sf, deform, Fields, Pose, Receivers, Settings};
 use crate::render::{render, RenderOptions};
 use crate::scene::{Integrator, Scene};
@@ -26,8 +28,13 @@ pub struct ShadowFieldOptions {
     /// Render this many frames of the scene's `[animation]` (`Some(0)`: the block's
     /// own `frames`); `None`: the still scene, animation ignored.
     pub frames: Option<u32>,
-    /// Samples per pixel of the path-traced direct-lighting reference (default 256).
+    /// Samples per pixel the path-traced direct-lighting reference starts at
+    /// (default 256); raised until it resolves the preview's bias, up to
+    /// `reference_spp_max` (default [`figures::REFERENCE_SPP_MAX`]).
     pub reference_spp: Option<u32>,
+    pub reference_spp_max: Option<u32>,
+    /// Frames the precompute is amortised over (default [`figures::AMORTISE_FRAMES`]).
+    pub amortise_frames: Option<u32>,
     /// Override of the camera resolution.
     pub resolution: Option<(u32, u32)>,
     pub quiet: bool,
@@ -43,6 +50,8 @@ impl ShadowFieldOptions {
             out_dir: PathBuf::from("out"),
             frames: None,
             reference_spp: None,
+            reference_spp_max: None,
+            amortise_frames: None,
             resolution: None,
             quiet: false,
             settings: Settings::default(),
@@ -76,22 +85,10 @@ pub struct ShadowFieldSummary {
     /// Against the reference with the environment replaced by its order-4 projection.
     pub rmse_lowfreq: f64,
     pub rmse_lowfreq_relative: f64,
-    pub reference_spp: u32,
-    pub reference_s: f64,
-    /// spp and time the path tracer needs for the preview's RMSE (from a low-spp
-    /// run's noise, σ²/spp, the reference's own noise subtracted).
-    pub reference_spp_equal_error: f64,
-    pub reference_s_equal_error: f64,
-    pub speedup_equal_error: f64,
-    /// The preview's error with the reference's own noise removed,
-    /// √(rmse² − σ²/reference_spp) (0 when the noise explains it all).
-    pub rmse_bias: f64,
-    /// Whether that error exceeds the reference's noise (σ²/reference_spp): only
-    /// then is the equal-error point estimate well determined; otherwise the path
-    /// tracer needs more than `reference_spp` samples, and the lower bound holds.
-    pub equal_error_resolved: bool,
-    /// speedup at `reference_spp` when unresolved (a lower bound), else the estimate.
-    pub speedup_equal_error_lower_bound: f64,
+    /// Bias, equal-error time and speed-ups (`figures`); `frame_s` is `render_s`
+    /// plus, with `--frames`, the deforming entities' base-sphere updates.
+    #[serde(flatten)]
+    pub figures: Figures,
     pub exr: PathBuf,
     pub png: PathBuf,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -107,9 +104,6 @@ pub struct ShadowFieldSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rmse_worst_frame_relative: Option<f64>,
 }
-
-/// Spp of the low-sample path-traced run that measures the renderer's noise.
-const NOISE_SPP: u32 = 4;
 
 /// Runs the whole command. See the module doc for what it writes.
 pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
@@ -139,27 +133,19 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
     };
     let (fields, precompute_s, cached) = cached_fields(&scene, opts)?;
     let env = sf::environment_sh(scene.environment.as_ref());
-    let reference_spp = opts.reference_spp.unwrap_or(256);
     match frames {
         None => {
             let accel = Accel::build(&scene.meshes, &scene.spheres);
             let frame = shade_frame(&scene, &accel, &fields, &[], &env, &opts.settings);
-            let refs = references(&scene, &accel, &env, reference_spp, opts.quiet)?;
+            let refs = references(&scene, &accel, &env, &frame.shaded.rgb, opts)?;
             let stem = opts.out_dir.join(&name);
-            write_images(&stem, &frame.shaded, &refs.reference)?;
-            let summary = summarise(&scene, &fields, &frame, &refs, precompute_s, cached, &stem);
+            write_images(&stem, &frame.shaded, &refs.reference.beauty)?;
+            let timing = timing(opts, precompute_s, frame.render_s);
+            let summary = summarise(&scene, &fields, &frame, &refs, timing, cached, &stem, opts);
             write_json(&opts.out_dir.join("preview.json"), &summary)?;
             Ok(summary)
         }
-        Some(n) => run_frames(
-            &scene,
-            opts,
-            &fields,
-            &env,
-            n,
-            reference_spp,
-            (precompute_s, cached),
-        ),
+        Some(n) => run_frames(&scene, opts, &fields, &env, n, (precompute_s, cached)),
     }
 }
 
@@ -187,15 +173,19 @@ fn shade_frame(
     }
 }
 
-/// The converged reference, the low-frequency one and the noise measurement.
+/// The reference (at the spp that resolves the preview's bias, or the cap) and
+/// the low-frequency one at the same spp.
 struct References {
-    reference: Vec<Vec3>,
-    reference_s: f64,
+    reference: Reference,
     lowfreq: Vec<Vec3>,
-    /// σ² per sample per channel of the direct-lighting estimator, and its time per spp.
-    noise_var: f64,
-    seconds_per_spp: f64,
-    spp: u32,
+}
+
+fn timing(opts: &ShadowFieldOptions, precompute_s: f64, frame_s: f64) -> Timing {
+    Timing {
+        precompute_s,
+        frame_s,
+        frames: opts.amortise_frames.unwrap_or(figures::AMORTISE_FRAMES),
+    }
 }
 
 fn direct(spp: u32, seed: u32) -> RenderOptions {
@@ -211,65 +201,59 @@ fn references(
     scene: &Scene,
     accel: &Accel,
     env: &[ShF; 3],
-    spp: u32,
-    quiet: bool,
+    preview: &[Vec3],
+    opts: &ShadowFieldOptions,
 ) -> Result<References> {
-    let bar = progress_bar(quiet, "reference tiles");
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
-    let reference = render(scene, accel, &direct(spp, 0x5eed_0001), &progress)?;
-    bar.finish_and_clear();
-    let reference_s = reference.stats.wall_time.as_secs_f64();
+    let mode = ProgressMode::detect(opts.quiet);
+    let start = opts.reference_spp.unwrap_or(256);
+    let max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
+    // Seed index 0 is the reference written (the seed it always had); 1 and 2
+    // only measure its noise and the rate.
+    let seeds = [0x5eed_0001, 0x5eed_0003, 0x5eed_0004];
+    let reference = figures::converge_reference(preview, start, max, |spp, k| {
+        let phase = Phase::new(mode, &format!("reference at {spp} spp"), 0, "pixels");
+        let out = render(
+            scene,
+            accel,
+            &direct(spp, seeds[k as usize % 3]),
+            &phase.callback(),
+        )?;
+        Ok((out.beauty, out.stats.wall_time.as_secs_f64()))
+    })?;
     let lowfreq = match &scene.environment {
         Some(crate::scene::Environment::Constant { .. }) | None => reference.beauty.clone(),
         Some(_) => {
             let mut low = scene.clone();
             low.environment = Some(sf::environment_lowfreq(env, 256, 128));
-            render(&low, accel, &direct(spp, 0x5eed_0002), &|_, _| {})?.beauty
+            render(&low, accel, &direct(reference.spp, 0x5eed_0002), &|_, _| {})?.beauty
         }
     };
-    let noisy = render(scene, accel, &direct(NOISE_SPP, 0x5eed_0003), &|_, _| {})?;
-    let mse = metrics::rmse(&noisy.beauty, &reference.beauty)? as f64;
-    // E|x_s − x_ref|² = σ² (1/s + 1/s_ref).
-    let noise_var = mse * mse / (1.0 / NOISE_SPP as f64 + 1.0 / spp as f64);
-    Ok(References {
-        reference: reference.beauty,
-        reference_s,
-        lowfreq,
-        noise_var,
-        seconds_per_spp: reference_s / spp as f64,
-        spp,
-    })
+    Ok(References { reference, lowfreq })
 }
 
+#[allow(clippy::too_many_arguments)]
 fn summarise(
     scene: &Scene,
     fields: &Fields,
     frame: &Frame,
     refs: &References,
-    precompute_s: f64,
+    timing: Timing,
     cached: bool,
     stem: &Path,
+    opts: &ShadowFieldOptions,
 ) -> ShadowFieldSummary {
     let img = &frame.shaded.rgb;
     let mean = refs
         .reference
+        .beauty
         .iter()
         .map(|c| f64::from(c.x + c.y + c.z))
         .sum::<f64>()
-        / (3 * refs.reference.len().max(1)) as f64;
-    let rmse = metrics::rmse(img, &refs.reference).unwrap_or(f32::NAN) as f64;
-    let rmse_low = metrics::rmse(img, &refs.lowfreq).unwrap_or(f32::NAN) as f64;
-    // The path tracer at s spp scores σ²(1/s + 1/s_ref) against the reference.
-    let excess = rmse * rmse / refs.noise_var - 1.0 / refs.spp as f64;
-    let spp_eq = if excess > 0.0 { 1.0 / excess } else { 1e12 };
-    let s_eq = spp_eq * refs.seconds_per_spp;
-    let reference_noise = refs.noise_var / refs.spp as f64;
-    let bias2 = (rmse * rmse - reference_noise).max(0.0);
-    let resolved = bias2 > reference_noise;
-    let lower_spp = if resolved { spp_eq } else { refs.spp as f64 };
+        / (3 * refs.reference.beauty.len().max(1)) as f64;
+    // Same-sized planes of one camera: the metric cannot fail.
+    let rmse = metrics::rmse(img, &refs.reference.beauty).unwrap_or(0.0) as f64;
+    let rmse_low = metrics::rmse(img, &refs.lowfreq).unwrap_or(0.0) as f64;
+    let max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
     let threads = rayon::current_num_threads();
     let entities = fields.entities.len();
     let points = frame.shaded.points;
@@ -278,7 +262,7 @@ fn summarise(
         scene: scene.name(),
         entities,
         points,
-        precompute_s,
+        precompute_s: timing.precompute_s,
         precompute_cached: cached,
         render_s: frame.render_s,
         us_per_point_entity: frame.render_s * 1e6 * threads as f64
@@ -289,15 +273,7 @@ fn summarise(
         rmse_relative: rmse / mean.max(1e-30),
         rmse_lowfreq: rmse_low,
         rmse_lowfreq_relative: rmse_low / mean.max(1e-30),
-        reference_spp: refs.spp,
-        reference_s: refs.reference_s,
-        reference_spp_equal_error: spp_eq,
-        reference_s_equal_error: s_eq,
-        speedup_equal_error: s_eq / frame.render_s.max(1e-9),
-        rmse_bias: bias2.sqrt(),
-        equal_error_resolved: resolved,
-        speedup_equal_error_lower_bound: lower_spp * refs.seconds_per_spp
-            / frame.render_s.max(1e-9),
+        figures: figures::figures(rmse, &refs.reference, max, timing),
         exr: stem.with_extension("exr"),
         png: stem.with_extension("png"),
         frames: None,
@@ -338,15 +314,16 @@ fn cached_fields(scene: &Scene, opts: &ShadowFieldOptions) -> Result<(Fields, f6
             }
         }
     }
-    let bar = progress_bar(opts.quiet, "field samples");
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
+    let phase = Phase::new(
+        ProgressMode::detect(opts.quiet),
+        "shadow-field precompute",
+        0,
+        "field samples",
+    );
     let start = Instant::now();
-    let fields = sf::precompute(scene, settings, &progress);
+    let fields = sf::precompute(scene, settings, &phase.callback());
     let secs = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
+    drop(phase);
     if opts.cache {
         create_dir(&dir)?;
         let bytes = sf::cache::to_bytes(&fields);
@@ -402,20 +379,6 @@ fn create_dir(dir: &Path) -> Result<()> {
     })
 }
 
-fn progress_bar(quiet: bool, what: &str) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if quiet || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(0);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
-        "{{elapsed_precise}} [{{wide_bar}}] {{pos}}/{{len}} {what}, ETA {{eta}}"
-    )) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar
-}
-
 /// `--frames N`: rigid entities reuse their fields (rotated in SH), deforming ones
 /// are rebuilt each frame from their base-sphere visibility.
 fn run_frames(
@@ -424,7 +387,6 @@ fn run_frames(
     fields: &Fields,
     env: &[ShF; 3],
     n: u32,
-    reference_spp: u32,
     (precompute_s, cached): (f64, bool),
 ) -> Result<ShadowFieldSummary> {
     let Some(anim) = scene.animation.as_ref() else {
@@ -490,27 +452,27 @@ fn run_frames(
         }
         let frame = shade_frame(&posed, &accel, &frame_fields, &poses, env, settings);
         let stem = opts.out_dir.join(format!("{}-f{f:03}", scene.name()));
-        if f == 0 {
-            let refs = references(&posed, &accel, env, reference_spp, opts.quiet)?;
-            write_images(&stem, &frame.shaded, &refs.reference)?;
-            worst = worst.max(metrics::rmse(&frame.shaded.rgb, &refs.reference)? as f64);
-            first = Some((frame, refs, stem));
-        } else {
-            let reference = render(
-                &posed,
-                &accel,
-                &direct(reference_spp, 0x5eed_0001),
-                &|_, _| {},
-            )?;
+        if let Some((_, refs, _)) = &first {
+            // The later frames' references at the spp the first one settled on.
+            let spp = refs.reference.spp;
+            let reference = render(&posed, &accel, &direct(spp, 0x5eed_0001), &|_, _| {})?;
             write_images(&stem, &frame.shaded, &reference.beauty)?;
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &reference.beauty)? as f64);
+        } else {
+            let refs = references(&posed, &accel, env, &frame.shaded.rgb, opts)?;
+            write_images(&stem, &frame.shaded, &refs.reference.beauty)?;
+            worst = worst.max(metrics::rmse(&frame.shaded.rgb, &refs.reference.beauty)? as f64);
+            first = Some((frame, refs, stem));
         }
     }
     let (frame, refs, stem) = first.ok_or_else(|| Error::Option {
         option: "--frames".into(),
         message: "expected at least one frame".into(),
     })?;
-    let mut summary = summarise(scene, fields, &frame, &refs, precompute_s, cached, &stem);
+    // A frame of the sequence costs its shading and its deforming entities' updates.
+    let frame_s = frame.render_s + bsv_total / f64::from(n.max(1));
+    let timing = timing(opts, precompute_s, frame_s);
+    let mut summary = summarise(scene, fields, &frame, &refs, timing, cached, &stem, opts);
     summary.frames = Some(n);
     if bsv_count > 0 {
         summary.bsv_update_s = Some(bsv_total / bsv_count as f64);
