@@ -136,6 +136,9 @@ where
     let file_name = target
         .file_name()
         .ok_or_else(|| output_error(target, "the path does not name a file".into()))?;
+    // The last guard (commands check their outputs before any work): a rename
+    // over a FIFO or a device would replace it with a regular file.
+    super::input::check_output_target(target, "the output")?;
     let dir = parent_dir(target);
     sweep_stale(dir);
     let (file, temp) = create_temp(dir, file_name)
