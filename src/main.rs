@@ -74,6 +74,8 @@ fn main() -> ExitCode {
             }
         }
     };
+    // The temporary names of writers killed mid-commit, wherever they wrote.
+    gradtrace::output::atomic::sweep_pending();
     match std::panic::catch_unwind(|| run(cli)) {
         Ok(Ok(code)) => code,
         Ok(Err(e)) => {

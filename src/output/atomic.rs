@@ -20,10 +20,22 @@
 //! 3. Every staged file holds an exclusive `flock` from the moment it exists
 //!    until the process ends. [`stage`] first sweeps the directory: a
 //!    `.*.gtmp-*` file whose lock it can take belongs to a dead process (locks
-//!    die with their process; a reused PID inherits nothing) and is removed. A
-//!    kill inside step 2's window therefore leaves a name only until the next
-//!    write to that directory. (On a file system without `flock` the sweep
-//!    cannot tell a live writer from a dead one and leaves such names alone.)
+//!    die with their process; a reused PID inherits nothing) and is removed.
+//!    (On a file system without `flock` the sweep cannot tell a live writer
+//!    from a dead one and leaves such names alone.)
+//! 5. No system call replaces a file by an anonymous one, so step 2's window
+//!    cannot be closed, only made to leave nothing for long. Before the
+//!    `linkat`, the writer records the temporary name in a **pending journal**
+//!    (`$TMPDIR/gradtrace-pending-UID/`, one entry per name, itself created
+//!    anonymous, locked and only then named, so an entry is never seen
+//!    incomplete or unlocked while its writer lives) and removes the entry
+//!    after the rename. [`sweep_pending`] — run at the start of every command
+//!    and by every [`stage`] — removes the names recorded by entries whose lock
+//!    it can take (their writer is dead), wherever they are. A kill inside the
+//!    window (a 15 MB `merge` output, say) thus leaves its name until the next
+//!    gradtrace command of that user, not until the next write to that one
+//!    directory, which may never come. The journal is best effort: where it
+//!    cannot be made, step 3 still applies.
 //! 4. Names carry 64 random bits and are created exclusively (retried on the
 //!    rare collision), so a leftover file, or a PID reused in a container, can
 //!    never block a later write.
@@ -73,6 +85,8 @@ pub struct Staged {
     target: PathBuf,
     /// The temporary name, once it has one (from the start in the fallback).
     temp: Option<PathBuf>,
+    /// The pending-journal entry of an anonymous file's temporary name (step 5).
+    journal: Option<Journaled>,
     committed: bool,
 }
 
@@ -87,7 +101,7 @@ impl Staged {
         if let Some(t) = &self.temp {
             return Ok(t.clone());
         }
-        let temp = link_anonymous(&self.file, &self.target)
+        let temp = link_anonymous(&self.file, &self.target, &mut self.journal)
             .map_err(|e| output_error(&self.target, format!("cannot name the new file: {e}")))?;
         self.temp = Some(temp.clone());
         Ok(temp)
@@ -99,6 +113,9 @@ impl Staged {
         std::fs::rename(&temp, &self.target)
             .map_err(|e| output_error(&self.target, format!("cannot replace the file: {e}")))?;
         self.committed = true;
+        if let Some(j) = self.journal.take() {
+            j.remove();
+        }
         Ok(())
     }
 
@@ -115,6 +132,9 @@ impl Drop for Staged {
     fn drop(&mut self) {
         if let (false, Some(t)) = (self.committed, &self.temp) {
             let _ = std::fs::remove_file(t);
+        }
+        if let Some(j) = self.journal.take() {
+            j.remove();
         }
     }
 }
@@ -136,7 +156,11 @@ where
     let file_name = target
         .file_name()
         .ok_or_else(|| output_error(target, "the path does not name a file".into()))?;
+    // The last guard (commands check their outputs before any work): a rename
+    // over a FIFO or a device would replace it with a regular file.
+    super::input::check_output_target(target, "the output")?;
     let dir = parent_dir(target);
+    sweep_pending();
     sweep_stale(dir);
     let (file, temp) = create_temp(dir, file_name)
         .map_err(|e| output_error(target, format!("cannot create a temporary file: {e}")))?;
@@ -145,6 +169,7 @@ where
         file,
         target: target.to_path_buf(),
         temp,
+        journal: None,
         committed: false,
     };
     let handle = staged
@@ -282,8 +307,14 @@ fn same_file(_file: &File, path: &Path) -> bool {
     path.exists()
 }
 
-/// Names an anonymous file next to `target` (retrying on a name collision).
-fn link_anonymous(file: &File, target: &Path) -> std::io::Result<PathBuf> {
+/// Names an anonymous file next to `target` (retrying on a name collision),
+/// recording the name in the pending journal first (step 5; `journal` gets
+/// the entry).
+fn link_anonymous(
+    file: &File,
+    target: &Path,
+    journal: &mut Option<Journaled>,
+) -> std::io::Result<PathBuf> {
     let dir = parent_dir(target);
     let name = target.file_name().unwrap_or(OsStr::new("file"));
     #[cfg(target_os = "linux")]
@@ -291,6 +322,10 @@ fn link_anonymous(file: &File, target: &Path) -> std::io::Result<PathBuf> {
         let mut last = None;
         for _ in 0..16 {
             let path = temp_path(dir, name);
+            if let Some(old) = journal.take() {
+                old.remove();
+            }
+            *journal = Journaled::record(&path);
             match linux::link(file, &path) {
                 Ok(()) => return Ok(path),
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
@@ -301,8 +336,105 @@ fn link_anonymous(file: &File, target: &Path) -> std::io::Result<PathBuf> {
     }
     #[cfg(not(target_os = "linux"))]
     {
-        let _ = (file, dir, name);
+        let _ = (file, dir, name, journal);
         Err(std::io::Error::other("anonymous files need Linux"))
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The pending journal (step 5 of the scheme).
+// ---------------------------------------------------------------------------
+
+/// This user's journal folder, created (mode 0700) when missing; `None` where
+/// it cannot be made or is not this user's own folder.
+#[cfg(target_os = "linux")]
+fn journal_dir() -> Option<PathBuf> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+    // SAFETY: getuid has no preconditions and cannot fail.
+    let uid = unsafe { libc::getuid() };
+    let dir = std::env::temp_dir().join(format!("gradtrace-pending-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let m = std::fs::symlink_metadata(&dir).ok()?;
+    (m.is_dir() && m.uid() == uid).then_some(dir)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn journal_dir() -> Option<PathBuf> {
+    None
+}
+
+/// A journal entry: a locked file holding one temporary name. Dropped without
+/// [`Journaled::remove`], it stays for [`sweep_pending`] (the process is dying).
+#[derive(Debug)]
+struct Journaled {
+    path: PathBuf,
+    _lock: File,
+}
+
+impl Journaled {
+    /// Records `temp` (made absolute); `None` where the journal is unusable.
+    #[cfg(target_os = "linux")]
+    fn record(temp: &Path) -> Option<Self> {
+        use std::io::Write;
+        let dir = journal_dir()?;
+        let abs = std::path::absolute(temp).ok()?;
+        let mut file = linux::open_anonymous(&dir)?;
+        file.try_lock().ok()?;
+        file.write_all(abs.as_os_str().as_encoded_bytes()).ok()?;
+        for _ in 0..16 {
+            let path = dir.join(format!("{:016x}", random_u64()));
+            match linux::link(&file, &path) {
+                Ok(()) => return Some(Self { path, _lock: file }),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+                Err(_) => return None,
+            }
+        }
+        None
+    }
+
+    #[cfg(not(target_os = "linux"))]
+    fn record(_temp: &Path) -> Option<Self> {
+        None
+    }
+
+    /// Removes the entry (its name is gone or in place: nothing to sweep).
+    fn remove(self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Removes the temporary names that dead writers recorded in the pending
+/// journal, and their entries (step 5). Best effort and cheap (the journal is
+/// empty but for killed writers); every command calls it at its start.
+pub fn sweep_pending() {
+    let Some(dir) = journal_dir() else {
+        return;
+    };
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let Ok(file) = File::open(&path) else {
+            continue;
+        };
+        // Locked: its writer lives (this process's own entries included:
+        // flock conflicts between open files, not processes).
+        if file.try_lock().is_err() || !same_file(&file, &path) {
+            continue;
+        }
+        if let Ok(text) = std::fs::read(&path) {
+            let temp = PathBuf::from(OsString::from(String::from_utf8_lossy(&text).as_ref()));
+            // Only a temporary name, and only one whose own lock is free.
+            if temp.file_name().is_some_and(is_temp_name) {
+                if let Ok(t) = File::open(&temp) {
+                    if t.try_lock().is_ok() && same_file(&t, &temp) {
+                        let _ = std::fs::remove_file(&temp);
+                    }
+                }
+            }
+        }
+        let _ = std::fs::remove_file(&path);
     }
 }
 

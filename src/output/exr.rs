@@ -14,6 +14,8 @@ use exr::prelude::{
     read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds,
     Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
 };
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 /// Where an EXR's planes sit in the full image, and where they came from.
@@ -164,23 +166,36 @@ fn header_attributes(
 /// [`read_exr`] with the header: the display window, where the data window sits
 /// in it, and every string attribute (sorted by name).
 pub fn read_exr_with_header(path: &Path) -> crate::Result<(OutputImage, ExrHeader)> {
-    check_header_size(path)?;
+    read_exr_input(path, &[])
+}
+
+/// [`read_exr_with_header`] for a command that also writes `outputs`: the file
+/// is opened by [`super::input::open_input`] (a regular file, none of the
+/// outputs) and its header checked by [`check_header`], all before any pixel
+/// is allocated.
+pub fn read_exr_input(path: &Path, outputs: &[&Path]) -> crate::Result<(OutputImage, ExrHeader)> {
+    let mut file = super::input::open_input(path, "an EXR file", outputs)?;
+    check_header(path, &file)?;
+    file.seek(SeekFrom::Start(0)).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(BufReader::new(file))
         .map_err(|e| match e {
-            exr::error::Error::Io(source) => Error::Io {
+            // The header and the offsets were checked: what fails now is the data.
+            exr::error::Error::Io(source) => Error::Asset {
                 path: path.to_path_buf(),
-                source,
+                message: format!(
+                    "cannot decode the pixel data ({source}); expected a complete, uncorrupted EXR file"
+                ),
             },
-            other => Error::Asset {
-                path: path.to_path_buf(),
-                message: format!("invalid EXR: {other}"),
-            },
+            other => exr_error(path, other),
         })?;
     let mut out: Option<OutputImage> = None;
     for layer in &image.layer_data {
@@ -222,8 +237,10 @@ pub fn read_exr_with_header(path: &Path) -> crate::Result<(OutputImage, ExrHeade
         ..ExrHeader::default()
     };
     if let Some(layer) = image.layer_data.first() {
+        // Not negative: `check_header` refused a data window outside the
+        // display window (it used to be clamped to 0 here and accepted).
         let p = layer.attributes.layer_position - display.position;
-        header.origin = (p.x().max(0) as usize, p.y().max(0) as usize);
+        header.origin = (p.x() as usize, p.y() as usize);
     }
     let others = image.layer_data.iter().map(|l| &l.attributes.other);
     for other in others.chain([&image.attributes.other]) {
@@ -255,21 +272,82 @@ fn exr_error(path: &Path, e: exr::error::Error) -> Error {
 /// a scene may ask for (`scene::MAX_PIXELS`).
 pub const MAX_READ_PIXELS: u64 = 1 << 28;
 
-/// Rejects, from the header alone, a file whose parts claim more than
-/// [`MAX_READ_PIXELS`] pixels: the reader would allocate them before noticing
-/// the file is short, and an allocation failure aborts the process.
-fn check_header_size(path: &Path) -> crate::Result<()> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+/// Counts the bytes a reader handed out: where the header ended.
+struct Counting<R> {
+    inner: R,
+    read: u64,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.read += n as u64;
+        Ok(n)
+    }
+}
+
+/// Checks, from the header and the offset tables alone, what the decoder would
+/// otherwise find out by allocating or seeking: every part's data window and the
+/// display window at most [`MAX_READ_PIXELS`] (a claimed 10⁹² display window
+/// was allocated by `merge` for the whole image), the data window inside the
+/// display window (a tile's place in the image: a negative or overhanging
+/// origin cannot be placed), and every chunk offset inside the file (one ≥ 2⁶³
+/// made the decoder's seek fail with a bare "Invalid argument").
+fn check_header(path: &Path, file: &File) -> crate::Result<()> {
+    let err = |message: String| Error::Asset {
+        path: path.to_path_buf(),
+        message,
+    };
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let len = file.metadata().map_err(io)?.len();
+    let mut reader = Counting {
+        inner: BufReader::new(file),
+        read: 0,
+    };
+    let meta = exr::meta::MetaData::read_from_buffered(&mut reader, false)
+        .map_err(|e| exr_error(path, e))?;
+    let pixels = |w: usize, h: usize| (w as u64).saturating_mul(h as u64);
+    let mut chunks = 0u64;
     for h in &meta.headers {
-        let (w, ht) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
-        if w.saturating_mul(ht) > MAX_READ_PIXELS {
-            return Err(Error::Asset {
-                path: path.to_path_buf(),
-                message: format!(
-                    "the header declares {w}×{ht} pixels, more than the {} supported",
-                    MAX_READ_PIXELS
-                ),
-            });
+        let d = &h.shared_attributes.display_window;
+        let (dw, dh) = (d.size.width(), d.size.height());
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        for (what, w, ht) in [("display", dw, dh), ("data", w, ht)] {
+            if pixels(w, ht) > MAX_READ_PIXELS {
+                return Err(err(format!(
+                    "the header declares a {what} window of {w}×{ht} pixels; expected at most {MAX_READ_PIXELS} (2^28, as scene::MAX_PIXELS)"
+                )));
+            }
+        }
+        let p = h.own_attributes.layer_position;
+        let (x0, y0) = (i64::from(p.x()), i64::from(p.y()));
+        let (dx0, dy0) = (i64::from(d.position.x()), i64::from(d.position.y()));
+        let (x1, y1) = (x0 + w as i64, y0 + ht as i64);
+        let (dx1, dy1) = (dx0 + dw as i64, dy0 + dh as i64);
+        if x0 < dx0 || y0 < dy0 || x1 > dx1 || y1 > dy1 {
+            return Err(err(format!(
+                "the data window ({x0}, {y0})–({x1}, {y1}) does not lie inside the display window ({dx0}, {dy0})–({dx1}, {dy1}); expected a data window inside the display window"
+            )));
+        }
+        chunks += h.chunk_count as u64;
+    }
+    let table_end = reader.read.saturating_add(chunks.saturating_mul(8));
+    if table_end > len {
+        return Err(err(format!(
+            "is {len} bytes long, shorter than its header and chunk offset table ({table_end} bytes); expected a complete EXR file"
+        )));
+    }
+    let mut word = [0u8; 8];
+    for k in 0..chunks {
+        reader.read_exact(&mut word).map_err(io)?;
+        let offset = u64::from_le_bytes(word);
+        if offset < table_end || offset >= len {
+            return Err(err(format!(
+                "chunk {k}'s offset is {offset}, outside the file's {len} bytes of data (from byte {table_end}); expected an offset inside the file (the file is corrupt or truncated)"
+            )));
         }
     }
     Ok(())
@@ -277,7 +355,9 @@ fn check_header_size(path: &Path) -> crate::Result<()> {
 
 /// The render id an EXR carries ([`RENDER_ID_KEY`]), from its header alone.
 pub(crate) fn read_render_id(path: &Path) -> crate::Result<Option<String>> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+    let file = super::input::open_input(path, "an EXR file", &[])?;
+    let meta =
+        exr::meta::MetaData::read_from_unbuffered(file, false).map_err(|e| exr_error(path, e))?;
     Ok(meta.headers.iter().find_map(|h| {
         h.own_attributes
             .other

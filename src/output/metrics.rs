@@ -24,14 +24,24 @@ pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
+/// |x − r|² in f64: in f32 the square of a difference near 1e20 is infinite.
+pub fn sq_dist_f64(x: Vec3, r: Vec3) -> f64 {
+    (0..3)
+        .map(|k| {
+            let d = f64::from(x[k]) - f64::from(r[k]);
+            d * d
+        })
+        .sum()
+}
+
 /// Root-mean-square error over all pixels and all three channels:
-/// `sqrt( Σ (x − r)² / (3N) )`.
+/// `sqrt( Σ (x − r)² / (3N) )`, accumulated in f64.
 pub fn rmse(img: &[Vec3], reference: &[Vec3]) -> Result<f32> {
     check_pair(img, reference)?;
     let sum: f64 = img
         .iter()
         .zip(reference)
-        .map(|(x, r)| f64::from((*x - *r).length_squared()))
+        .map(|(x, r)| sq_dist_f64(*x, *r))
         .sum();
     Ok((sum / (3 * img.len()) as f64).sqrt() as f32)
 }

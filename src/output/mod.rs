@@ -5,6 +5,7 @@
 pub mod atomic;
 pub mod colormap;
 mod exr;
+pub mod input;
 pub mod metrics;
 pub mod plot;
 mod png;
@@ -13,7 +14,8 @@ pub mod report;
 use crate::math::Vec3;
 
 pub use self::exr::{
-    read_exr, read_exr_with_header, stage_exr, stage_exr_with_header, write_exr, ExrHeader,
+    read_exr, read_exr_input, read_exr_with_header, stage_exr, stage_exr_with_header, write_exr,
+    ExrHeader,
 };
 pub use self::png::{
     srgb_oetf, stage_png, stage_png_rgb8, to_srgb8, write_png, write_png_exposure,

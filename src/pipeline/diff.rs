@@ -6,7 +6,7 @@ use crate::math::Vec3;
 use crate::output::colormap::viridis8;
 use crate::output::metrics::{self, RELMSE_EPS};
 use crate::output::names::RGB;
-use crate::output::{read_exr, stage_png_rgb8};
+use crate::output::{read_exr_input, stage_png_rgb8};
 use crate::{Error, Result};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -145,14 +145,37 @@ pub fn run(image: &Path, reference: &Path, opts: &DiffOptions) -> Result<DiffRep
         });
     }
     let map_path = error_map_path(image, reference, opts.error_map.as_deref())?;
-    let (a, w, h) = read_beauty(image)?;
-    let (b, wb, hb) = read_beauty(reference)?;
+    let (a, w, h, wa) = read_beauty(image, &map_path)?;
+    let (b, wb, hb, wr) = read_beauty(reference, &map_path)?;
     if (w, h) != (wb, hb) {
         return Err(Error::Asset {
             path: reference.to_path_buf(),
             message: format!(
                 "is {wb}x{hb} but {} is {w}x{h}; diff needs two images of one size",
                 image.display()
+            ),
+        });
+    }
+    // Two tiles of one size at different places are different pixels.
+    if wa != wr {
+        let at = |(d, o): DataWindow| {
+            format!(
+                "pixels {},{},{},{} of a {}x{} image",
+                o.0,
+                o.1,
+                o.0 + w,
+                o.1 + h,
+                d.0,
+                d.1
+            )
+        };
+        return Err(Error::Asset {
+            path: reference.to_path_buf(),
+            message: format!(
+                "covers {} but {} covers {}; diff needs two images of one data window",
+                at(wr),
+                image.display(),
+                at(wa)
             ),
         });
     }
@@ -202,12 +225,23 @@ fn error_map_path(image: &Path, reference: &Path, given: Option<&Path>) -> Resul
             path.display()
         )));
     }
+    // The same file under another spelling (`./a.exr`) is caught when the
+    // inputs are opened, by device and inode.
+    crate::output::input::check_output_target(&path, "--error-map")?;
     Ok(path)
 }
 
-/// The beauty `R,G,B` of an EXR, checked finite; errors name the file.
-fn read_beauty(path: &Path) -> Result<(Vec<Vec3>, usize, usize)> {
-    let img = read_exr(path)?;
+/// An image's display window size and its data window's origin in it.
+type DataWindow = ((usize, usize), (usize, usize));
+
+/// The beauty `R,G,B` of an EXR, checked finite, and its data window; errors
+/// name the file. `map` is the error map, which it must not be.
+fn read_beauty(path: &Path, map: &Path) -> Result<(Vec<Vec3>, usize, usize, DataWindow)> {
+    let (img, header) = read_exr_input(path, &[map])?;
+    let display = match header.display {
+        (0, 0) => (img.width, img.height),
+        d => d,
+    };
     let asset_err = |message: String| Error::Asset {
         path: path.to_path_buf(),
         message,
@@ -228,7 +262,7 @@ fn read_beauty(path: &Path) -> Result<(Vec<Vec3>, usize, usize)> {
             rgb[i]
         )));
     }
-    Ok((rgb, img.width, img.height))
+    Ok((rgb, img.width, img.height, (display, header.origin)))
 }
 
 /// The per-pixel error of `metric` and the value shown at the top of the
@@ -249,14 +283,19 @@ fn per_pixel_error(
         DiffMetric::Rmse => a
             .iter()
             .zip(b)
-            .map(|(x, r)| ((*x - *r).length_squared() / 3.0).sqrt())
+            .map(|(x, r)| (metrics::sq_dist_f64(*x, *r) / 3.0).sqrt() as f32)
             .collect(),
         DiffMetric::Relmse => a
             .iter()
             .zip(b)
             .map(|(x, r)| {
-                let d = *x - *r;
-                (d * d / (*r * *r + Vec3::splat(eps))).element_sum() / 3.0
+                let sum: f64 = (0..3)
+                    .map(|k| {
+                        let (x, r) = (f64::from(x[k]), f64::from(r[k]));
+                        (x - r) * (x - r) / (r * r + f64::from(eps))
+                    })
+                    .sum();
+                (sum / 3.0) as f32
             })
             .collect(),
     };

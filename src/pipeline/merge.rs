@@ -13,7 +13,7 @@
 
 use super::output_set::write_output_set_with_header;
 use crate::output::names::{GRAD_TERMS, RGB};
-use crate::output::{read_exr_with_header, Channel, ExrHeader, OutputImage};
+use crate::output::{read_exr_input, Channel, ExrHeader, OutputImage};
 use crate::render::{Crop, MergePlanes, GRAD_TERM_LUMINANCES};
 use crate::{Error, Result};
 use std::collections::BTreeMap;
@@ -65,12 +65,36 @@ pub struct Part {
 
 impl Part {
     pub fn read(path: &Path) -> Result<Self> {
-        let (image, header) = read_exr_with_header(path)?;
-        Ok(Self {
+        Self::read_input(path, &[])
+    }
+
+    /// Reads a part of a command that writes `outputs` (none of which it may
+    /// be), refusing a non-finite value here, where the part can be named: left
+    /// to the EXR writer it was blamed on the output.
+    pub fn read_input(path: &Path, outputs: &[&Path]) -> Result<Self> {
+        let (image, header) = read_exr_input(path, outputs)?;
+        let part = Self {
             path: path.to_path_buf(),
             image,
             header,
-        })
+        };
+        let w = part.image.width.max(1);
+        let (x0, y0) = part.header.origin;
+        for ch in &part.image.channels {
+            if let Some(i) = ch.data.iter().position(|v| !v.is_finite()) {
+                return Err(Error::Asset {
+                    path: part.path.clone(),
+                    message: format!(
+                        "channel {:?} holds {} at pixel ({}, {}) of the image; expected finite values",
+                        ch.name,
+                        ch.data[i],
+                        x0 + i % w,
+                        y0 + i / w
+                    ),
+                });
+            }
+        }
+        Ok(part)
     }
 
     fn error(&self, message: String) -> Error {
@@ -107,7 +131,8 @@ impl Part {
         }
     }
 
-    fn display(&self) -> (usize, usize) {
+    /// The full image's size.
+    pub fn display(&self) -> (usize, usize) {
         match self.header.display {
             (0, 0) => (self.image.width, self.image.height),
             d => d,
@@ -177,7 +202,7 @@ pub fn run(job: &MergeJob) -> Result<MergeSummary> {
     let parts = job
         .parts
         .iter()
-        .map(|p| Part::read(p))
+        .map(|p| Part::read_input(p, &[&exr, &png]))
         .collect::<Result<Vec<_>>>()?;
     let merged = merge_parts(&parts, &exr, &job.command)?;
     let beauty = merged.image.vec3("", RGB).unwrap_or_default();
@@ -382,40 +407,57 @@ fn check_ranges(group: &[&Part]) -> Result<(u32, u32)> {
     Ok((sorted[0].1 .0, sorted[sorted.len() - 1].1 .1))
 }
 
-/// The tiles cover the `display` image exactly once.
+/// The tiles cover the `display` image exactly once. Found from the tiles'
+/// rectangles alone, without a per-pixel map: a header may claim a display
+/// window of 2²⁸ pixels around a one-pixel tile, and the map was allocated
+/// before the gap was found.
 fn check_coverage(groups: &[Vec<&Part>], display: (usize, usize), out: &Path) -> Result<()> {
     let (w, h) = display;
-    let mut owner: Vec<Option<usize>> = vec![None; w * h];
-    for (g, group) in groups.iter().enumerate() {
-        let c = group[0].window();
+    let tiles: Vec<(&Part, Crop)> = groups.iter().map(|g| (g[0], g[0].window())).collect();
+    let mut area = 0u64;
+    for (k, (part, c)) in tiles.iter().enumerate() {
         if c.x1 as usize > w || c.y1 as usize > h {
-            return Err(group[0].error(format!("its tile {c} lies outside the {w}x{h} image")));
+            return Err(part.error(format!("its tile {c} lies outside the {w}x{h} image")));
         }
-        for y in c.y0 as usize..c.y1 as usize {
-            for x in c.x0 as usize..c.x1 as usize {
-                if let Some(o) = owner[y * w + x] {
-                    return Err(group[0].error(format!(
-                        "its tile {c} overlaps {}'s tile {} (pixel ({x}, {y}) is in both)",
-                        groups[o][0].path.display(),
-                        groups[o][0].window()
-                    )));
-                }
-                owner[y * w + x] = Some(g);
+        for (other, o) in &tiles[..k] {
+            let (x, y) = (c.x0.max(o.x0), c.y0.max(o.y0));
+            if x < c.x1.min(o.x1) && y < c.y1.min(o.y1) {
+                return Err(part.error(format!(
+                    "its tile {c} overlaps {}'s tile {o} (pixel ({x}, {y}) is in both)",
+                    other.path.display()
+                )));
             }
         }
+        area += u64::from(c.width()) * u64::from(c.height());
     }
-    let missing = owner.iter().filter(|o| o.is_none()).count();
-    if let Some(i) = owner.iter().position(Option::is_none) {
-        return Err(Error::Merge {
-            path: out.to_path_buf(),
-            message: format!(
-                "the parts leave {missing} of the {w}x{h} pixels uncovered, the first at ({}, {}): a tile is missing",
-                i % w,
-                i / w
-            ),
-        });
+    let total = w as u64 * h as u64;
+    if area == total {
+        return Ok(());
     }
-    Ok(())
+    // Disjoint tiles inside the image with less area: some pixel is missing.
+    // The first in row-major order starts a row (x = 0) or follows a tile
+    // (x = its x1), on the first row (y = 0) or below a tile (y = its y1).
+    let covered = |x: u32, y: u32| {
+        tiles
+            .iter()
+            .any(|(_, c)| c.x0 <= x && x < c.x1 && c.y0 <= y && y < c.y1)
+    };
+    let xs = std::iter::once(0).chain(tiles.iter().map(|(_, c)| c.x1));
+    let ys = std::iter::once(0).chain(tiles.iter().map(|(_, c)| c.y1));
+    let first = ys
+        .flat_map(|y| xs.clone().map(move |x| (y, x)))
+        .filter(|&(y, x)| (x as usize) < w && (y as usize) < h && !covered(x, y))
+        .min()
+        .unwrap_or((0, 0));
+    Err(Error::Merge {
+        path: out.to_path_buf(),
+        message: format!(
+            "the parts leave {} of the {w}x{h} pixels uncovered, the first at ({}, {}): a tile is missing",
+            total - area,
+            first.1,
+            first.0
+        ),
+    })
 }
 
 /// The tiles pasted into one `display`-sized image (the channels of the first).

@@ -96,6 +96,7 @@ pub fn output_paths(out: Option<&Path>, scene_stem: &str) -> Result<(PathBuf, Pa
                 message: "is a directory".into(),
             });
         }
+        output::input::check_output_target(p, "--out")?;
     }
     Ok((exr, png))
 }

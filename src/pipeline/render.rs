@@ -225,6 +225,7 @@ fn run_full(
     if let Some(prev) = resume {
         opts.sample_range = Some(resume_range(scene, &opts, prev)?);
         opts.crop = Some(prev.window());
+        check_resume_channels(scene, accel, &opts, prev)?;
     }
     let phase = match job.passes.time_limit {
         Some(_) => Phase::new(job.progress, "render", 0, "ms"),
@@ -297,6 +298,13 @@ fn resume_range(scene: &Scene, opts: &RenderOptions, prev: &Part) -> Result<(u32
             prev.attr(attr::SEED)?
         )));
     }
+    let (w, h) = opts.resolution_of(scene);
+    if prev.display() != (w as usize, h as usize) {
+        let (pw, ph) = prev.display();
+        return Err(err(format!(
+            "cannot resume: it is a part of a {pw}x{ph} image, but this render is {w}x{h}; expected a file rendered at this render's size"
+        )));
+    }
     let (_, end) = prev.range()?;
     let spp = opts.spp.unwrap_or(scene.settings.spp);
     if end >= spp {
@@ -305,6 +313,49 @@ fn resume_range(scene: &Scene, opts: &RenderOptions, prev: &Part) -> Result<(u32
         )));
     }
     Ok((end, spp))
+}
+
+/// Refuses, before any sample is traced, a resume file whose channels differ
+/// from those this render writes (a plain render's file lacks the `merge.*`
+/// planes; it used to fail at the merge, after every remaining sample). The
+/// channels are found by rendering one sample of one pixel: which planes a
+/// render makes depends on its options in many places, and asking the renderer
+/// is the one answer that cannot drift from them.
+fn check_resume_channels(
+    scene: &Scene,
+    accel: &crate::accel::Accel,
+    opts: &RenderOptions,
+    prev: &Part,
+) -> Result<()> {
+    let mut probe = opts.clone();
+    let first = opts.sample_range.map_or(0, |(a, _)| a);
+    probe.sample_range = Some((first, first + 1));
+    let c = prev.window();
+    probe.crop = Some(Crop {
+        x0: c.x0,
+        y0: c.y0,
+        x1: c.x0 + 1,
+        y1: c.y0 + 1,
+    });
+    let out = render::render(scene, accel, &probe, &|_, _| {})?;
+    let names = |img: &OutputImage| {
+        img.channels
+            .iter()
+            .map(|c| c.name.clone())
+            .collect::<std::collections::BTreeSet<_>>()
+    };
+    let (want, have) = (names(&image_of_render(&out)), names(&prev.image));
+    if want == have {
+        return Ok(());
+    }
+    let missing: Vec<&String> = want.difference(&have).collect();
+    let extra: Vec<&String> = have.difference(&want).collect();
+    Err(Error::Asset {
+        path: prev.path.clone(),
+        message: format!(
+            "cannot resume: lacks the channels {missing:?} and holds {extra:?} beyond those this render writes; expected the output of a --time-limit or --spp-range render with the same options"
+        ),
+    })
 }
 
 /// The EXR header of a render: the provenance attributes and, for a tile, its
