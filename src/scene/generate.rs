@@ -87,7 +87,7 @@ impl Rng {
 
     /// Uniform in 0..n.
     pub fn below(&mut self, n: u32) -> u32 {
-        ((self.next_u64() >> 32) * n as u64 >> 32) as u32
+        (((self.next_u64() >> 32) * n as u64) >> 32) as u32
     }
 
     pub fn chance(&mut self, p: f32) -> bool {
@@ -256,7 +256,7 @@ impl Generator<'_> {
                         num(r.log_range(0.001, 0.03)),
                         r.below(25) as i32 - 12,
                         num(r.range(-20.0, 20.0)),
-                        num(r.range(0.0, 6.28))
+                        num(r.range(0.0, std::f32::consts::TAU))
                     )
                 })
                 .collect();
