@@ -9,7 +9,7 @@ use super::gradients::visibility::{trace_line_and_ring, Domain, LinePoint};
 use super::gradients::{GradientSample, SV};
 use super::interaction::{interaction, Interaction};
 use super::lights::{LightSet, LineLight};
-use crate::accel::Accel;
+use crate::accel::{Accel, PrimRef};
 use crate::brdf::{BsdfSample, Material};
 use crate::math::sampler::PixelSampler;
 use crate::math::{finite_or_zero, Frame, Ray, Vec2, Vec3};
@@ -441,7 +441,7 @@ impl PathTracer<'_> {
         if let Some(c) = capture {
             let far = self.far_light.map(|k| (c.hd.cv, k));
             let lanes = match ls.cone {
-                Some((centre, radius)) => sphere_light::direct_sample(
+                Some((centre, radius)) => Some(sphere_light::direct_sample(
                     material,
                     &c.hd,
                     centre,
@@ -451,13 +451,13 @@ impl PathTracer<'_> {
                     1.0 / ls.pdf,
                     ConeLaw::Uniform,
                     far,
-                ),
-                None => {
-                    let lp = light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far);
-                    shading::direct_sample(material, &c.hd, &lp)
-                }
+                )),
+                None => light_point(si.p, ls.point, ls.wi, ls.radiance, ls.pdf, far)
+                    .map(|lp| shading::direct_sample(material, &c.hd, &lp)),
             };
-            c.g.add_lanes(&lanes, 1.0);
+            if let Some(lanes) = lanes {
+                c.g.add_lanes(&lanes, 1.0);
+            }
         }
         (beta * f * wi_local.z * ls.radiance * (w / ls.pdf), 1)
     }
@@ -578,8 +578,10 @@ impl PathTracer<'_> {
                     far,
                 )
             } else {
-                let lp = light_point(p, pt.light_point, pt.wi, le, pt.pdf, far);
-                shading::direct_sample(material, hd, &lp)
+                match light_point(p, pt.light_point, pt.wi, le, pt.pdf, far) {
+                    Some(lp) => shading::direct_sample(material, hd, &lp),
+                    None => return,
+                }
             };
             g.add_lanes(&c, 1.0 / pmf);
         };
@@ -646,8 +648,19 @@ fn line_domain(scene: &Scene, light: LineLight, si: &Interaction) -> Option<(Dom
         LineLight::Rect(m) => {
             let mesh = &scene.meshes[m as usize];
             let r = mesh.rect?;
-            // One-sided: a rectangle facing away sends nothing.
-            if r.normal().dot(p - r.corner) <= 0.0 {
+            // A rectangle does not light its own points (a camera may see its
+            // back): their distances to it are zero, and issue 54's NaN came
+            // from the line's 0/0 at such a point.
+            if matches!(si.prim, PrimRef::Triangle { mesh, .. } if mesh == m) {
+                return None;
+            }
+            // One-sided: a rectangle facing away sends nothing, nor one whose
+            // plane x lies in within its rounding bound (its side is undecided
+            // there, and cos θ_y of every light point is 0 up to rounding).
+            let n = r.normal();
+            let to_p = p - r.corner;
+            let bound = n.abs().dot(si.p_error) + 4.0 * f32::EPSILON * to_p.abs().dot(n.abs());
+            if n.dot(to_p) <= bound {
                 return None;
             }
             let centre = r.corner + 0.5 * (r.edge_u + r.edge_v);
@@ -679,26 +692,33 @@ fn light_point(
     radiance: Vec3,
     pdf: f32,
     far: Option<(f32, f32)>,
-) -> LightPoint {
-    match point {
+) -> Option<LightPoint> {
+    Some(match point {
         Some((y, ny)) => {
             let d = y - p;
             let r2 = d.length_squared();
             if let Some((cv, far_factor)) = far {
                 if cv * r2.sqrt() > far_factor {
-                    return LightPoint::Direction { wi, radiance, pdf };
+                    return Some(LightPoint::Direction { wi, radiance, pdf });
                 }
             }
             let cos_y = (ny.dot(d) / r2.sqrt()).abs();
+            let pdf_area = pdf * cos_y / r2;
+            // Seen edge-on (cos θ_y = 0) or from its own surface (r = 0) the point
+            // has no area density; it carries no light, as the point sampler's
+            // density check (`LightSet::sample`) has it.
+            if !(pdf_area > 0.0 && pdf_area.is_finite()) {
+                return None;
+            }
             LightPoint::Area {
                 y,
                 ny,
                 radiance,
-                pdf_area: pdf * cos_y / r2,
+                pdf_area,
             }
         }
         None => LightPoint::Direction { wi, radiance, pdf },
-    }
+    })
 }
 
 /// Records the radiance once the emitters the first hit sees directly are counted

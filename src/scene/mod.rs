@@ -7,6 +7,7 @@ pub mod bump;
 pub mod camera;
 mod describe;
 pub mod environment;
+pub mod generate;
 mod geometry;
 mod locate;
 mod obj;

@@ -272,6 +272,10 @@ impl<'a> Marcher<'a> {
         // not from x: the offset moves the origin toward the light.
         let o = offset_ray_origin_with_error(self.x, self.p_error, self.ng, w);
         let t_o = light_extent(self.domain, o, w).0;
+        // An offset across the light's plane leaves no segment: not a visible ray.
+        if t_o.is_nan() || t_o <= 0.0 {
+            return None;
+        }
         Some((Ray::segment(o, w, t_o * (1.0 - 1e-4)), lp))
     }
 
