@@ -9,43 +9,6 @@ use gradtrace::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
 use gradtrace::render::{render, RenderOptions, RenderOutput};
 use std::time::{Duration, Instant};
 
-/// A small bright sphere light (radiance 300) over a diffuse sphere on a floor
-/// (noisy: the soft shadow, indirect light, the light's own edge) in front of a
-/// constant sky seen directly (flat and noise-free): `scale_out.rs`'s scene at
-/// 64×48.
-const SMALL_LIGHT: &str = r#"
-[camera]
-from = [0, 1.2, 4.5]
-to = [0, 0.5, 0]
-fov = 35
-resolution = [64, 48]
-[render]
-spp = 16
-max_depth = 4
-[materials.grey]
-type = "lambert"
-albedo = [0.7, 0.7, 0.7]
-[[shapes]]
-type = "sphere"
-center = [0, 0.5, 0]
-radius = 0.5
-material = "grey"
-[[shapes]]
-type = "quad"
-corner = [-1.5, 0, 1.5]
-edge_u = [3, 0, 0]
-edge_v = [0, 0, -3]
-material = "grey"
-[[lights]]
-type = "sphere"
-center = [1.2, 1.8, 0.8]
-radius = 0.08
-radiance = [300, 300, 300]
-[environment]
-type = "constant"
-radiance = [0.3, 0.3, 0.3]
-"#;
-
 fn scene() -> (
     gradtrace::scene::Scene,
     gradtrace::accel::Accel,
@@ -53,7 +16,7 @@ fn scene() -> (
 ) {
     let dir = temp_dir("small-light");
     let path = dir.join("small_light.toml");
-    std::fs::write(&path, SMALL_LIGHT).unwrap();
+    std::fs::write(&path, common::small_light_scene(64, 48)).unwrap();
     let (scene, accel) = gradtrace::pipeline::load(&path).unwrap();
     (scene, accel, path)
 }

@@ -16,6 +16,7 @@
 //!   one-pass render's own f64 cancellation;
 //! - each plus 4·2⁻¹⁴⁹ (f32's subnormal step) where values are subnormal.
 
+mod common;
 use gradtrace::output::{read_exr, read_exr_with_header, OutputImage};
 use gradtrace::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
 use gradtrace::render::{render, RenderOptions};
@@ -535,46 +536,10 @@ fn every_exr_header_carries_its_provenance() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A diffuse sphere on a floor under a small bright sphere light (noisy: soft
-/// shadow, indirect light) in front of a constant environment seen directly
-/// (noise-free).
-const NOISY_AND_SMOOTH: &str = r#"
-[camera]
-from = [0, 1.2, 4.5]
-to = [0, 0.5, 0]
-fov = 35
-resolution = [48, 32]
-[render]
-spp = 16
-max_depth = 4
-[materials.grey]
-type = "lambert"
-albedo = [0.7, 0.7, 0.7]
-[[shapes]]
-type = "sphere"
-center = [0, 0.5, 0]
-radius = 0.5
-material = "grey"
-[[shapes]]
-type = "quad"
-corner = [-1.5, 0, 1.5]
-edge_u = [3, 0, 0]
-edge_v = [0, 0, -3]
-material = "grey"
-[[lights]]
-type = "sphere"
-center = [1.2, 1.8, 0.8]
-radius = 0.08
-radiance = [300, 300, 300]
-[environment]
-type = "constant"
-radiance = [0.3, 0.3, 0.3]
-"#;
-
 fn noisy_scene() -> (gradtrace::scene::Scene, gradtrace::accel::Accel) {
     let dir = temp_dir("noise-scene");
     let path = dir.join("noisy.toml");
-    std::fs::write(&path, NOISY_AND_SMOOTH).unwrap();
+    std::fs::write(&path, common::small_light_scene(48, 32)).unwrap();
     gradtrace::pipeline::load(&path).unwrap()
 }
 

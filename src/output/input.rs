@@ -9,34 +9,7 @@ use crate::Error;
 use std::fs::{File, Metadata};
 use std::path::Path;
 
-/// "a FIFO (named pipe)", "a directory", … for messages about non-regular files.
-pub fn file_kind(m: &Metadata) -> &'static str {
-    let t = m.file_type();
-    if t.is_dir() {
-        return "a directory";
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-        if t.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    if t.is_file() {
-        "a regular file"
-    } else {
-        "not a regular file"
-    }
-}
+pub use crate::error::file_kind;
 
 /// (device, inode): what makes two paths one file.
 #[cfg(unix)]

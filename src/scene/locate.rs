@@ -260,7 +260,7 @@ impl<'a> Ctx<'a> {
                 format!(
                     "{} is {}, not a regular file; expected a file",
                     p.display(),
-                    file_kind(&m)
+                    crate::error::file_kind(&m)
                 ),
             )),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -283,35 +283,6 @@ impl<'a> Ctx<'a> {
             ),
             other => other,
         }
-    }
-}
-
-/// "a directory", "a character device", … for messages about non-regular files.
-pub(super) fn file_kind(m: &std::fs::Metadata) -> &'static str {
-    let t = m.file_type();
-    if t.is_dir() {
-        return "a directory";
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-        if t.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    if t.is_file() {
-        "a regular file"
-    } else {
-        "not a regular file"
     }
 }
 

@@ -167,7 +167,7 @@ fn read_obj(path: &Path) -> crate::Result<(Vec<tobj::Model>, Vec<tobj::Material>
             Ok(m) if m.is_file() => tobj::load_mtl(&mtl).map_err(|e| (e, format!("{e}"))),
             Ok(m) => Err((
                 tobj::LoadError::OpenFileFailed,
-                format!("it is {}, not a regular file", super::locate::file_kind(&m)),
+                format!("it is {}, not a regular file", crate::error::file_kind(&m)),
             )),
             Err(e) => Err((tobj::LoadError::OpenFileFailed, e.to_string())),
         };

@@ -54,7 +54,7 @@ fn read_scene_file(path: &Path) -> crate::Result<String> {
     };
     let meta = std::fs::metadata(path).map_err(io)?;
     if !meta.is_file() {
-        let what = super::locate::file_kind(&meta);
+        let what = crate::error::file_kind(&meta);
         return Err(input_err(
             path,
             format!("is {what}, not a regular file; expected a scene file (TOML)"),

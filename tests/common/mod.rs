@@ -131,3 +131,44 @@ pub fn run_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
     );
     out
 }
+
+/// A small bright sphere light (radiance 300) over a diffuse sphere on a floor
+/// (noisy: the soft shadow, indirect light, the light's own edge) in front of a
+/// constant sky seen directly (flat and noise-free): where per-pixel adaptive
+/// sampling must pay off.
+pub fn small_light_scene(width: u32, height: u32) -> String {
+    format!(
+        r#"
+[camera]
+from = [0, 1.2, 4.5]
+to = [0, 0.5, 0]
+fov = 35
+resolution = [{width}, {height}]
+[render]
+spp = 16
+max_depth = 4
+[materials.grey]
+type = "lambert"
+albedo = [0.7, 0.7, 0.7]
+[[shapes]]
+type = "sphere"
+center = [0, 0.5, 0]
+radius = 0.5
+material = "grey"
+[[shapes]]
+type = "quad"
+corner = [-1.5, 0, 1.5]
+edge_u = [3, 0, 0]
+edge_v = [0, 0, -3]
+material = "grey"
+[[lights]]
+type = "sphere"
+center = [1.2, 1.8, 0.8]
+radius = 0.08
+radiance = [300, 300, 300]
+[environment]
+type = "constant"
+radiance = [0.3, 0.3, 0.3]
+"#
+    )
+}
