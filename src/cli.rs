@@ -68,8 +68,9 @@ pub(crate) struct MergeArgs {
 
 /// Upper bounds of the counts a user gives, each refused with one line before
 /// any work (issue 54: `--frames 4294967295` wrote files until it was killed).
-/// Frames of an animation: two files each, 20,000 files at most.
-const MAX_FRAMES: i64 = 10_000;
+/// Frames of an animation: two files each, 20,000 files at most (the bound of
+/// the scene's `[animation] frames` too).
+const MAX_FRAMES: i64 = gradtrace::scene::animation::MAX_FRAMES as i64;
 /// Views on the glossy preview's orbit: one every 0.1°.
 const MAX_ORBIT: i64 = 3_600;
 /// Seeds of `compare`: its 95 % intervals stop narrowing usefully long before.

@@ -706,3 +706,327 @@ fn content_hash_changes_with_every_input_and_survives_a_move() {
         .unwrap();
     assert_eq!(h_moved, h0);
 }
+
+/// A ball and a box (lines 9–18); an `[animation]` body appended starts on line 19.
+fn animated(body: &str) -> String {
+    format!(
+        "{CAM}{WHITE}[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+         material = \"w\"\n[[shapes]]\nname = \"box\"\ntype = \"cube\"\nmaterial = \"w\"\n{body}"
+    )
+}
+
+/// Issue 54, defects 16 and 19: every `[animation]` error names the exact key
+/// path and its line (not the section header) in the project's words, and
+/// translations and amounts keep to ±`scene::MAX_MAGNITUDE`.
+#[test]
+fn animation_errors_name_the_key_path_and_line() {
+    let obj = "[animation]\n[[animation.objects]]\n"; // lines 19-20; keys from line 21
+    let ball = format!("{obj}shape = \"ball\"\n"); // keys from line 22
+                                                   // (the `[animation]` body, substrings the one-line message must contain)
+    let cases: Vec<(String, Vec<&str>)> = vec![
+        (
+            "[animation]\nframes = 0\n".into(),
+            vec!["animation.frames (line 20", "at least 1 frame"],
+        ),
+        (
+            "[animation]\nframes = 10001\n".into(),
+            vec!["animation.frames (line 20", "at most 10000", "10001"],
+        ),
+        (
+            "[animation]\nframes = -2\n".into(),
+            vec!["animation.frames (line 20", "u32"],
+        ),
+        (
+            "[animation]\nframes = 2.5\n".into(),
+            vec!["animation.frames (line 20", "u32"],
+        ),
+        (
+            "[animation]\nframe = 3\n".into(),
+            vec![
+                "animation.frame (line 20",
+                "unknown field `frame`",
+                "`frames` or `objects`",
+            ],
+        ),
+        (
+            "[animation]\nobjects = 3\n".into(),
+            vec!["animation.objects (line 20", "expected an array"],
+        ),
+        (
+            "[animation]\nobjects = [1]\n".into(),
+            vec!["animation.objects[0] (line 20", "expected a table"],
+        ),
+        (
+            format!("{obj}keys = []\n"),
+            vec!["animation.objects[0] (line 20", "missing field `shape`"],
+        ),
+        (
+            format!("{obj}shape = \"bal\"\n"),
+            vec![
+                "animation.objects[0].shape (line 21",
+                "undefined shape `bal`",
+                "`ball`, `box`",
+            ],
+        ),
+        (
+            format!("{obj}shape = 7\n"),
+            vec!["animation.objects[0].shape (line 21", "expected a string"],
+        ),
+        (
+            format!("{ball}[[animation.objects]]\nshape = \"ball\"\n"),
+            vec!["animation.objects[1].shape (line 23", "animated twice"],
+        ),
+        (
+            format!("{ball}speed = 2\n"),
+            vec![
+                "animation.objects[0].speed (line 22",
+                "unknown field `speed`",
+                "`shape`, `keys`, `deform`",
+            ],
+        ),
+        (
+            format!("{ball}keys = {{ t = 0 }}\n"),
+            vec!["animation.objects[0].keys (line 22", "expected an array"],
+        ),
+        (
+            format!("{ball}keys = [0.5]\n"),
+            vec!["animation.objects[0].keys[0] (line 22", "expected a table"],
+        ),
+        (
+            format!("{ball}keys = [{{ translate = [0, 0, 0] }}]\n"),
+            vec!["animation.objects[0].keys[0] (line 22", "missing field `t`"],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, scale = 2 }}]\n"),
+            vec![
+                "animation.objects[0].keys[0].scale (line 22",
+                "unknown field `scale`",
+                "`t`, `translate`, `rotate`",
+            ],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, translate = [1, 2, 3, 4] }}]\n"),
+            vec![
+                "animation.objects[0].keys[0].translate (line 22",
+                "array of length 3",
+                "length 4",
+            ],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, translate = [1, 2] }}]\n"),
+            vec![
+                "animation.objects[0].keys[0].translate (line 22",
+                "array of length 3",
+                "length 2",
+            ],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, translate = [0, nan, 0] }}]\n"),
+            vec!["animation.objects[0].keys[0].translate (line 22", "finite"],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, translate = [0, 1e39, 0] }}]\n"),
+            vec!["animation.objects[0].keys[0].translate (line 22", "finite"],
+        ),
+        (
+            format!(
+                "{ball}keys = [\n  {{ t = 0 }},\n  {{ t = 1, translate = [1e30, 0, 0] }},\n]\n"
+            ),
+            vec![
+                "animation.objects[0].keys[1].translate (line 24",
+                "1e12",
+                "MAX_MAGNITUDE",
+            ],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, rotate = [0, 1, 0] }}]\n"),
+            vec![
+                "animation.objects[0].keys[0].rotate (line 22",
+                "array of length 4",
+                "length 3",
+            ],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, rotate = [0, 0, 0, 90] }}]\n"),
+            vec![
+                "animation.objects[0].keys[0].rotate (line 22",
+                "axis of zero length",
+            ],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 0, rotate = [0, 1, 0, inf] }}]\n"),
+            vec!["animation.objects[0].keys[0].rotate (line 22", "finite"],
+        ),
+        (
+            format!("{ball}keys = [{{ t = 1.5 }}]\n"),
+            vec!["animation.objects[0].keys[0].t (line 22", "[0, 1]", "1.5"],
+        ),
+        (
+            format!("{ball}keys = [{{ t = -0.25 }}]\n"),
+            vec!["animation.objects[0].keys[0].t (line 22", "[0, 1]", "-0.25"],
+        ),
+        (
+            format!("{ball}keys = [{{ t = nan }}]\n"),
+            vec!["animation.objects[0].keys[0].t (line 22", "finite"],
+        ),
+        (
+            format!("{ball}keys = [{{ t = \"0\" }}]\n"),
+            vec!["animation.objects[0].keys[0].t (line 22", "expected f32"],
+        ),
+        (
+            format!("{ball}keys = [\n  {{ t = 0.5 }},\n  {{ t = 0.5 }},\n]\n"),
+            vec![
+                "animation.objects[0].keys[1].t (line 24",
+                "increasing t",
+                "0.5",
+            ],
+        ),
+        (
+            format!("{ball}keys = [\n  {{ t = 0.75 }},\n  {{ t = 0.25 }},\n]\n"),
+            vec![
+                "animation.objects[0].keys[1].t (line 24",
+                "increasing t",
+                "0.25",
+            ],
+        ),
+        (
+            format!("{ball}deform = \"bend\"\n"),
+            vec!["animation.objects[0].deform (line 22", "expected a table"],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"wobble\", amount = [0, 1] }}\n"),
+            vec![
+                "animation.objects[0].deform.type (line 22",
+                "unknown variant `wobble`",
+                "`bend`, `twist`, `squash`",
+            ],
+        ),
+        (
+            format!("{ball}deform = {{ amount = [0, 1] }}\n"),
+            vec![
+                "animation.objects[0].deform (line 22",
+                "missing field `type`",
+                "`bend`, `twist`, `squash`",
+            ],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"bend\" }}\n"),
+            vec!["animation.objects[0].deform (line 22", "needs `amount`"],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"bend\", amount = [0, 1, 2] }}\n"),
+            vec![
+                "animation.objects[0].deform.amount (line 22",
+                "array of length 2",
+                "length 3",
+            ],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"twist\", amount = [0, inf] }}\n"),
+            vec!["animation.objects[0].deform.amount (line 22", "finite"],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"bend\", amount = [0, -1e30] }}\n"),
+            vec![
+                "animation.objects[0].deform.amount (line 22",
+                "1e12",
+                "MAX_MAGNITUDE",
+            ],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"squash\", amount = [0, 0.99] }}\n"),
+            vec!["animation.objects[0].deform.amount (line 22", "[-1, 0.95)"],
+        ),
+        (
+            format!("{ball}deform = {{ type = \"bend\", amount = [0, 1], axis = 1 }}\n"),
+            vec![
+                "animation.objects[0].deform.axis (line 22",
+                "does not apply to type = \"bend\"",
+                "`amount`",
+            ],
+        ),
+    ];
+    // Every case is checked, then the failures listed together.
+    let mut failed = Vec::new();
+    for (body, wanted) in &cases {
+        let text = animated(body);
+        let msg = match scene::load_from_str(&text, Path::new("dir/bad.toml")) {
+            Ok(_) => "(loaded)".to_string(),
+            Err(e) => e.to_string(),
+        };
+        println!("{msg}");
+        let lacks: Vec<&&str> = wanted.iter().filter(|w| !msg.contains(**w)).collect();
+        if !msg.starts_with("dir/bad.toml: ") || msg.contains('\n') || !lacks.is_empty() {
+            failed.push(format!("{body:?}\n  got {msg}\n  lacks {lacks:?}"));
+        }
+    }
+    // A top-level key must come before the first table.
+    let msg = err_of(&format!("animation = 3\n{}", animated("")));
+    if !msg.contains("animation (line 1, column 13): expected a table") {
+        failed.push(format!("animation = 3\n  got {msg}"));
+    }
+    assert!(
+        failed.is_empty(),
+        "{} of {} cases failed:\n{}",
+        failed.len(),
+        cases.len() + 1,
+        failed.join("\n")
+    );
+}
+
+/// The limits are inclusive (±1e12, 10000 frames), and an axis of any finite
+/// non-zero length gives a finite rotation (a length that over- or underflows
+/// f32 gave a NaN quaternion).
+#[test]
+fn animation_limits_admit_their_bounds_and_any_nonzero_axis() {
+    let text = animated(
+        "[animation]\nframes = 10000\n[[animation.objects]]\nshape = \"ball\"\n\
+         keys = [{ t = 0, translate = [1e12, -1e12, 0], rotate = [1e30, 1e30, 0, 90] },\n\
+         { t = 1, rotate = [0, 0, 1e-30, 90] }]\n\
+         [[animation.objects]]\nshape = \"box\"\ndeform = { type = \"twist\", amount = [-1e12, 1e12] }\n",
+    );
+    let s = scene::load_from_str(&text, Path::new("dir/ok.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let a = s.animation.as_ref().unwrap();
+    assert_eq!(a.frames, 10000);
+    let k = &a.tracks[0].keys;
+    assert_eq!(k[0].translate, Vec3::new(1e12, -1e12, 0.0));
+    let want0 = glam::Quat::from_axis_angle(
+        glam::Vec3::new(1.0, 1.0, 0.0).normalize(),
+        90f32.to_radians(),
+    );
+    let want1 = glam::Quat::from_axis_angle(glam::Vec3::Z, 90f32.to_radians());
+    for (got, want) in [(k[0].rotate, want0), (k[1].rotate, want1)] {
+        assert!(
+            got.is_finite() && got.dot(want).abs() > 1.0 - 1e-6,
+            "{got:?} against {want:?}"
+        );
+    }
+    assert_eq!(a.tracks[1].deform.unwrap().amount, [-1e12, 1e12]);
+}
+
+/// The bundled `[animation]` block reads to exactly what it says (the
+/// reader's rewrite must not move a frame).
+#[test]
+fn bundled_animation_reads_exactly() {
+    let s = bundled("shadowfield_deform.toml");
+    let a = s.animation.as_ref().unwrap();
+    assert_eq!(a.frames, 8);
+    assert_eq!(a.tracks.len(), 2);
+    let (bunny, ball) = (&a.tracks[0], &a.tracks[1]);
+    assert_eq!(bunny.object_id, id_of(&s, "bunny"));
+    assert!(bunny.keys.is_empty());
+    let d = bunny.deform.unwrap();
+    assert_eq!(
+        (d.kind, d.amount),
+        (scene::animation::DeformKind::Twist, [0.0, 1.4])
+    );
+    assert_eq!(ball.object_id, id_of(&s, "ball"));
+    assert!(ball.deform.is_none());
+    assert_eq!(ball.keys.len(), 2);
+    assert_eq!((ball.keys[0].t, ball.keys[1].t), (0.0, 1.0));
+    assert_eq!(ball.keys[0].translate, Vec3::ZERO);
+    assert_eq!(ball.keys[0].rotate, glam::Quat::IDENTITY);
+    assert_eq!(ball.keys[1].translate, Vec3::new(-0.6, 0.0, 0.5));
+    let r = glam::Quat::from_axis_angle(glam::Vec3::Z, 120f32.to_radians());
+    assert_eq!(ball.keys[1].rotate, r, "bit for bit");
+}

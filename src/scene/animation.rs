@@ -14,57 +14,19 @@
 //! deform = { type = "bend", amount = [0, 0.6] }
 //! ```
 
-use super::locate::{Ctx, KeyPath};
-use super::{Mesh, Scene, Sphere};
+use super::params::{list, Params};
+use super::{Mesh, Scene, Sphere, MAX_MAGNITUDE};
 use crate::math::{cross, Vec3};
 use glam::{Mat3, Quat, Vec4};
-use serde::Deserialize;
 
-/// Raw TOML of the block (serde reports unknown keys with their spans).
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-pub(super) struct AnimationRaw {
-    #[serde(default)]
-    frames: Option<u32>,
-    #[serde(default)]
-    objects: Vec<TrackRaw>,
-}
-
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-struct TrackRaw {
-    shape: String,
-    #[serde(default)]
-    keys: Vec<KeyRaw>,
-    deform: Option<DeformRaw>,
-}
-
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-struct KeyRaw {
-    t: f32,
-    #[serde(default)]
-    translate: Option<[f32; 3]>,
-    /// [axis_x, axis_y, axis_z, degrees]
-    #[serde(default)]
-    rotate: Option<[f32; 4]>,
-}
-
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-struct DeformRaw {
-    #[serde(rename = "type")]
-    kind: DeformKind,
-    /// Amount at t = 0 and t = 1.
-    amount: [f32; 2],
-}
+/// Most frames a block may ask for: each is two files (as `--frames`).
+pub const MAX_FRAMES: u32 = 10_000;
 
 /// A procedural deformation, about the bottom centre of the shape's rest box
 /// (height H): `bend` shears x by amount·H·h² (h = height fraction), `twist` turns
 /// about the vertical axis by amount·h radians, `squash` scales y by 1 − amount and
 /// x, z by 1/√(1 − amount) (volume kept).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DeformKind {
     Bend,
     Twist,
@@ -101,100 +63,159 @@ pub struct Animation {
     pub tracks: Vec<Track>,
 }
 
-pub(super) fn resolve(
-    ctx: &Ctx,
-    raw: &AnimationRaw,
-    object_names: &[String],
-) -> crate::Result<Animation> {
-    let at = KeyPath::default().key("animation");
-    let frames = raw.frames.unwrap_or(8);
+const DEFORMS: &[(&str, DeformKind)] = &[
+    ("bend", DeformKind::Bend),
+    ("twist", DeformKind::Twist),
+    ("squash", DeformKind::Squash),
+];
+
+/// Reads the `[animation]` table `p` against the scene's shape names. Every key
+/// goes through [`Params`], so each message names its exact key path and line.
+pub(super) fn read(p: &Params, object_names: &[String]) -> crate::Result<Animation> {
+    let frames = p.u32("frames")?.unwrap_or(8);
+    let objects = p.tables("objects")?.unwrap_or_default();
+    p.finish()?;
     if frames == 0 {
-        return Err(ctx.err(&at.key("frames"), "expected at least 1 frame"));
+        return Err(p.err(Some("frames"), "expected at least 1 frame, got 0"));
     }
-    let mut tracks: Vec<Track> = Vec::new();
-    for (i, t) in raw.objects.iter().enumerate() {
-        let at = at.key("objects").index(i);
-        let Some(pos) = object_names.iter().position(|n| *n == t.shape) else {
-            let names: Vec<String> = object_names.iter().map(|n| format!("`{n}`")).collect();
-            return Err(ctx.err(
-                &at.key("shape"),
-                format!(
-                    "undefined shape `{}`; defined shapes: {}",
-                    t.shape,
-                    names.join(", ")
-                ),
-            ));
-        };
-        let object_id = pos as u32 + 1;
-        if tracks.iter().any(|tr| tr.object_id == object_id) {
-            return Err(ctx.err(
-                &at.key("shape"),
-                format!("shape `{}` is animated twice", t.shape),
-            ));
+    if frames > MAX_FRAMES {
+        return Err(p.err(
+            Some("frames"),
+            format!("expected at most {MAX_FRAMES} frames (two files each), got {frames}"),
+        ));
+    }
+    let mut tracks: Vec<Track> = Vec::with_capacity(objects.len());
+    for o in &objects {
+        let track = read_track(o, object_names)?;
+        if tracks.iter().any(|t| t.object_id == track.object_id) {
+            let name = &object_names[track.object_id as usize - 1];
+            return Err(o.err(Some("shape"), format!("shape `{name}` is animated twice")));
         }
-        let mut keys = Vec::with_capacity(t.keys.len());
-        for (k, key) in t.keys.iter().enumerate() {
-            keys.push(resolve_key(ctx, &at.key("keys").index(k), key)?);
-        }
-        if keys.windows(2).any(|w| w[1].t <= w[0].t) {
-            return Err(ctx.err(&at.key("keys"), "expected keys in increasing t"));
-        }
-        let deform = match &t.deform {
-            Some(d) => {
-                let dat = at.key("deform").key("amount");
-                if !d.amount.iter().all(|a| a.is_finite()) {
-                    return Err(ctx.err(&dat, "expected two finite numbers"));
-                }
-                if d.kind == DeformKind::Squash
-                    && d.amount.iter().any(|a| !(-1.0..0.95).contains(a))
-                {
-                    return Err(ctx.err(&dat, "a squash amount must lie in [-1, 0.95)"));
-                }
-                Some(Deform {
-                    kind: d.kind,
-                    amount: d.amount,
-                })
-            }
-            None => None,
-        };
-        tracks.push(Track {
-            object_id,
-            keys,
-            deform,
-        });
+        tracks.push(track);
     }
     Ok(Animation { frames, tracks })
 }
 
-fn resolve_key(ctx: &Ctx, at: &KeyPath, k: &KeyRaw) -> crate::Result<Key> {
-    if !(k.t.is_finite() && (0.0..=1.0).contains(&k.t)) {
-        return Err(ctx.err(
-            &at.key("t"),
-            format!("expected a time in [0, 1], got {}", k.t),
+/// One `[[animation.objects]]` entry.
+fn read_track(o: &Params, object_names: &[String]) -> crate::Result<Track> {
+    let shape = o.string("shape")?;
+    let keys = o.tables("keys")?.unwrap_or_default();
+    let deform = o.table("deform")?;
+    o.finish()?;
+    let shape = o.need("shape", shape)?;
+    let Some(pos) = object_names.iter().position(|n| n == shape) else {
+        let names: Vec<&str> = object_names.iter().map(String::as_str).collect();
+        let defined = if names.is_empty() {
+            "the scene names no shapes".to_string()
+        } else {
+            format!("defined shapes: {}", list(&names))
+        };
+        return Err(o.err(
+            Some("shape"),
+            format!("undefined shape `{shape}`; {defined}"),
+        ));
+    };
+    let mut out: Vec<Key> = Vec::with_capacity(keys.len());
+    for (i, k) in keys.iter().enumerate() {
+        let key = read_key(k)?;
+        if let Some(prev) = out.last() {
+            if key.t <= prev.t {
+                return Err(k.err(
+                    Some("t"),
+                    format!(
+                        "expected keys in increasing t, got t = {} after t = {} of keys[{}]",
+                        key.t,
+                        prev.t,
+                        i - 1
+                    ),
+                ));
+            }
+        }
+        out.push(key);
+    }
+    let deform = deform.as_ref().map(read_deform).transpose()?;
+    Ok(Track {
+        object_id: pos as u32 + 1,
+        keys: out,
+        deform,
+    })
+}
+
+/// One rigid keyframe `{ t, translate, rotate }`.
+fn read_key(k: &Params) -> crate::Result<Key> {
+    let t = k.f32("t")?;
+    let translate = k.f32s::<3>("translate")?;
+    let rotate = k.f32s::<4>("rotate")?;
+    k.finish()?;
+    let t = k.need("t", t)?;
+    if !(0.0..=1.0).contains(&t) {
+        return Err(k.err(Some("t"), format!("expected a time in [0, 1], got {t}")));
+    }
+    let translate = Vec3::from(translate.unwrap_or([0.0; 3]));
+    if translate.abs().max_element() > MAX_MAGNITUDE {
+        return Err(k.err(
+            Some("translate"),
+            format!(
+                "translation [{:?}, {:?}, {:?}] lies beyond ±{MAX_MAGNITUDE:e}, the largest \
+                 coordinate magnitude supported (scene::MAX_MAGNITUDE)",
+                translate.x, translate.y, translate.z
+            ),
         ));
     }
-    let translate = k.translate.unwrap_or([0.0; 3]);
-    if !translate.iter().all(|x| x.is_finite()) {
-        return Err(ctx.err(&at.key("translate"), "expected three finite numbers"));
-    }
-    let rotate = match k.rotate {
+    let rotate = match rotate {
         None => Quat::IDENTITY,
         Some([x, y, z, deg]) => {
-            let axis = Vec3::new(x, y, z);
-            if !(axis.is_finite() && deg.is_finite()) || axis.length() < 1e-12 {
-                return Err(ctx.err(
-                    &at.key("rotate"),
-                    "expected [axis_x, axis_y, axis_z, degrees] with a non-zero axis",
+            let mut axis = Vec3::new(x, y, z);
+            if axis == Vec3::ZERO {
+                return Err(k.err(
+                    Some("rotate"),
+                    format!(
+                        "expected [axis_x, axis_y, axis_z, degrees] with a non-zero axis, got \
+                         an axis of zero length [{x}, {y}, {z}]"
+                    ),
                 ));
+            }
+            // An axis whose length over- or underflows f32 is scaled first; the
+            // usual lengths are normalised as they are (the same bits as before).
+            if !(1e-18..1e18).contains(&axis.length()) {
+                axis /= axis.abs().max_element();
             }
             Quat::from_axis_angle(axis.normalize().into(), deg.to_radians())
         }
     };
     Ok(Key {
-        t: k.t,
-        translate: Vec3::from(translate),
+        t,
+        translate,
         rotate,
     })
+}
+
+/// `deform = { type, amount }`.
+fn read_deform(d: &Params) -> crate::Result<Deform> {
+    let kind = d.kind(DEFORMS)?;
+    let amount = d.f32s::<2>("amount")?;
+    d.finish()?;
+    let amount = d.need("amount", amount)?;
+    if amount.iter().any(|a| a.abs() > MAX_MAGNITUDE) {
+        return Err(d.err(
+            Some("amount"),
+            format!(
+                "amount [{:?}, {:?}] lies beyond ±{MAX_MAGNITUDE:e}, the largest magnitude \
+                 supported (scene::MAX_MAGNITUDE)",
+                amount[0], amount[1]
+            ),
+        ));
+    }
+    if kind == DeformKind::Squash && amount.iter().any(|a| !(-1.0..0.95).contains(a)) {
+        return Err(d.err(
+            Some("amount"),
+            format!(
+                "a squash amount must lie in [-1, 0.95), got [{}, {}]",
+                amount[0], amount[1]
+            ),
+        ));
+    }
+    Ok(Deform { kind, amount })
 }
 
 /// Time of frame `f` of `n`.

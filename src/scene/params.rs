@@ -344,20 +344,6 @@ impl<'a> Params<'a> {
         Ok(out)
     }
 
-    /// Deserializes the value at `key` with serde (for tables whose reader
-    /// prefers a `#[derive(Deserialize)]` struct); the key counts as read.
-    #[allow(dead_code)]
-    pub(super) fn serde<T: serde::de::DeserializeOwned>(
-        &self,
-        key: &'static str,
-    ) -> crate::Result<Option<T>> {
-        self.read(key, |ctx, at, v| {
-            v.clone()
-                .try_into()
-                .map_err(|e: toml::de::Error| ctx.err(at, e.message().trim().replace('\n', "; ")))
-        })
-    }
-
     /// The generic unread-key check: a key present in the table that no getter
     /// asked for is an error listing the keys that were asked for (`type`
     /// excepted). Call it once all of the table's keys have been read.

@@ -403,7 +403,7 @@ impl<'a> Builder<'a> {
         let shapes = top.tables("shapes")?.unwrap_or_default();
         let lights = top.tables("lights")?.unwrap_or_default();
         let environment = top.table("environment")?;
-        let animation_raw = top.serde::<super::animation::AnimationRaw>("animation")?;
+        let animation = top.table("animation")?;
         top.finish()?;
         let settings = match &render {
             Some(r) => settings(r)?,
@@ -438,9 +438,9 @@ impl<'a> Builder<'a> {
             degenerate_triangles: self.degenerate,
             meshes_with_normals: self.meshes.iter().filter(|m| !m.normals.is_empty()).count(),
         };
-        let animation = animation_raw
+        let animation = animation
             .as_ref()
-            .map(|a| super::animation::resolve(ctx, a, &self.object_names))
+            .map(|a| super::animation::read(a, &self.object_names))
             .transpose()?;
         Ok(Scene {
             path: ctx.file.to_path_buf(),
