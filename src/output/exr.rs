@@ -171,7 +171,7 @@ pub fn read_exr_with_header(path: &Path) -> crate::Result<(OutputImage, ExrHeade
 
 /// [`read_exr_with_header`] for a command that also writes `outputs`: the file
 /// is opened by [`super::input::open_input`] (a regular file, none of the
-/// outputs) and its header checked by [`check_header`], all before any pixel
+/// outputs) and its header checked by `check_header`, all before any pixel
 /// is allocated.
 pub fn read_exr_input(path: &Path, outputs: &[&Path]) -> crate::Result<(OutputImage, ExrHeader)> {
     let mut file = super::input::open_input(path, "an EXR file", outputs)?;
