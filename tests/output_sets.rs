@@ -56,11 +56,19 @@ fn assert_consistent(index_path: &Path) -> String {
 /// The EXR's header has the render id (`want`, or any) and the provenance.
 fn assert_provenance(exr: &Path, want: Option<&str>) {
     let (_, header) = read_exr_with_header(exr).unwrap();
-    let id = header.get(RENDER_ID_KEY).unwrap_or_else(|| panic!("{}: no id", exr.display()));
+    let id = header
+        .get(RENDER_ID_KEY)
+        .unwrap_or_else(|| panic!("{}: no id", exr.display()));
     if let Some(w) = want {
         assert_eq!(id, w, "{}", exr.display());
     }
-    for key in [attr::VERSION, attr::COMMAND, attr::SCENE_SHA256, attr::SPP, attr::RENDER_TIME_S] {
+    for key in [
+        attr::VERSION,
+        attr::COMMAND,
+        attr::SCENE_SHA256,
+        attr::SPP,
+        attr::RENDER_TIME_S,
+    ] {
         assert!(
             header.get(key).is_some_and(|v| !v.is_empty()),
             "{}: no {key}",
@@ -70,7 +78,10 @@ fn assert_provenance(exr: &Path, want: Option<&str>) {
 }
 
 fn shadow_opts(dir: &Path, frames: Option<u32>, size: (u32, u32)) -> ShadowFieldOptions {
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shadowfield_deform.toml");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/shadowfield_deform.toml"
+    );
     let mut opts = ShadowFieldOptions::new(scene);
     opts.out_dir = dir.to_path_buf();
     opts.quiet = true;
@@ -249,20 +260,43 @@ fn a_compare_stopped_before_its_index_is_detected() {
     let dir = temp_dir("stopped");
     let run = |budgets: &str, stop: bool| {
         let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_gradtrace"));
-        cmd.args(["compare", "scenes/cornell.toml", "--width", "24", "--height", "16"])
-            .args(["--spp", "2", "--reference-spp", "4", "--strategies", "gradient"])
-            .args(["--budgets", budgets, "--keep-exr", "--quiet", "--out"])
-            .arg(&dir);
+        cmd.args([
+            "compare",
+            "scenes/cornell.toml",
+            "--width",
+            "24",
+            "--height",
+            "16",
+        ])
+        .args([
+            "--spp",
+            "2",
+            "--reference-spp",
+            "4",
+            "--strategies",
+            "gradient",
+        ])
+        .args(["--budgets", budgets, "--keep-exr", "--quiet", "--out"])
+        .arg(&dir);
         if stop {
             cmd.env(STOP_BEFORE_INDEX_ENV, "1");
         }
         cmd.output().unwrap()
     };
     let out = run("0.25", false);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let first = assert_consistent(&dir.join("report.json"));
     let out = run("0.3", true);
-    assert_eq!(out.status.code(), Some(86), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(86),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert_eq!(index(&dir.join("report.json"))["render_id"], first.as_str());
     match check_set(&dir.join("report.json")).unwrap() {
         SetState::Mismatched { id, found, .. } => {
@@ -273,7 +307,11 @@ fn a_compare_stopped_before_its_index_is_detected() {
     }
     // The next complete compare sweeps the stopped run's folder.
     let out = run("0.3", false);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let last = assert_consistent(&dir.join("report.json"));
     assert_eq!(asset_folders(&dir), [last]);
     let _ = std::fs::remove_dir_all(&dir);

@@ -537,7 +537,11 @@ fn report_writes_three_files_and_assets() {
     assert_eq!(assets, srcs.len() + 2);
     // One folder, the report's own.
     assert_eq!(std::fs::read_dir(dir.join(ASSET_DIR)).unwrap().count(), 1);
-    let id = assets_of(&dir).file_name().unwrap().to_string_lossy().into_owned();
+    let id = assets_of(&dir)
+        .file_name()
+        .unwrap()
+        .to_string_lossy()
+        .into_owned();
     assert!(md.contains(&format!("({ASSET_DIR}/{id}/speed_rmse.svg)")));
     assert!(assets_of(&dir).join("speed_rmse.svg").exists());
     // No temporary files left behind.
@@ -1041,5 +1045,6 @@ fn compare_writes_budgets_as_given() {
 fn assets_of(dir: &Path) -> PathBuf {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
-    dir.join(ASSET_DIR).join(json["render_id"].as_str().unwrap())
+    dir.join(ASSET_DIR)
+        .join(json["render_id"].as_str().unwrap())
 }

@@ -849,12 +849,13 @@ impl StagedSet {
                 rel.to_string_lossy().into_owned()
             })
             .collect();
-        let map = json.as_object_mut().ok_or_else(|| {
-            output_error(path, "the index must be a JSON object".into())
-        })?;
+        let map = json
+            .as_object_mut()
+            .ok_or_else(|| output_error(path, "the index must be a JSON object".into()))?;
         map.insert(SET_ID_FIELD.into(), self.id.clone().into());
         map.insert(SET_FILES_FIELD.into(), files.into());
-        let text = serde_json::to_string_pretty(&json).map_err(|e| output_error(path, e.to_string()))?;
+        let text =
+            serde_json::to_string_pretty(&json).map_err(|e| output_error(path, e.to_string()))?;
         self.index = Some(stage(path, |out| {
             use std::io::Write;
             out.write_all(text.as_bytes()).map_err(|e| e.to_string())
@@ -904,9 +905,9 @@ pub enum SetState {
 }
 
 /// Checks the set an index (`preview.json`, `report.json`) describes: each file
-/// it lists must carry its id — EXR and PNG in their headers, JSON, HTML and
-/// Markdown as a `render_id` line, any other file (a report's JPEG or SVG
-/// assets) by lying in a folder named by the id.
+/// it lists must carry its id: a file in a folder named by the id (a report's
+/// assets) by that folder, else an EXR or PNG in its header, an HTML or
+/// Markdown page as a `render_id: ` comment line.
 pub fn check_set(index: &Path) -> crate::Result<SetState> {
     let bad = |m: String| crate::Error::Asset {
         path: index.to_path_buf(),
@@ -945,6 +946,10 @@ pub fn check_set(index: &Path) -> crate::Result<SetState> {
 
 /// The id a member carries (`None`: missing, unreadable or untagged).
 fn member_id(path: &Path, id: &str) -> Option<String> {
+    let folder = path.parent().and_then(Path::file_name);
+    if folder.is_some_and(|f| f == OsStr::new(id)) {
+        return path.is_file().then(|| id.to_string());
+    }
     let ext = path.extension()?.to_str()?.to_ascii_lowercase();
     match ext.as_str() {
         "exr" => super::exr::read_render_id(path).ok().flatten(),
@@ -955,10 +960,8 @@ fn member_id(path: &Path, id: &str) -> Option<String> {
                 .find_map(|l| l.split_once("render_id: ").map(|(_, r)| r))
                 .map(|r| r.chars().take_while(char::is_ascii_hexdigit).collect())
         }
-        _ => {
-            let folder = path.parent()?.file_name()?.to_str()?;
-            (path.is_file() && folder == id).then(|| folder.to_string())
-        }
+        // Neither tagged nor in the id's folder.
+        _ => None,
     }
 }
 

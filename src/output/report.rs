@@ -370,11 +370,7 @@ pub fn write_report_with(
     let id = hasher.finish();
     let prefix = format!("{ASSET_DIR}/{id}");
     let html = html(input, &rows, &cards, &plots, &scales, &prefix);
-    let html = html.replacen(
-        "<html",
-        &format!("<!-- render_id: {id} -->\n<html"),
-        1,
-    );
+    let html = html.replacen("<html", &format!("<!-- render_id: {id} -->\n<html"), 1);
     let markdown = markdown(input, &rows, &cards, &scales, &prefix);
     let markdown = format!("{markdown}\n<!-- render_id: {id} -->\n");
 

@@ -360,7 +360,12 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         .collect();
     // Everything goes into one set, written at the end under one render id.
     let mut set = PreviewSet::default();
-    set.png(opts.out_dir.join(format!("{name}_error.png")), error_rgb, w, h);
+    set.png(
+        opts.out_dir.join(format!("{name}_error.png")),
+        error_rgb,
+        w,
+        h,
+    );
     let mut exr = OutputImage::new(w, h);
     exr.push_vec3("", ["R", "G", "B"], &image);
     exr.push_vec3("reference.", ["R", "G", "B"], &reference);
@@ -411,7 +416,11 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         stats_page(&summary, &levels_png, &transfer),
     );
     let header = super::provenance(&scene, refs.spp, frame_s)?;
-    set.write(&summary.json, index(&summary, opts, &scene, &orbit), &header)?;
+    set.write(
+        &summary.json,
+        index(&summary, opts, &scene, &orbit),
+        &header,
+    )?;
     Ok(summary)
 }
 
