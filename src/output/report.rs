@@ -886,8 +886,10 @@ fn documentation(fields: &[(&str, &str)]) -> serde_json::Value {
 
 /// `report.json`'s own documentation of its top-level keys (its `fields`), so that
 /// a reader of the file alone knows what each number means.
-const JSON_FIELDS: [(&str, &str); 16] = [
+const JSON_FIELDS: [(&str, &str); 18] = [
     ("scene", "name of the compared scene"),
+    ("render_id", "the id every file of this report carries (its assets: their folder report-assets/<id>/); written last, so a file without it belongs to another run"),
+    ("files", "every file of this report, relative to its folder (assets, --keep-exr EXRs, report.md, report.html)"),
     ("scene_hash", "SHA-256 of the scene file and every file it references"),
     ("command", "the command line that wrote this report"),
     ("version", "gradtrace's version and git commit"),
