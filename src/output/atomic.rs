@@ -54,6 +54,13 @@
 //! two leaves the new PNG beside the old EXR, and [`check_pair`] reports their
 //! ids as different; the EXR, the primary output, is always a complete file
 //! from one render.
+//!
+//! # Output sets: the same, for many files
+//!
+//! A preview's images and `preview.json`, a report's assets, pages and kept
+//! EXRs: [`StagedSet`] gives them one id and renames the JSON index (id and
+//! file list) last; [`check_set`] reads the index and finds any listed file
+//! of another run.
 
 use super::OutputImage;
 use crate::math::Vec3;
