@@ -37,7 +37,7 @@ pub(crate) enum Command {
     /// Render a content-keyed cached reference, every adaptive-sampling strategy at
     /// several budgets (over --seeds repetitions) and the baselines a user would
     /// pick instead at equal time, and write `<out>/report.html` (with its
-    /// `report-assets/`), `report.json` and `report.md`.
+    /// `report-assets/<id>/`), `report.json` and `report.md`.
     Compare(CompareArgs),
     /// Compare two EXRs' beauty (R, G, B): RMSE, relMSE, FLIP and an error-map
     /// PNG; exit status 1 when --threshold is exceeded.

@@ -13,7 +13,7 @@ use gradtrace::output::report::{
     compute_rows, markdown_table, mean_ci95, write_report, ReferenceInfo, ReportInput, ReportRow,
     Run, RunKind, ASSET_DIR,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 mod common;
 use common::Rng;
@@ -533,12 +533,19 @@ fn report_writes_three_files_and_assets() {
         assert!(html.contains(&format!(">{label}<")), "{label}");
     }
     // The linked images and the two plots (which the HTML inlines).
-    let assets = std::fs::read_dir(dir.join(ASSET_DIR)).unwrap().count();
+    let assets = std::fs::read_dir(assets_of(&dir)).unwrap().count();
     assert_eq!(assets, srcs.len() + 2);
-    assert!(md.contains(&format!("({ASSET_DIR}/speed_rmse.svg)")));
-    assert!(dir.join(ASSET_DIR).join("speed_rmse.svg").exists());
+    // One folder, the report's own.
+    assert_eq!(std::fs::read_dir(dir.join(ASSET_DIR)).unwrap().count(), 1);
+    let id = assets_of(&dir)
+        .file_name()
+        .unwrap()
+        .to_string_lossy()
+        .into_owned();
+    assert!(md.contains(&format!("({ASSET_DIR}/{id}/speed_rmse.svg)")));
+    assert!(assets_of(&dir).join("speed_rmse.svg").exists());
     // No temporary files left behind.
-    for d in [dir.clone(), dir.join(ASSET_DIR)] {
+    for d in [dir.clone(), dir.join(ASSET_DIR), assets_of(&dir)] {
         for e in std::fs::read_dir(d).unwrap() {
             let name = e.unwrap().file_name().to_string_lossy().to_string();
             assert!(!name.starts_with('.'), "leftover {name}");
@@ -555,7 +562,7 @@ fn sample_map_marks_sample_pixels_over_dimmed_reference() {
     input.runs.truncate(1);
     input.runs[0].sample_positions = vec![Vec2::new(3.5, 2.5), Vec2::new(W as f32, H as f32)];
     write_report(&dir, &input).unwrap();
-    let path = dir.join(ASSET_DIR).join("run-000-gradient-samples.png");
+    let path = assets_of(&dir).join("run-000-gradient-samples.png");
     let img = image::open(&path).unwrap().to_rgb8();
     assert_eq!((img.width() as usize, img.height() as usize), (W, H));
     let marker = [255, 96, 32];
@@ -583,7 +590,7 @@ fn sample_map_marks_sample_pixels_over_dimmed_reference() {
     // to JPEG's rounding of a flat colour).
     input.runs[0].image = input.reference.clone();
     write_report(&dir, &input).unwrap();
-    let err = image::open(dir.join(ASSET_DIR).join("run-000-gradient-error.jpg"))
+    let err = image::open(assets_of(&dir).join("run-000-gradient-error.jpg"))
         .unwrap()
         .to_rgb8();
     let v0 = viridis(0.0).to_array().map(|v| (v * 255.0).round() as i32);
@@ -691,7 +698,7 @@ fn every_plotted_point_has_an_error_bar() {
     let one_seed = plotted.iter().filter(|r| r.seeds == 1).count();
     assert_eq!(one_seed, 1);
     for plot in ["speed_rmse.svg", "speed_flip.svg"] {
-        let svg = std::fs::read_to_string(dir.join(ASSET_DIR).join(plot)).unwrap();
+        let svg = std::fs::read_to_string(assets_of(&dir).join(plot)).unwrap();
         // A point: its outline circle; a hollow one is filled white.
         let circles = tags(&svg, "circle");
         let points: Vec<&&str> = circles
@@ -1032,4 +1039,12 @@ fn compare_writes_budgets_as_given() {
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The report's asset folder, `report-assets/<render_id of report.json>`.
+fn assets_of(dir: &Path) -> PathBuf {
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    dir.join(ASSET_DIR)
+        .join(json["render_id"].as_str().unwrap())
 }

@@ -54,6 +54,13 @@
 //! two leaves the new PNG beside the old EXR, and [`check_pair`] reports their
 //! ids as different; the EXR, the primary output, is always a complete file
 //! from one render.
+//!
+//! # Output sets: the same, for many files
+//!
+//! A preview's images and `preview.json`, a report's assets, pages and kept
+//! EXRs: [`StagedSet`] gives them one id and renames the JSON index (id and
+//! file list) last; [`check_set`] reads the index and finds any listed file
+//! of another run.
 
 use super::OutputImage;
 use crate::math::Vec3;
@@ -646,6 +653,20 @@ pub fn write_pair(
     Ok(id)
 }
 
+/// One EXR with a render id of its own (of `beauty`) and `header`'s
+/// provenance: for files that belong to no set (cached references), so that
+/// they too say where they came from. Returns the id.
+pub fn write_exr_with_id(
+    path: &Path,
+    image: &OutputImage,
+    header: &super::ExrHeader,
+    beauty: &[Vec3],
+) -> crate::Result<String> {
+    let id = render_id(beauty, image.width, image.height, 0.0);
+    super::exr::stage_exr_tagged(path, image, header, &id)?.commit()?;
+    Ok(id)
+}
+
 /// What [`check_pair`] found.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PairState {
@@ -667,6 +688,288 @@ pub fn check_pair(exr: &Path, png: &Path) -> crate::Result<PairState> {
         (Some(a), Some(b)) if a == b => PairState::Consistent(a),
         (exr, png) => PairState::Mismatched { exr, png },
     })
+}
+
+// ---------------------------------------------------------------------------
+// An output set: many files under one render id, the index last.
+// ---------------------------------------------------------------------------
+
+/// The id of an output set: the first 128 bits (hex) of SHA-256 over whatever
+/// the caller feeds it (every image's pixels, the summary's text). Built from
+/// the content, not drawn at random, so that a rerun that produces the same
+/// set writes the same files, as [`render_id`] does for a pair.
+pub struct SetIdHasher(sha2::Sha256);
+
+impl Default for SetIdHasher {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SetIdHasher {
+    pub fn new() -> Self {
+        use sha2::Digest;
+        Self(sha2::Sha256::new_with_prefix(b"gradtrace output set v1\0"))
+    }
+
+    /// Adds a length-prefixed byte string (so that parts cannot run together).
+    pub fn bytes(&mut self, b: &[u8]) -> &mut Self {
+        use sha2::Digest;
+        self.0.update((b.len() as u64).to_le_bytes());
+        self.0.update(b);
+        self
+    }
+
+    /// Adds the f32 bits of a plane.
+    pub fn floats(&mut self, v: &[f32]) -> &mut Self {
+        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_bits().to_le_bytes()).collect();
+        self.bytes(&bytes)
+    }
+
+    /// Adds the f32 bits of an RGB plane.
+    pub fn rgb(&mut self, v: &[Vec3]) -> &mut Self {
+        let bytes: Vec<u8> = v
+            .iter()
+            .flat_map(|p| p.to_array())
+            .flat_map(|x| x.to_bits().to_le_bytes())
+            .collect();
+        self.bytes(&bytes)
+    }
+
+    /// Adds every channel of an image (names, size and data).
+    pub fn image(&mut self, img: &OutputImage) -> &mut Self {
+        self.bytes(&(img.width as u64).to_le_bytes());
+        self.bytes(&(img.height as u64).to_le_bytes());
+        for c in &img.channels {
+            self.bytes(c.name.as_bytes());
+            self.floats(&c.data);
+        }
+        self
+    }
+
+    pub fn finish(self) -> String {
+        use sha2::Digest;
+        self.0.finalize()[..16]
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    }
+}
+
+/// The JSON field of an index that names its set's id.
+pub const SET_ID_FIELD: &str = "render_id";
+/// The JSON field of an index that lists its set's files (relative to the index's folder).
+pub const SET_FILES_FIELD: &str = "files";
+
+/// Test hook: when this variable is set, [`StagedSet::commit`] exits the process
+/// (status 86) after the members are in place and before the index is, as a
+/// kill there would; `tests/output_sets.rs` checks that [`check_set`] sees it.
+pub const STOP_BEFORE_INDEX_ENV: &str = "GRADTRACE_TEST_STOP_BEFORE_INDEX";
+
+/// The files of one output set (a preview's images and `preview.json`, a
+/// report's pages, assets and EXRs), all staged under one render id.
+///
+/// Many files cannot be renamed in one step, so, as for [`StagedPair`], a split
+/// set is made *detectable*: every member carries the id (EXR header, PNG
+/// `tEXt` chunk, a line of text, or a folder named by it), the members are
+/// renamed first and the index — a JSON file naming the id and every member —
+/// last. A reader who trusts the index can check each file it lists
+/// ([`check_set`]); a kill before the index's rename leaves new members beside
+/// the old index, whose id they do not carry.
+#[derive(Debug)]
+pub struct StagedSet {
+    id: String,
+    members: Vec<Staged>,
+    index: Option<Staged>,
+}
+
+impl StagedSet {
+    pub fn new(id: String) -> Self {
+        Self {
+            id,
+            members: Vec::new(),
+            index: None,
+        }
+    }
+
+    /// The id every file of the set carries.
+    pub fn render_id(&self) -> &str {
+        &self.id
+    }
+
+    /// Stages an EXR with the id and `header`'s attributes (provenance).
+    pub fn stage_exr(
+        &mut self,
+        path: &Path,
+        image: &OutputImage,
+        header: &super::ExrHeader,
+    ) -> crate::Result<()> {
+        let s = super::exr::stage_exr_tagged(path, image, header, &self.id)?;
+        self.members.push(s);
+        Ok(())
+    }
+
+    /// Stages a PNG of linear RGB (tone-mapped at `exposure`) with the id.
+    pub fn stage_png(
+        &mut self,
+        path: &Path,
+        rgb: &[Vec3],
+        width: usize,
+        height: usize,
+        exposure: f32,
+    ) -> crate::Result<()> {
+        let s = super::png::stage_png_tagged(path, rgb, width, height, exposure, Some(&self.id))?;
+        self.members.push(s);
+        Ok(())
+    }
+
+    /// Stages a member whose bytes already show the id (a page with an id
+    /// line) or that lies in a folder named by it (a report's assets).
+    pub fn stage_bytes(&mut self, path: &Path, bytes: &[u8]) -> crate::Result<()> {
+        let s = stage(path, |out| {
+            use std::io::Write;
+            out.write_all(bytes).map_err(|e| e.to_string())
+        })?;
+        self.members.push(s);
+        Ok(())
+    }
+
+    /// Adds an already staged member (which must carry the id).
+    pub fn push(&mut self, staged: Staged) {
+        self.members.push(staged);
+    }
+
+    /// The targets of the members staged so far.
+    pub fn member_paths(&self) -> Vec<PathBuf> {
+        self.members.iter().map(|s| s.target.clone()).collect()
+    }
+
+    /// Stages the index: `json` (an object) with [`SET_ID_FIELD`] and
+    /// [`SET_FILES_FIELD`] (every member, relative to the index's folder) added.
+    pub fn stage_index(&mut self, path: &Path, mut json: serde_json::Value) -> crate::Result<()> {
+        let dir = parent_dir(path);
+        let files: Vec<String> = self
+            .members
+            .iter()
+            .map(|s| {
+                let rel = s.target.strip_prefix(dir).unwrap_or(&s.target);
+                rel.to_string_lossy().into_owned()
+            })
+            .collect();
+        let map = json
+            .as_object_mut()
+            .ok_or_else(|| output_error(path, "the index must be a JSON object".into()))?;
+        map.insert(SET_ID_FIELD.into(), self.id.clone().into());
+        map.insert(SET_FILES_FIELD.into(), files.into());
+        let text =
+            serde_json::to_string_pretty(&json).map_err(|e| output_error(path, e.to_string()))?;
+        self.index = Some(stage(path, |out| {
+            use std::io::Write;
+            out.write_all(text.as_bytes()).map_err(|e| e.to_string())
+        })?);
+        Ok(())
+    }
+
+    /// Renames the members, then the index, into place. An error before the
+    /// first rename leaves every previous file untouched; one after it leaves a
+    /// split set that [`check_set`] reports.
+    pub fn commit(self) -> crate::Result<()> {
+        let Self { members, index, .. } = self;
+        let mut dirs: Vec<PathBuf> = Vec::new();
+        for mut m in members {
+            m.rename()?;
+            let d = parent_dir(&m.target).to_path_buf();
+            if !dirs.contains(&d) {
+                dirs.push(d);
+            }
+        }
+        for d in &dirs {
+            if let Ok(dir) = File::open(d) {
+                let _ = dir.sync_all();
+            }
+        }
+        if std::env::var_os(STOP_BEFORE_INDEX_ENV).is_some() {
+            std::process::exit(86);
+        }
+        match index {
+            Some(i) => i.commit(),
+            None => Ok(()),
+        }
+    }
+}
+
+/// What [`check_set`] found.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SetState {
+    /// Every listed file carries the index's id.
+    Consistent(String),
+    /// A listed file is missing or carries another id (or none).
+    Mismatched {
+        id: String,
+        file: PathBuf,
+        found: Option<String>,
+    },
+}
+
+/// Checks the set an index (`preview.json`, `report.json`) describes: each file
+/// it lists must carry its id: a file in a folder named by the id (a report's
+/// assets) by that folder, else an EXR or PNG in its header, an HTML or
+/// Markdown page as a `render_id: ` comment line.
+pub fn check_set(index: &Path) -> crate::Result<SetState> {
+    let bad = |m: String| crate::Error::Asset {
+        path: index.to_path_buf(),
+        message: m,
+    };
+    let text = std::fs::read_to_string(index).map_err(|source| crate::Error::Io {
+        path: index.to_path_buf(),
+        source,
+    })?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("invalid JSON: {e}")))?;
+    let id = json[SET_ID_FIELD]
+        .as_str()
+        .ok_or_else(|| bad(format!("expected a string field `{SET_ID_FIELD}`")))?
+        .to_string();
+    let files = json[SET_FILES_FIELD]
+        .as_array()
+        .ok_or_else(|| bad(format!("expected an array field `{SET_FILES_FIELD}`")))?;
+    let dir = parent_dir(index);
+    for f in files {
+        let rel = f
+            .as_str()
+            .ok_or_else(|| bad(format!("`{SET_FILES_FIELD}` must hold strings")))?;
+        let path = dir.join(rel);
+        let found = member_id(&path, &id);
+        if found.as_deref() != Some(id.as_str()) {
+            return Ok(SetState::Mismatched {
+                id,
+                file: path,
+                found,
+            });
+        }
+    }
+    Ok(SetState::Consistent(id))
+}
+
+/// The id a member carries (`None`: missing, unreadable or untagged).
+fn member_id(path: &Path, id: &str) -> Option<String> {
+    let folder = path.parent().and_then(Path::file_name);
+    if folder.is_some_and(|f| f == OsStr::new(id)) {
+        return path.is_file().then(|| id.to_string());
+    }
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "exr" => super::exr::read_render_id(path).ok().flatten(),
+        "png" => super::png::read_render_id(path).ok().flatten(),
+        "json" | "md" | "html" => {
+            let text = std::fs::read_to_string(path).ok()?;
+            text.lines()
+                .find_map(|l| l.split_once("render_id: ").map(|(_, r)| r))
+                .map(|r| r.chars().take_while(char::is_ascii_hexdigit).collect())
+        }
+        // Neither tagged nor in the id's folder.
+        _ => None,
+    }
 }
 
 #[cfg(test)]

@@ -11,11 +11,22 @@
 //! files are staged first and only then renamed into place, so invalid input or a
 //! failed encoder leaves the directory untouched.
 //!
-//! The HTML links its images (JPEG files under `report-assets/`, written once) and
+//! The report is one output set (`super::atomic::StagedSet`) under one render id:
+//! its assets go to a fresh folder `report-assets/<id>/`, then `report.md`,
+//! `report.html` and, last, `report.json` (the index: the id and every file) are
+//! renamed into place, and only then are the asset folders of other ids removed.
+//! A report thus never links another run's assets, two compares into one folder
+//! never mix them, and a kill leaves at most one stale folder, swept by the next
+//! report. (Swapping a whole staged folder in with `renameat2(RENAME_EXCHANGE)`
+//! would be atomic too, but would also swap out the cached reference and kept
+//! EXRs that live beside the report, and needs Linux 3.15 and a file system
+//! that supports it.)
+//!
+//! The HTML links its images (JPEG files under `report-assets/<id>/`) and
 //! inlines its plots as SVG, with no external CSS, scripts or fonts: the folder can
 //! be copied or mailed whole and opened offline.
 
-use super::atomic::{output_error, stage, Staged};
+use super::atomic::{output_error, SetIdHasher, StagedSet};
 use super::colormap::{viridis8, viridis_hex};
 use super::metrics::{self, luminance, FLIP_PPD, RELMSE_EPS, TRIM_FRACTION};
 use super::plot::{loglog_svg, Series};
@@ -25,7 +36,6 @@ use image::codecs::jpeg::JpegEncoder;
 use image::ExtendedColorType;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
 /// Folder (inside the report directory) for the image files.
@@ -84,7 +94,8 @@ impl RunKind {
     }
 
     /// Camera samples per evaluated point (adaptive, interpolation) or per pixel.
-    fn spp(self) -> u32 {
+    /// Samples per pixel (or per evaluated point).
+    pub fn spp(self) -> u32 {
         match self {
             RunKind::Adaptive { spp, .. }
             | RunKind::Baseline { spp, .. }
@@ -254,10 +265,20 @@ pub fn compute_rows(input: &ReportInput) -> Result<Vec<ReportRow>> {
     Ok(summarise(input, &measured))
 }
 
-/// Writes `report.html`, `report.json`, `report.md` and `report-assets/` into `dir`
+/// Writes `report.html`, `report.json`, `report.md` and `report-assets/<id>/` into `dir`
 /// (created if missing) and returns the rows. On any error nothing in `dir` is
 /// created or replaced.
 pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
+    write_report_with(dir, input, |_| Ok(()))
+}
+
+/// [`write_report`] with more members of the set (`compare --keep-exr`'s EXRs),
+/// which `extra` stages under the report's id; they are renamed before the pages.
+pub fn write_report_with(
+    dir: &Path,
+    input: &ReportInput,
+    extra: impl FnOnce(&mut StagedSet) -> Result<()>,
+) -> Result<Vec<ReportRow>> {
     let html_path = dir.join("report.html");
     validate(input, &html_path)?;
     let measured = measure(input, &html_path)?;
@@ -339,27 +360,78 @@ pub fn write_report(dir: &Path, input: &ReportInput) -> Result<Vec<ReportRow>> {
     for (name, svg) in &plots {
         assets.push((name.clone(), svg.clone().into_bytes()));
     }
-    let html = html(input, &rows, &cards, &plots, &scales);
-    let markdown = markdown(input, &rows, &cards, &scales);
     let json = json(input, &rows, &scales).map_err(fail)?;
+    // The id: every asset's bytes and the figures (which cover the pages).
+    let mut hasher = SetIdHasher::new();
+    for (name, bytes) in &assets {
+        hasher.bytes(name.as_bytes()).bytes(bytes);
+    }
+    hasher.bytes(json.to_string().as_bytes());
+    let id = hasher.finish();
+    let prefix = format!("{ASSET_DIR}/{id}");
+    let html = html(input, &rows, &cards, &plots, &scales, &prefix);
+    let html = html.replacen("<html", &format!("<!-- render_id: {id} -->\n<html"), 1);
+    let markdown = markdown(input, &rows, &cards, &scales, &prefix);
+    let markdown = format!("{markdown}\n<!-- render_id: {id} -->\n");
 
     // Stage everything, then commit: a failure before the first rename leaves the
-    // old report (if any) intact; the staged temporaries are removed on drop.
-    let asset_dir = dir.join(ASSET_DIR);
+    // old report (if any) intact; the staged temporaries are removed on drop
+    // (and the fresh asset folder with them, if this run made it).
+    let asset_root = dir.join(ASSET_DIR);
+    let asset_dir = asset_root.join(&id);
+    let made_folder = !asset_dir.exists();
     std::fs::create_dir_all(&asset_dir)
         .map_err(|e| output_error(&asset_dir, format!("cannot create the directory: {e}")))?;
-    let mut staged: Vec<Staged> = Vec::new();
-    for (name, bytes) in &assets {
-        staged.push(stage_bytes(&asset_dir.join(name), bytes)?);
-    }
-    staged.push(stage_bytes(&dir.join("report.json"), json.as_bytes())?);
-    staged.push(stage_bytes(&dir.join("report.md"), markdown.as_bytes())?);
-    // The HTML last, so that a reader who sees the new report sees its assets.
-    staged.push(stage_bytes(&html_path, html.as_bytes())?);
-    for s in staged {
-        s.commit()?;
-    }
+    let staged = (|| {
+        let mut set = StagedSet::new(id.clone());
+        for (name, bytes) in &assets {
+            set.stage_bytes(&asset_dir.join(name), bytes)?;
+        }
+        extra(&mut set)?;
+        set.stage_bytes(&dir.join("report.md"), markdown.as_bytes())?;
+        set.stage_bytes(&html_path, html.as_bytes())?;
+        // The index last: a reader who trusts it finds every file it lists.
+        set.stage_index(&dir.join("report.json"), json)?;
+        Ok::<_, crate::Error>(set)
+    })();
+    let set = match staged {
+        Ok(set) => set,
+        Err(e) => {
+            if made_folder {
+                let _ = std::fs::remove_dir(&asset_dir);
+                let _ = std::fs::remove_dir(&asset_root);
+            }
+            return Err(e);
+        }
+    };
+    set.commit()?;
+    remove_other_assets(&asset_root, &id);
     Ok(rows)
+}
+
+/// Removes what other reports left under `report-assets/`: the folders of other
+/// ids (a report whose index is replaced, or a killed run's) and the flat files
+/// of the layout before ids. Best effort: a leftover is only disk space, never
+/// linked by the report in place.
+fn remove_other_assets(root: &Path, id: &str) {
+    let Ok(entries) = std::fs::read_dir(root) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Ok(kind) = e.file_type() else {
+            continue;
+        };
+        let ours = name.len() == 32 && name.bytes().all(|b| b.is_ascii_hexdigit());
+        if kind.is_dir() && ours && name != id {
+            let _ = std::fs::remove_dir_all(e.path());
+        } else if kind.is_file()
+            && [".jpg", ".png", ".svg"].iter().any(|x| name.ends_with(x))
+            && !name.starts_with('.')
+        {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 /// File names of one shown run's images inside [`ASSET_DIR`].
@@ -771,7 +843,7 @@ fn json(
     input: &ReportInput,
     rows: &[ReportRow],
     scales: &[ErrorScale],
-) -> std::result::Result<String, String> {
+) -> std::result::Result<serde_json::Value, String> {
     let value = serde_json::json!({
         "scene": input.scene,
         "scene_hash": input.scene_hash,
@@ -798,7 +870,9 @@ fn json(
         "fields": documentation(&JSON_FIELDS),
         "run_fields": documentation(&RUN_FIELDS),
     });
-    serde_json::to_string_pretty(&value).map_err(|e| e.to_string())
+    // Serialisable (checked here, where a failure still names the report).
+    serde_json::to_string(&value).map_err(|e| e.to_string())?;
+    Ok(value)
 }
 
 /// A JSON object of (key, one line) pairs.
@@ -812,8 +886,10 @@ fn documentation(fields: &[(&str, &str)]) -> serde_json::Value {
 
 /// `report.json`'s own documentation of its top-level keys (its `fields`), so that
 /// a reader of the file alone knows what each number means.
-const JSON_FIELDS: [(&str, &str); 16] = [
+const JSON_FIELDS: [(&str, &str); 18] = [
     ("scene", "name of the compared scene"),
+    ("render_id", "the id every file of this report carries (its assets: their folder report-assets/<id>/); written last, so a file without it belongs to another run"),
+    ("files", "every file of this report, relative to its folder (assets, --keep-exr EXRs, report.md, report.html)"),
     ("scene_hash", "SHA-256 of the scene file and every file it references"),
     ("command", "the command line that wrote this report"),
     ("version", "gradtrace's version and git commit"),
@@ -1031,11 +1107,13 @@ pub fn markdown_table(rows: &[ReportRow]) -> String {
     s
 }
 
+/// `assets`: the folder the links point into (`report-assets/<id>`).
 fn markdown(
     input: &ReportInput,
     rows: &[ReportRow],
     cards: &[Card],
     scales: &[ErrorScale],
+    assets: &str,
 ) -> String {
     let mut s = format!("# Comparison: {}\n\n", input.scene);
     if let Some(line) = headline(input, rows) {
@@ -1045,23 +1123,23 @@ fn markdown(
     s += &markdown_table(rows);
     let _ = writeln!(
         s,
-        "![RMSE against time]({ASSET_DIR}/speed_rmse.svg)\n![FLIP against time]({ASSET_DIR}/speed_flip.svg)"
+        "![RMSE against time]({assets}/speed_rmse.svg)\n![FLIP against time]({assets}/speed_flip.svg)"
     );
-    let _ = writeln!(s, "\n![reference]({ASSET_DIR}/reference.jpg)");
+    let _ = writeln!(s, "\n![reference]({assets}/reference.jpg)");
     for (k, scale) in scales.iter().enumerate() {
         let _ = writeln!(s, "\n{}\n", scale_caption(scale));
         for card in cards.iter().filter(|c| c.scale == k) {
             let run = &input.runs[card.run];
             let _ = write!(
                 s,
-                "- {} ({}): [image]({ASSET_DIR}/{}) · [error]({ASSET_DIR}/{})",
+                "- {} ({}): [image]({assets}/{}) · [error]({assets}/{})",
                 run.name,
                 run.kind.short(),
                 card.image,
                 card.error
             );
             if let Some(m) = &card.samples {
-                let _ = write!(s, " · [samples]({ASSET_DIR}/{m})");
+                let _ = write!(s, " · [samples]({assets}/{m})");
             }
             s += "\n";
         }
@@ -1147,13 +1225,14 @@ fn html(
     cards: &[Card],
     plots: &[(String, String)],
     scales: &[ErrorScale],
+    assets: &str,
 ) -> String {
     let (w, h) = (input.width, input.height);
     // Thumbnails scale smoothly; a click opens the full-size file.
     // `extra` follows the caption inside the figure (an error map's colour bar).
     let figure = |name: &str, alt: &str, extra: &str| {
         format!(
-            "<figure><a href=\"{ASSET_DIR}/{name}\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{ASSET_DIR}/{name}\"></a><figcaption>{a}</figcaption>{extra}</figure>",
+            "<figure><a href=\"{assets}/{name}\"><img width=\"{w}\" height=\"{h}\" alt=\"{a}\" src=\"{assets}/{name}\"></a><figcaption>{a}</figcaption>{extra}</figure>",
             a = esc(alt)
         )
     };
@@ -1327,10 +1406,6 @@ fn sample_map(reference8: &[u8], w: usize, h: usize, positions: &[Vec2]) -> Vec<
         out[3 * (j * w + i)..3 * (j * w + i) + 3].copy_from_slice(&[255, 96, 32]);
     }
     out
-}
-
-fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged> {
-    stage(path, |out| out.write_all(bytes).map_err(|e| e.to_string()))
 }
 
 /// An SVG document made fit for inline HTML: the XML declaration and the

@@ -237,9 +237,6 @@ pub fn compare(
     rendering_s += grid.iter().map(|r| r.wall_time_s).sum::<f64>();
     progress("Sec. 8 interpolation grid");
     runs.extend(grid);
-    if opts.keep_exr {
-        keep_exrs(&plan, &runs)?;
-    }
 
     let outside_s = (start.elapsed().as_secs_f64() - rendering_s).max(0.0);
     let notes = notes(
@@ -266,7 +263,14 @@ pub fn compare(
         notes,
     };
     let t = Instant::now();
-    let rows = report::write_report(&opts.out_dir, &input)?;
+    // `--keep-exr`'s EXRs are members of the report's set: one id, renamed
+    // before the pages, listed in report.json.
+    let rows = report::write_report_with(&opts.out_dir, &input, |set| {
+        if opts.keep_exr {
+            keep_exrs(&plan, &input, set)?;
+        }
+        Ok(())
+    })?;
     let total = start.elapsed().as_secs_f64();
     let outside = outside_s + t.elapsed().as_secs_f64();
     progress(&format!(
@@ -774,8 +778,15 @@ fn adaptive_run(name: &str, kind: RunKind, seed: u32, out: AdaptiveRender) -> Ru
     }
 }
 
-/// `--keep-exr`: every run's image as `runs/<name>-<setting>-seed<k>.exr`.
-fn keep_exrs(plan: &Plan, runs: &[Run]) -> Result<()> {
+/// `--keep-exr`: every run's image as `runs/<name>-<setting>-seed<k>.exr`, with
+/// the report's id and the provenance `render` writes.
+fn keep_exrs(
+    plan: &Plan,
+    input: &report::ReportInput,
+    set: &mut crate::output::atomic::StagedSet,
+) -> Result<()> {
+    use super::merge::attr;
+    let runs = &input.runs;
     let dir = plan.opts.out_dir.join("runs");
     std::fs::create_dir_all(&dir).map_err(|e| Error::Output {
         path: dir.clone(),
@@ -802,7 +813,20 @@ fn keep_exrs(plan: &Plan, runs: &[Run]) -> Result<()> {
             .collect();
         let mut img = crate::output::OutputImage::new(w as usize, h as usize);
         img.push_vec3("", crate::output::names::RGB, &r.image);
-        crate::output::write_exr(&dir.join(format!("{name}.exr")), &img)?;
+        let mut attributes: Vec<(String, String)> = vec![
+            (attr::VERSION.into(), input.version.clone()),
+            (attr::COMMAND.into(), input.command.clone()),
+            (attr::SCENE_SHA256.into(), input.scene_hash.clone()),
+            (attr::SPP.into(), r.kind.spp().to_string()),
+            (attr::SEED.into(), r.seed.to_string()),
+            (attr::RENDER_TIME_S.into(), format!("{:.3}", r.wall_time_s)),
+        ];
+        attributes.sort();
+        let header = crate::output::ExrHeader {
+            attributes,
+            ..Default::default()
+        };
+        set.stage_exr(&dir.join(format!("{name}.exr")), &img, &header)?;
     }
     Ok(())
 }
@@ -863,7 +887,8 @@ fn cached_reference(plan: &Plan, scene_hash: &str) -> Result<(Vec<Vec3>, Referen
         path: dir.clone(),
         message: format!("cannot create the folder: {e}"),
     })?;
-    crate::output::write_exr(&exr, &image_of_render(&out))?;
+    let header = super::render::provenance(plan.scene, &opts, &plan.opts.command, &out)?;
+    crate::output::atomic::write_exr_with_id(&exr, &image_of_render(&out), &header, &out.beauty)?;
     let sidecar = serde_json::json!({
         "cache_key": key, "scene_hash": scene_hash, "spp": plan.reference_spp,
         "time_s": secs, "options": format!("{opts:?}"), "version": super::VERSION,

@@ -15,6 +15,7 @@ use crate::accel::Accel;
 use crate::math::{luminance, Vec2, Vec3};
 use crate::output::{self, OutputImage};
 use crate::pipeline::preview::figures::{self, Figures, Timing};
+use crate::pipeline::preview::PreviewSet;
 use crate::pipeline::progress::{Phase, ProgressMode};
 use crate::preview::glossy::{self, PrefilteredEnv, Settings, Transfer};
 use crate::render::{self, RenderOptions};
@@ -222,7 +223,8 @@ fn reference(
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| out_err(dir, e))?;
     }
-    output::write_exr(&path, &img)?;
+    let header = crate::pipeline::render::provenance(scene, &ropts, &super::command_line(), &out)?;
+    output::atomic::write_exr_with_id(&path, &img, &header, &out.beauty)?;
     Ok((out.beauty, secs))
 }
 
@@ -356,30 +358,32 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         .iter()
         .map(|e| output::colormap::viridis((e * scale).min(1.0)))
         .collect();
-    output::write_png(
-        &opts.out_dir.join(format!("{name}_error.png")),
-        &error_rgb,
+    // Everything goes into one set, written at the end under one render id.
+    let mut set = PreviewSet::default();
+    set.png(
+        opts.out_dir.join(format!("{name}_error.png")),
+        error_rgb,
         w,
         h,
-    )?;
+    );
     let mut exr = OutputImage::new(w, h);
     exr.push_vec3("", ["R", "G", "B"], &image);
     exr.push_vec3("reference.", ["R", "G", "B"], &reference);
     exr.push_scalar("error.Y", error);
     let exr_path = opts.out_dir.join(format!("{name}.exr"));
-    output::write_exr(&exr_path, &exr)?;
+    set.exr(exr_path.clone(), exr);
     let png = opts.out_dir.join(format!("{name}.png"));
-    output::write_png(&png, &image, w, h)?;
-    output::write_png(
-        &opts.out_dir.join(format!("{name}_reference.png")),
-        &reference,
+    set.png(png.clone(), image.clone(), w, h);
+    set.png(
+        opts.out_dir.join(format!("{name}_reference.png")),
+        reference.clone(),
         w,
         h,
-    )?;
-    let orbit = orbit_views(&transfer, &env, &scene, &accel, &camera, opts)?;
+    );
+    let orbit = orbit_views(&mut set, &transfer, &env, &scene, &accel, &camera, opts)?;
     let levels_png = opts.out_dir.join(format!("{name}_levels.png"));
     let levels = level_image(&transfer, &accel, &camera);
-    output::write_png(&levels_png, &levels, w, h)?;
+    set.png(levels_png.clone(), levels, w, h);
     let s = &transfer.stats;
     let timing = Timing {
         precompute_s: s.precompute_s,
@@ -407,8 +411,16 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         reference_s: refs.seconds,
         figures: figures::figures(rmse, &refs, spp_max, timing),
     };
-    write_json(&summary, opts, &scene, &orbit)?;
-    write_stats_page(&summary, &levels_png, &transfer)?;
+    set.page(
+        summary.stats_page.clone(),
+        stats_page(&summary, &levels_png, &transfer),
+    );
+    let header = super::provenance(&scene, refs.spp, frame_s)?;
+    set.write(
+        &summary.json,
+        index(&summary, opts, &scene, &orbit),
+        &header,
+    )?;
     Ok(summary)
 }
 
@@ -437,6 +449,7 @@ fn interior_pixels(accel: &Accel, camera: &Camera) -> Vec<bool> {
 }
 
 fn orbit_views(
+    set: &mut PreviewSet,
     t: &Transfer,
     env: &PrefilteredEnv,
     scene: &Scene,
@@ -467,12 +480,12 @@ fn orbit_views(
         let img = glossy::render(t, env, scene, accel, &cam);
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let file = format!("orbit_{k:03}.png");
-        output::write_png(
-            &opts.out_dir.join(&file),
-            &img,
+        set.png(
+            opts.out_dir.join(&file),
+            img,
             cam.width as usize,
             cam.height as usize,
-        )?;
+        );
         out.push((file, ms));
     }
     Ok(out)
@@ -505,12 +518,13 @@ fn level_image(t: &Transfer, accel: &Accel, camera: &Camera) -> Vec<Vec3> {
     img
 }
 
-fn write_json(
+/// `preview.json` before the set adds its `render_id` and `files`.
+fn index(
     s: &GlossySummary,
     opts: &GlossyOptions,
     scene: &Scene,
     orbit: &[(String, f64)],
-) -> crate::Result<()> {
+) -> serde_json::Value {
     let json = serde_json::json!({
         "method": "glossy-transfer",
         "scene": scene.name(),
@@ -541,11 +555,10 @@ fn write_json(
     {
         map.extend(figures);
     }
-    let text = serde_json::to_string_pretty(&json).map_err(|e| out_err(&s.json, e))?;
-    write_bytes(&s.json, text.as_bytes())
+    json
 }
 
-fn write_stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> crate::Result<()> {
+fn stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> String {
     let mut md = String::from(
         "# Glossy transfer: precomputation statistics\n\n| quantity | value |\n|---|---|\n",
     );
@@ -607,5 +620,5 @@ fn write_stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> crate
     md += &format!("\n![mesh coloured by angular level (viridis, dark = level 0), resolved edges dark]({file})\n");
     let name = file.trim_end_matches("_levels.png");
     md += &format!("\n| preview | path tracer (direct + one bounce) |\n|---|---|\n| ![]({name}.png) | ![]({name}_reference.png) |\n");
-    write_bytes(&s.stats_page, md.as_bytes())
+    md
 }

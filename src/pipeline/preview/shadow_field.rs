@@ -2,7 +2,8 @@
 //!
 //! Writes `DIR/<scene>.exr` (`R,G,B` = preview, `reference.R/G/B`, `error.Y`),
 //! `DIR/<scene>.png` and `DIR/preview.json`; with `--frames N` one EXR/PNG per frame
-//! (`<scene>-fNNN`). Fields are cached under `DIR/cache/`, keyed by the scene's
+//! (`<scene>-fNNN`), all as one set under one render id, `preview.json` (its
+//! index) last. Fields are cached under `DIR/cache/`, keyed by the scene's
 //! content hash, every precompute setting and a hash of the source (`pipeline::SOURCE_EPOCH`).
 
 use crate::accel::Accel;
@@ -10,6 +11,7 @@ use crate::math::sh::ShF;
 use crate::math::Vec3;
 use crate::output::{self, metrics, OutputImage};
 use crate::pipeline::preview::figures::{self, Figures, Reference, Timing};
+use crate::pipeline::preview::PreviewSet;
 use crate::pipeline::progress::{Phase, ProgressMode};
 use crate::preview::shadow_field::{self as sf, deform, Fields, Pose, Receivers, Settings};
 use crate::render::{render, RenderOptions};
@@ -139,10 +141,12 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
             let frame = shade_frame(&scene, &accel, &fields, &[], &env, &opts.settings);
             let refs = references(&scene, &accel, &env, &frame.shaded.rgb, opts)?;
             let stem = opts.out_dir.join(&name);
-            write_images(&stem, &frame.shaded, &refs.reference.beauty)?;
+            let mut set = PreviewSet::default();
+            add_images(&mut set, &stem, &frame.shaded, &refs.reference.beauty);
             let timing = timing(opts, precompute_s, frame.render_s);
             let summary = summarise(&scene, &fields, &frame, &refs, timing, cached, &stem, opts);
-            write_json(&opts.out_dir.join("preview.json"), &summary)?;
+            let header = super::provenance(&scene, refs.reference.spp, frame.render_s)?;
+            write_set(set, &opts.out_dir.join("preview.json"), &summary, &header)?;
             Ok(summary)
         }
         Some(n) => run_frames(&scene, opts, &fields, &env, n, (precompute_s, cached)),
@@ -340,8 +344,8 @@ fn cached_fields(scene: &Scene, opts: &ShadowFieldOptions) -> Result<(Fields, f6
 }
 
 /// EXR (`R,G,B` preview, `reference.R/G/B`, `error.Y` = |luminance difference|)
-/// and the preview's PNG, both staged before either is renamed into place.
-fn write_images(stem: &Path, shaded: &sf::Shaded, reference: &[Vec3]) -> Result<()> {
+/// and the preview's PNG, added to the run's set (written at its end).
+fn add_images(set: &mut PreviewSet, stem: &Path, shaded: &sf::Shaded, reference: &[Vec3]) {
     let (w, h) = (shaded.width, shaded.height);
     let mut img = OutputImage::new(w, h);
     img.push_vec3("", output::names::RGB, &shaded.rgb);
@@ -355,21 +359,22 @@ fn write_images(stem: &Path, shaded: &sf::Shaded, reference: &[Vec3]) -> Result<
             .map(|(a, b)| (metrics::luminance(*a) - metrics::luminance(*b)).abs())
             .collect(),
     );
-    let exr = output::stage_exr(&stem.with_extension("exr"), &img)?;
-    let png = output::stage_png(&stem.with_extension("png"), &shaded.rgb, w, h, 0.0)?;
-    exr.commit()?;
-    png.commit()
+    set.exr(stem.with_extension("exr"), img);
+    set.png(stem.with_extension("png"), shaded.rgb.clone(), w, h);
 }
 
-fn write_json(path: &Path, summary: &impl Serialize) -> Result<()> {
-    let text = serde_json::to_string_pretty(summary).map_err(|e| Error::Output {
+/// Every image, then `preview.json` (with the set's `render_id` and `files`).
+fn write_set(
+    set: PreviewSet,
+    path: &Path,
+    summary: &impl Serialize,
+    header: &output::ExrHeader,
+) -> Result<()> {
+    let json = serde_json::to_value(summary).map_err(|e| Error::Output {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    output::write_atomic(path, |f| {
-        use std::io::Write;
-        f.write_all(text.as_bytes()).map_err(|e| e.to_string())
-    })
+    set.write(path, json, header).map(|_| ())
 }
 
 fn create_dir(dir: &Path) -> Result<()> {
@@ -411,6 +416,7 @@ fn run_frames(
     let table = deform::MatrixTable::for_grid(&unit, 1.0, deform::Extrapolation::Visibility);
     let (mut bsv_total, mut bsv_count, mut full_field_s) = (0.0, 0usize, None);
     let mut first: Option<(Frame, References, PathBuf)> = None;
+    let mut set = PreviewSet::default();
     let mut worst: f64 = 0.0;
     for f in 0..n {
         let t = crate::scene::animation::frame_time(f, n);
@@ -456,11 +462,11 @@ fn run_frames(
             // The later frames' references at the spp the first one settled on.
             let spp = refs.reference.spp;
             let reference = render(&posed, &accel, &direct(spp, 0x5eed_0001), &|_, _| {})?;
-            write_images(&stem, &frame.shaded, &reference.beauty)?;
+            add_images(&mut set, &stem, &frame.shaded, &reference.beauty);
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &reference.beauty)? as f64);
         } else {
             let refs = references(&posed, &accel, env, &frame.shaded.rgb, opts)?;
-            write_images(&stem, &frame.shaded, &refs.reference.beauty)?;
+            add_images(&mut set, &stem, &frame.shaded, &refs.reference.beauty);
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &refs.reference.beauty)? as f64);
             first = Some((frame, refs, stem));
         }
@@ -480,7 +486,8 @@ fn run_frames(
     }
     summary.rmse_worst_frame = Some(worst);
     summary.rmse_worst_frame_relative = Some(worst / summary.image_mean.max(1e-30));
-    write_json(&opts.out_dir.join("preview.json"), &summary)?;
+    let header = super::provenance(scene, refs.reference.spp, frame_s)?;
+    write_set(set, &opts.out_dir.join("preview.json"), &summary, &header)?;
     Ok(summary)
 }
 
