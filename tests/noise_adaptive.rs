@@ -9,12 +9,16 @@ use gradtrace::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
 use gradtrace::render::{render, RenderOptions, RenderOutput};
 use std::time::{Duration, Instant};
 
-fn scene() -> (
+/// The scene, written into a folder of the calling test's own (`name`): the
+/// tests run in parallel, and a shared folder was removed under another test.
+fn scene(
+    name: &str,
+) -> (
     gradtrace::scene::Scene,
     gradtrace::accel::Accel,
     std::path::PathBuf,
 ) {
-    let dir = temp_dir("small-light");
+    let dir = temp_dir(name);
     let path = dir.join("small_light.toml");
     std::fs::write(&path, common::small_light_scene(64, 48)).unwrap();
     let (scene, accel) = gradtrace::pipeline::load(&path).unwrap();
@@ -45,7 +49,7 @@ fn spp_map(out: &RenderOutput) -> Vec<f64> {
 /// average at least 1.5 times the samples of the quietest half.
 #[test]
 fn adapts_at_16_spp_and_samples_the_noisy_pixels_more() {
-    let (scene, accel, _) = scene();
+    let (scene, accel, _) = scene("adapts");
     let settings = NoiseAdaptive::new(0.01, 16);
     println!(
         "min spp {}, check every {}",
@@ -95,7 +99,7 @@ fn adapts_at_16_spp_and_samples_the_noisy_pixels_more() {
 /// adaptive run must be lower on every seed and at least 10 % lower on their mean.
 #[test]
 fn beats_uniform_at_an_equal_sample_count_on_a_small_bright_light() {
-    let (scene, accel, _) = scene();
+    let (scene, accel, _) = scene("beats-uniform");
     let reference = render(&scene, &accel, &options(99, 4096), &|_, _| {}).unwrap();
     let relmse =
         |img: &[Vec3]| gradtrace::output::metrics::relmse(img, &reference.beauty).unwrap() as f64;
@@ -132,7 +136,7 @@ fn beats_uniform_at_an_equal_sample_count_on_a_small_bright_light() {
 /// machine is shared) and kills the run past 60 s.
 #[test]
 fn the_time_limit_holds_from_the_first_round() {
-    let (_, _, path) = scene();
+    let (_, _, path) = scene("time-limit");
     let dir = path.parent().unwrap();
     let start = Instant::now();
     let mut child = std::process::Command::new(BIN)
@@ -177,7 +181,7 @@ fn the_time_limit_holds_from_the_first_round() {
     );
 
     // The library call: a sample limit of 3 spp also stops after the 2-spp pass.
-    let (scene, accel, _) = scene();
+    let (scene, accel, _) = scene("sample-limit");
     let mut s = NoiseAdaptive::new(0.0, 1_000_000);
     s.sample_limit = Some(3 * 64 * 48);
     let out = render_noise_adaptive(&scene, &accel, &options(1, 16), &s, &|_, _| {}).unwrap();

@@ -919,12 +919,41 @@ fn read_cached(exr: &Path, meta: &Path, key: &str, (w, h): (u32, u32)) -> Option
         return None;
     }
     let pixels = img.vec3("", crate::output::names::RGB)?;
+    // A damaged cache (a NaN written by another tool, a flipped bit) is a miss,
+    // found before the runs, and replaced by the fresh reference; scoring
+    // against it used to fail only after every run (issue 54, defect 15).
+    if !pixels.iter().all(|p| p.is_finite()) {
+        return None;
+    }
     Some((pixels, sidecar["time_s"].as_f64().unwrap_or(0.0)))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::erode;
+    use super::{erode, read_cached};
+
+    #[test]
+    fn a_cached_reference_with_a_nan_is_a_miss() {
+        let dir = std::env::temp_dir().join(format!("gradtrace-cache-nan-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (exr, meta) = (dir.join("r.exr"), dir.join("r.json"));
+        std::fs::write(&meta, r#"{"cache_key": "k", "time_s": 1.5}"#).unwrap();
+        let write = |nan: bool| {
+            exr::prelude::write_rgb_file(&exr, 2, 1, |x, _| {
+                let v = if nan && x == 0 { f32::NAN } else { 0.5 };
+                (v, v, v)
+            })
+            .unwrap()
+        };
+        write(false);
+        assert_eq!(
+            read_cached(&exr, &meta, "k", (2, 1)).map(|c| c.1),
+            Some(1.5)
+        );
+        write(true);
+        assert!(read_cached(&exr, &meta, "k", (2, 1)).is_none());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn erode_shrinks_by_the_radius() {
