@@ -479,20 +479,6 @@ pub(crate) fn preview_dir(method: &str, scene: &std::path::Path) -> PathBuf {
         .join(name)
 }
 
-/// This process's command line, for the EXR header (arguments with spaces quoted).
-pub(crate) fn command_line() -> String {
-    std::env::args()
-        .map(|a| {
-            if a.is_empty() || a.contains(char::is_whitespace) {
-                format!("{a:?}")
-            } else {
-                a
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
 /// A flag that Ctrl-C sets (a second Ctrl-C exits at once), for renders in passes.
 pub(crate) fn cancel_on_ctrl_c() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
@@ -554,7 +540,7 @@ impl RenderArgs {
             passes,
             resume: sp.resume,
             noise_adaptive,
-            command: command_line(),
+            command: gradtrace::pipeline::command_line(),
             adaptive,
             denoise: self.denoise,
             threads: c.threads,

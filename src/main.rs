@@ -7,8 +7,9 @@
 mod cli;
 
 use clap::Parser;
-use cli::{command_line, preview_dir, Cli, Command, PreviewCommand};
+use cli::{preview_dir, Cli, Command, PreviewCommand};
 use gradtrace::error::{error_line, one_line};
+use gradtrace::pipeline::command_line;
 use gradtrace::pipeline::compare;
 use gradtrace::pipeline::diff::DiffOptions;
 use gradtrace::pipeline::{self, progress::ProgressMode};

@@ -103,3 +103,18 @@ pub const SOURCE_EPOCH: &str = concat!(
     " ",
     env!("GRADTRACE_SOURCE_HASH")
 );
+
+/// This process's command line, for the headers and reports that record it
+/// (arguments with spaces quoted).
+pub fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if a.is_empty() || a.contains(char::is_whitespace) {
+                format!("{a:?}")
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}

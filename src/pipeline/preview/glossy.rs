@@ -223,7 +223,8 @@ fn reference(
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| out_err(dir, e))?;
     }
-    let header = crate::pipeline::render::provenance(scene, &ropts, &super::command_line(), &out)?;
+    let header =
+        crate::pipeline::render::provenance(scene, &ropts, &crate::pipeline::command_line(), &out)?;
     output::atomic::write_exr_with_id(&path, &img, &header, &out.beauty)?;
     Ok((out.beauty, secs))
 }

@@ -82,7 +82,7 @@ impl PreviewSet {
 pub(crate) fn provenance(scene: &Scene, reference_spp: u32, frame_s: f64) -> Result<ExrHeader> {
     let mut attributes: Vec<(String, String)> = vec![
         (attr::VERSION.into(), super::VERSION.into()),
-        (attr::COMMAND.into(), command_line()),
+        (attr::COMMAND.into(), crate::pipeline::command_line()),
         (attr::SCENE_SHA256.into(), scene.content_hash()?),
         (attr::SPP.into(), reference_spp.to_string()),
         (attr::RENDER_TIME_S.into(), format!("{frame_s:.3}")),
@@ -92,18 +92,4 @@ pub(crate) fn provenance(scene: &Scene, reference_spp: u32, frame_s: f64) -> Res
         attributes,
         ..ExrHeader::default()
     })
-}
-
-/// This process's command line, quoted as the binary's `cli::command_line` does.
-pub(crate) fn command_line() -> String {
-    std::env::args()
-        .map(|a| {
-            if a.is_empty() || a.contains(char::is_whitespace) {
-                format!("{a:?}")
-            } else {
-                a
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
 }
