@@ -834,16 +834,6 @@ impl StagedSet {
         Ok(())
     }
 
-    /// Adds an already staged member (which must carry the id).
-    pub fn push(&mut self, staged: Staged) {
-        self.members.push(staged);
-    }
-
-    /// The targets of the members staged so far.
-    pub fn member_paths(&self) -> Vec<PathBuf> {
-        self.members.iter().map(|s| s.target.clone()).collect()
-    }
-
     /// Stages the index: `json` (an object) with [`SET_ID_FIELD`] and
     /// [`SET_FILES_FIELD`] (every member, relative to the index's folder) added.
     pub fn stage_index(&mut self, path: &Path, mut json: serde_json::Value) -> crate::Result<()> {

@@ -30,6 +30,15 @@ pub struct ExrHeader {
 }
 
 impl ExrHeader {
+    /// The display window's size, or `(width, height)` (the planes' own) where
+    /// the header gives none.
+    pub fn display_or(&self, width: usize, height: usize) -> (usize, usize) {
+        match self.display {
+            (0, 0) => (width, height),
+            d => d,
+        }
+    }
+
     /// The value of string attribute `name`.
     pub fn get(&self, name: &str) -> Option<&str> {
         self.attributes
@@ -119,10 +128,7 @@ fn header_attributes(
     image: &OutputImage,
     header: &ExrHeader,
 ) -> crate::Result<(LayerAttributes, IntegerBounds)> {
-    let display = match header.display {
-        (0, 0) => (image.width, image.height),
-        d => d,
-    };
+    let display = header.display_or(image.width, image.height);
     let (x0, y0) = header.origin;
     if x0 + image.width > display.0
         || y0 + image.height > display.1

@@ -9,7 +9,7 @@ use crate::Error;
 use std::fs::{File, Metadata};
 use std::path::Path;
 
-pub use crate::error::file_kind;
+use crate::error::file_kind;
 
 /// (device, inode): what makes two paths one file.
 #[cfg(unix)]

@@ -238,10 +238,7 @@ type DataWindow = ((usize, usize), (usize, usize));
 /// name the file. `map` is the error map, which it must not be.
 fn read_beauty(path: &Path, map: &Path) -> Result<(Vec<Vec3>, usize, usize, DataWindow)> {
     let (img, header) = read_exr_input(path, &[map])?;
-    let display = match header.display {
-        (0, 0) => (img.width, img.height),
-        d => d,
-    };
+    let display = header.display_or(img.width, img.height);
     let asset_err = |message: String| Error::Asset {
         path: path.to_path_buf(),
         message,

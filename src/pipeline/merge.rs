@@ -133,10 +133,7 @@ impl Part {
 
     /// The full image's size.
     pub fn display(&self) -> (usize, usize) {
-        match self.header.display {
-            (0, 0) => (self.image.width, self.image.height),
-            d => d,
-        }
+        self.header.display_or(self.image.width, self.image.height)
     }
 }
 
