@@ -898,6 +898,14 @@ pub fn is_class_a(sample: u32) -> bool {
     (sample & 0xaaaa_aaaa).count_ones() & 1 == 1
 }
 
+/// How many of samples 0..n are class A: half of every aligned block of four,
+/// and of the last, partial block those [`is_class_a`] picks (so that a
+/// check after any number of samples weighs the half-estimate right).
+pub(crate) fn class_a_count(n: u32) -> u32 {
+    let whole = n / 4 * 4;
+    whole / 2 + (whole..n).filter(|&s| is_class_a(s)).count() as u32
+}
+
 impl PixelAccumulator {
     /// Adds sample `index`; `first`: it is the render's first sample (object id).
     fn add(&mut self, r: &SampleResult, index: u32, first: bool) {
@@ -925,11 +933,13 @@ impl PixelAccumulator {
         self.rays += r.rays as u64;
     }
 
-    /// The pixel mean I and the class-A estimate A (twice the class-A sum over the
-    /// sample count, so that E[A] = E[I]), RGB.
+    /// The pixel mean I and the class-A estimate A (the class-A sum over the
+    /// class-A count of samples 0..count, so that E[A] = E[I] after any number of
+    /// samples), RGB.
     pub fn mean_and_half(&self) -> ([f64; 3], [f64; 3]) {
         let n = self.count.max(1) as f64;
-        (self.sum.map(|s| s / n), self.class_a.map(|s| 2.0 * s / n))
+        let a = class_a_count(self.count).max(1) as f64;
+        (self.sum.map(|s| s / n), self.class_a.map(|s| s / a))
     }
 }
 

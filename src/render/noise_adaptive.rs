@@ -129,14 +129,6 @@ pub fn pixel_error(i: [f64; 3], a: [f64; 3]) -> f64 {
     diff / (1e-4 + normalize)
 }
 
-/// How many of samples 0..n are class A: half of every aligned block of four,
-/// and of the last, partial block those [`super::is_class_a`] picks (so that a
-/// check after any number of samples weighs the half-estimate right).
-fn class_a_count(n: u32) -> u32 {
-    let whole = n / 4 * 4;
-    whole / 2 + (whole..n).filter(|&s| super::is_class_a(s)).count() as u32
-}
-
 /// Renders the whole image with per-pixel adaptive sample counts (`opts.spp` is
 /// ignored: `settings.max_spp` caps every pixel). The output's `spp` is the
 /// most any pixel took and `spp_map` each pixel's count (`samples.spp`).
@@ -243,10 +235,7 @@ pub fn render_noise_adaptive(
         let mut unconverged = vec![false; w * h];
         film.for_each(|p, acc, _| {
             if active[p] && counts[p] < max {
-                let (i, half) = acc.mean_and_half();
-                // `mean_and_half` assumes that half of the samples are class A.
-                let scale = counts[p] as f64 / (2 * class_a_count(counts[p])).max(1) as f64;
-                let a = half.map(|v| v * scale);
+                let (i, a) = acc.mean_and_half();
                 unconverged[p] = pixel_error(i, a) >= floor;
             }
         });
@@ -355,7 +344,7 @@ mod tests {
     fn class_a_count_matches_the_samples() {
         for n in 0..200u32 {
             let direct = (0..n).filter(|&s| is_class_a(s)).count() as u32;
-            assert_eq!(class_a_count(n), direct, "n = {n}");
+            assert_eq!(crate::render::class_a_count(n), direct, "n = {n}");
         }
     }
 
