@@ -2,6 +2,7 @@
 """Speed and error of gradtrace against Mitsuba 3, each at its best sampler.
 
     python3 scripts/bench_mitsuba.py [--gradtrace BINARY] [--native [BINARY]] [--pgo [BINARY]]
+                                     [--before BINARY] [--no-mitsuba]
                                      [--runs 10]
                                      [--ref-spp 1024] [--scenes cornell,bunny]
                                      [--no-gradtrace] [--no-llvm]
@@ -18,7 +19,9 @@ depth 5. Box filter. Timed at equal spp:
     target-cpu=native"`, in target/native/; what Mitsuba's LLVM JIT and Embree's
     ISA dispatch do for theirs) as a further row, and with --pgo the PGO build
     of scripts/build_pgo.sh (each built here unless a BINARY is given); their
-    ratios against the Mitsuba rows follow each table;
+    ratios against the Mitsuba rows follow each table; with --before, a build from
+    before a change, timed in the same rounds, and the default build's render
+    time over its (median and per round: a refactor's "no speed lost" check);
   * Mitsuba 3 `scalar_rgb` (independent sampler) and `llvm_ad_rgb` with each of
     its `independent`, `multijitter` and `ldsampler` samplers: `mi.render` wall
     time, median of --runs; scene loading (`mi.load_dict`) and, for LLVM, the
@@ -259,6 +262,7 @@ def native_binary(binary: str) -> str:
 EXTRA_BUILDS = {
     "gradtrace-native": ("gradtrace, native build (`RUSTFLAGS=\"-C target-cpu=native\"`, `--profile dist`)", "native"),
     "gradtrace-pgo": ("gradtrace, PGO build (`scripts/build_pgo.sh`)", "pgo"),
+    "gradtrace-before": ("gradtrace, the build before the change (`--before`)", "before"),
 }
 
 
@@ -379,9 +383,28 @@ def extra_notes(label: str, rows: list[dict]) -> list[str]:
                 f"{r['variant']} {r['sampler']} {'—' if ratio is None else f'{ratio:.2f}'}× [{vals}], "
                 f"mean MSE {'—' if pooled is None else f'{pooled:.2f}'}×{interval(pooled_interval(extra, r))}"
             )
+        if not parts:
+            continue
         build = EXTRA_BUILDS[extra["variant"]][1]
         notes.append(f"{label}, the {build} build's efficiency ratio ({build} / row): " + "; ".join(parts) + ".")
     return notes
+
+
+def before_notes(label: str, rows: list[dict]) -> list[str]:
+    """The default build's render time over `--before`'s: the median of the
+    per-round ratios (the two ran back to back in each round, under the same
+    load) and the ratio of the medians."""
+    ours = next((r for r in rows if r["variant"] == "gradtrace"), None)
+    before = next((r for r in rows if r["variant"] == "gradtrace-before"), None)
+    if ours is None or before is None:
+        return []
+    per_round = [a / b for a, b in zip(ours["times_s"], before["times_s"]) if b > 0]
+    vals = ", ".join(f"{v:.3f}" for v in per_round)
+    return [
+        f"{label}, render time of this build / the build before (`--before`): median per round "
+        f"{statistics.median(per_round):.3f} [{vals}], ratio of medians {ours['render_s'] / before['render_s']:.3f}; "
+        f"RMSE {ours['rmse']:.4f} / {before['rmse']:.4f}."
+    ]
 
 
 def interval(ci: tuple[float, float] | None) -> str:
@@ -421,7 +444,7 @@ def markdown(scene_rows: list[tuple[Bench, list[dict]]], meta: dict) -> str:
                 f"{f(r['efficiency_ratio'])}× | {rounds(r)} | {f(r['efficiency_ratio_mean_mse'])}×{interval(r.get('efficiency_ratio_mean_mse_95'))} | "
                 f"{f(r['load_s'])} | {f(r['warmup_s'])} |"
             )
-        for note in extra_notes(b.label, rows):
+        for note in extra_notes(b.label, rows) + before_notes(b.label, rows):
             lines += ["", note]
     for note in meta["notes"]:
         lines.append(f"\n{note}")
@@ -453,10 +476,12 @@ def main() -> int:
     ap.add_argument("--runs", type=int, default=10, help="rounds (each renders every row once with seed 100 + round)")
     ap.add_argument("--ref-spp", type=int, default=1024, help="reference spp, a multiple of 16 (its noise is subtracted from the RMSE, so 1024 suffices)")
     ap.add_argument("--scenes", default="cornell,bunny", help="comma-separated: cornell, bunny")
+    ap.add_argument("--before", metavar="BINARY", help="also time this build (e.g. main before a change) in the same rounds, and print this build's time over its")
     ap.add_argument("--no-gradtrace", action="store_true", help="time the Mitsuba variants only")
+    ap.add_argument("--no-mitsuba", action="store_true", help="time gradtrace's builds only (the Mitsuba reference is still rendered or read from its cache)")
     ap.add_argument("--no-llvm", action="store_true", help="skip llvm_ad_rgb")
     args = ap.parse_args()
-    if not args.no_llvm and LIBLLVM is None:
+    if not args.no_llvm and not args.no_mitsuba and LIBLLVM is None:
         # Checked first: without the LLVM rows the run (~11 minutes on a fresh
         # machine, the reference included) cannot write its table.
         print(
@@ -489,8 +514,11 @@ def main() -> int:
             renderers.append(GradtraceRenderer(b, native, "gradtrace-native"))
         if pgo_binary is not None:
             renderers.append(GradtraceRenderer(b, pgo_binary, "gradtrace-pgo"))
-        renderers.append(MitsubaRenderer(b, "scalar_rgb", "independent"))
-        if not args.no_llvm:
+        if args.before is not None:
+            renderers.append(GradtraceRenderer(b, args.before, "gradtrace-before"))
+        if not args.no_mitsuba:
+            renderers.append(MitsubaRenderer(b, "scalar_rgb", "independent"))
+        if not args.no_llvm and not args.no_mitsuba:
             renderers += [MitsubaRenderer(b, "llvm_ad_rgb", s) for s in LLVM_SAMPLERS]
         # Round by round, every renderer once per round: a change in the machine's
         # load then reaches all rows alike instead of whichever ran at the time.
@@ -518,7 +546,7 @@ def main() -> int:
     table = markdown(scene_rows, meta)
     # benches/README.md holds issue 16's comparison: a table without gradtrace or
     # without the LLVM rows cannot stand for it, so it is printed, not written.
-    missing = [what for what, gone in (("gradtrace", binary is None), ("llvm_ad_rgb", args.no_llvm)) if gone]
+    missing = [what for what, gone in (("gradtrace", binary is None), ("llvm_ad_rgb", args.no_llvm or args.no_mitsuba)) if gone]
     if missing:
         print(f"benches/README.md left as it was: this table lacks {' and '.join(missing)}.", file=sys.stderr)
     else:
