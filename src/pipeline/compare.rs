@@ -149,6 +149,20 @@ pub fn default_dir(scene: &Path) -> PathBuf {
     Path::new("out").join(name)
 }
 
+/// What `gradtrace compare` prints: the report's table and where it went.
+#[derive(Clone, Debug)]
+pub struct CompareSummary {
+    pub rows: Vec<ReportRow>,
+    pub report: PathBuf,
+}
+
+impl std::fmt::Display for CompareSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        writeln!(f, "{}", report::markdown_table(&self.rows))?;
+        write!(f, "wrote {}", self.report.display())
+    }
+}
+
 /// `gradtrace compare`: checks the options, loads the scene, runs [`compare`] with
 /// one progress line per step, and returns the report's rows.
 pub fn run(
@@ -156,7 +170,7 @@ pub fn run(
     threads: Option<u32>,
     opts: &CompareOptions,
     mode: super::progress::ProgressMode,
-) -> Result<Vec<ReportRow>> {
+) -> Result<CompareSummary> {
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
     let oidn = crate::denoise::available();
@@ -174,7 +188,11 @@ pub fn run(
         }
         phase.message(msg);
     };
-    super::with_threads(threads, || compare(&scene, &accel, opts, &progress))?
+    let rows = super::with_threads(threads, || compare(&scene, &accel, opts, &progress))??;
+    Ok(CompareSummary {
+        rows,
+        report: opts.out_dir.join("report.html"),
+    })
 }
 
 /// The run settings shared by every render of a comparison.

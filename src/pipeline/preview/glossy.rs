@@ -94,6 +94,26 @@ pub struct GlossySummary {
     pub figures: Figures,
 }
 
+/// The command's one summary line.
+impl std::fmt::Display for GlossySummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "glossy: {} → {} vertices, precompute {:.1} s{}, frame {:.1} ms, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {} and {}",
+            self.vertices_initial,
+            self.vertices_final,
+            self.precompute_s,
+            if self.cached { " (cached)" } else { "" },
+            self.render_ms,
+            self.rmse,
+            100.0 * self.rmse / self.reference_mean.max(1e-12),
+            self.figures.summary(),
+            self.exr.display(),
+            self.stats_page.display()
+        )
+    }
+}
+
 fn out_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
     crate::Error::Output {
         path: path.to_path_buf(),

@@ -107,6 +107,24 @@ pub struct ShadowFieldSummary {
     pub rmse_worst_frame_relative: Option<f64>,
 }
 
+/// The command's one summary line.
+impl std::fmt::Display for ShadowFieldSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {}",
+            self.entities,
+            self.precompute_s,
+            if self.precompute_cached { " (cached)" } else { "" },
+            self.render_s,
+            self.rmse,
+            100.0 * self.rmse_relative,
+            self.figures.summary(),
+            self.exr.display()
+        )
+    }
+}
+
 /// Runs the whole command. See the module doc for what it writes.
 pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
     let mut scene = crate::scene::load(&opts.scene)?;
