@@ -95,7 +95,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             let job = args.into_job();
             show(quiet, pipeline::render::run(&job)?);
             if job.passes.interrupted() {
-                eprintln!("{}", pipeline::render::INTERRUPTED_NOTE);
+                eprintln!("{}", pipeline::render::interrupted_note());
                 return Ok(ExitCode::from(pipeline::render::EXIT_INTERRUPTED));
             }
         }

@@ -164,7 +164,7 @@ impl std::fmt::Display for CompareSummary {
 }
 
 /// `gradtrace compare`: checks the options, loads the scene, runs [`compare`] with
-/// one progress line per step, and returns the report's rows.
+/// one progress line per step, and returns what the command prints.
 pub fn run(
     scene_path: &Path,
     threads: Option<u32>,

@@ -158,9 +158,10 @@ fn rate(rays: u64, seconds: f64) -> String {
 /// that ran to its end.
 pub const EXIT_INTERRUPTED: u8 = 130;
 
-/// What such a render says on stderr (naming [`EXIT_INTERRUPTED`]).
-pub const INTERRUPTED_NOTE: &str =
-    "interrupted: wrote the passes finished before Ctrl-C (exit status 130)";
+/// What such a render says on stderr.
+pub fn interrupted_note() -> String {
+    format!("interrupted: wrote the passes finished before Ctrl-C (exit status {EXIT_INTERRUPTED})")
+}
 
 /// Renders `job.scene` and writes the EXR + PNG set. The output paths are settled
 /// before any work, so a bad `--out` costs nothing; so are the resume file and the
