@@ -5,7 +5,9 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use gradtrace::adaptive::{Settings, Strategy};
 use gradtrace::pipeline::compare::{self, CompareOptions};
-use gradtrace::pipeline::diff::DiffMetric;
+use gradtrace::pipeline::diff::{DiffMetric, DiffOptions};
+use gradtrace::pipeline::preview::glossy::GlossyOptions;
+use gradtrace::pipeline::preview::shadow_field::ShadowFieldOptions;
 use gradtrace::pipeline::{self, progress::ProgressMode};
 use gradtrace::reconstruct::Interpolation;
 use gradtrace::render::noise_adaptive::NoiseAdaptive;
@@ -64,6 +66,33 @@ pub(crate) struct MergeArgs {
     /// No summary line.
     #[arg(long, short)]
     pub(crate) quiet: bool,
+}
+
+impl Command {
+    /// The file a run is about and what it is doing with it, for the one line
+    /// a failed allocation prints (`memory::doing`).
+    pub(crate) fn doing(&self) -> (&std::path::Path, &'static str) {
+        match self {
+            Command::Render(a) => (&a.scene, "rendering"),
+            Command::Info(a) => (&a.scene, "reading the scene"),
+            Command::Diff(a) => (&a.image, "comparing the images"),
+            Command::Preview(PreviewCommand::ShadowField(a) | PreviewCommand::Glossy(a)) => {
+                (&a.scene, "making the preview")
+            }
+            Command::Merge(a) => (&a.out, "merging the parts"),
+            Command::Compare(a) => (&a.scene, "comparing the renderers"),
+        }
+    }
+}
+
+impl MergeArgs {
+    pub(crate) fn job(&self) -> pipeline::merge::MergeJob {
+        pipeline::merge::MergeJob {
+            parts: self.parts.clone(),
+            out: self.out.clone(),
+            command: pipeline::command_line(),
+        }
+    }
 }
 
 /// Upper bounds of the counts a user gives, each refused with one line before
@@ -149,6 +178,49 @@ impl PreviewArgs {
             anyhow::bail!("{flag} is an option of `preview {owner}` only");
         }
         Ok(())
+    }
+
+    pub(crate) fn shadow_field_options(&self) -> anyhow::Result<ShadowFieldOptions> {
+        self.only_for(false)?;
+        let mut opts = ShadowFieldOptions::new(&self.scene);
+        opts.out_dir = self.out_dir("shadow-field");
+        (opts.frames, opts.reference_spp, opts.quiet) =
+            (self.frames, self.reference_spp, self.quiet);
+        (opts.reference_spp_max, opts.amortise_frames) =
+            (self.reference_spp_max, self.amortise_frames);
+        Ok(opts)
+    }
+
+    pub(crate) fn glossy_options(&self) -> anyhow::Result<GlossyOptions> {
+        self.only_for(true)?;
+        let mut opts = GlossyOptions::new(&self.scene);
+        opts.out_dir = self.out_dir("glossy");
+        (opts.orbit, opts.reference_spp, opts.quiet) = (self.orbit, self.reference_spp, self.quiet);
+        (opts.reference_spp_max, opts.amortise_frames) =
+            (self.reference_spp_max, self.amortise_frames);
+        if let Some(n) = self.uniform {
+            (opts.settings.uniform_levels, opts.settings.spatial) = (n, false);
+        }
+        if let Some(n) = self.max_vertices {
+            opts.settings.max_vertices = n as usize;
+        }
+        Ok(opts)
+    }
+
+    fn out_dir(&self, method: &str) -> PathBuf {
+        self.out
+            .clone()
+            .unwrap_or_else(|| preview_dir(method, &self.scene))
+    }
+}
+
+impl DiffArgs {
+    pub(crate) fn options(&self) -> DiffOptions {
+        DiffOptions {
+            metric: self.metric,
+            threshold: self.threshold,
+            error_map: self.error_map.clone(),
+        }
     }
 }
 
@@ -555,7 +627,12 @@ impl RenderArgs {
 }
 
 impl CompareArgs {
-    pub(crate) fn options(&self, dir: PathBuf) -> CompareOptions {
+    /// The options, writing to `--out` or the scene's default folder.
+    pub(crate) fn options(&self) -> CompareOptions {
+        let dir = self
+            .out
+            .clone()
+            .unwrap_or_else(|| compare::default_dir(&self.scene));
         let mut opts = CompareOptions::new(dir);
         if !self.strategies.is_empty() {
             opts.strategies = self.strategies.clone();

@@ -7,11 +7,8 @@
 mod cli;
 
 use clap::Parser;
-use cli::{preview_dir, Cli, Command, PreviewCommand};
+use cli::{Cli, Command, PreviewCommand};
 use gradtrace::error::{error_line, one_line};
-use gradtrace::pipeline::command_line;
-use gradtrace::pipeline::compare;
-use gradtrace::pipeline::diff::DiffOptions;
 use gradtrace::pipeline::{self, progress::ProgressMode};
 use std::process::ExitCode;
 
@@ -88,140 +85,50 @@ fn main() -> ExitCode {
     }
 }
 
-/// The exit status of a render that Ctrl-C ended early after writing what it
-/// had (the shell's 128 + SIGINT), so that a script can tell it from a render
-/// that ran to its end.
-const EXIT_INTERRUPTED: u8 = 130;
-
+/// One dispatch: each command runs in `pipeline`, which formats its own summary.
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
-    let _doing = {
-        let (path, activity) = match &cli.command {
-            Command::Render(a) => (&a.scene, "rendering"),
-            Command::Info(a) => (&a.scene, "reading the scene"),
-            Command::Diff(a) => (&a.image, "comparing the images"),
-            Command::Preview(PreviewCommand::ShadowField(a) | PreviewCommand::Glossy(a)) => {
-                (&a.scene, "making the preview")
-            }
-            Command::Merge(a) => (&a.out, "merging the parts"),
-            Command::Compare(a) => (&a.scene, "comparing the renderers"),
-        };
-        gradtrace::memory::doing(path, activity)
-    };
+    let (path, activity) = cli.command.doing();
+    let _doing = gradtrace::memory::doing(path, activity);
     match cli.command {
         Command::Render(args) => {
             let quiet = args.common.quiet;
             let job = args.into_job();
-            let summary = pipeline::render::run(&job)?;
-            if !quiet {
-                println!("{summary}");
-            }
+            show(quiet, pipeline::render::run(&job)?);
             if job.passes.interrupted() {
-                eprintln!(
-                    "interrupted: wrote the passes finished before Ctrl-C (exit status {EXIT_INTERRUPTED})"
-                );
-                return Ok(ExitCode::from(EXIT_INTERRUPTED));
+                eprintln!("{}", pipeline::render::interrupted_note());
+                return Ok(ExitCode::from(pipeline::render::EXIT_INTERRUPTED));
             }
         }
         Command::Info(args) => print!("{}", pipeline::info(&args.scene)?),
         Command::Diff(args) => {
-            let opts = DiffOptions {
-                metric: args.metric,
-                threshold: args.threshold,
-                error_map: args.error_map,
-            };
-            let report = pipeline::diff::run(&args.image, &args.reference, &opts)?;
-            println!("{report}");
-            if report.exceeds_threshold() {
-                anyhow::bail!(
-                    "{} differs from {}: {} {:.6e} is above --threshold {}",
-                    args.image.display(),
-                    args.reference.display(),
-                    args.metric.name(),
-                    report.value(),
-                    opts.threshold.unwrap_or_default()
-                );
+            let report = pipeline::diff::run(&args.image, &args.reference, &args.options())?;
+            show(false, &report);
+            if let Some(message) = report.threshold_error() {
+                anyhow::bail!(message);
             }
         }
         Command::Preview(PreviewCommand::ShadowField(a)) => {
-            use pipeline::preview::shadow_field::{run, ShadowFieldOptions};
-            a.only_for(false)?;
-            let mut opts = ShadowFieldOptions::new(&a.scene);
-            opts.out_dir = a
-                .out
-                .unwrap_or_else(|| preview_dir("shadow-field", &a.scene));
-            (opts.frames, opts.reference_spp, opts.quiet) = (a.frames, a.reference_spp, a.quiet);
-            (opts.reference_spp_max, opts.amortise_frames) =
-                (a.reference_spp_max, a.amortise_frames);
-            let s = run(&opts)?;
-            if !a.quiet {
-                println!(
-                    "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {}",
-                    s.entities,
-                    s.precompute_s,
-                    if s.precompute_cached { " (cached)" } else { "" },
-                    s.render_s,
-                    s.rmse,
-                    100.0 * s.rmse_relative,
-                    s.figures.summary(),
-                    s.exr.display()
-                );
-            }
+            let opts = a.shadow_field_options()?;
+            show(a.quiet, pipeline::preview::shadow_field::run(&opts)?);
         }
         Command::Preview(PreviewCommand::Glossy(a)) => {
-            use pipeline::preview::glossy::{run, GlossyOptions};
-            a.only_for(true)?;
-            let mut opts = GlossyOptions::new(&a.scene);
-            opts.out_dir = a.out.unwrap_or_else(|| preview_dir("glossy", &a.scene));
-            (opts.orbit, opts.reference_spp, opts.quiet) = (a.orbit, a.reference_spp, a.quiet);
-            (opts.reference_spp_max, opts.amortise_frames) =
-                (a.reference_spp_max, a.amortise_frames);
-            if let Some(n) = a.uniform {
-                (opts.settings.uniform_levels, opts.settings.spatial) = (n, false);
-            }
-            if let Some(n) = a.max_vertices {
-                opts.settings.max_vertices = n as usize;
-            }
-            let s = run(&opts)?;
-            if !a.quiet {
-                println!(
-                    "glossy: {} → {} vertices, precompute {:.1} s{}, frame {:.1} ms, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {} and {}",
-                    s.vertices_initial,
-                    s.vertices_final,
-                    s.precompute_s,
-                    if s.cached { " (cached)" } else { "" },
-                    s.render_ms,
-                    s.rmse,
-                    100.0 * s.rmse / s.reference_mean.max(1e-12),
-                    s.figures.summary(),
-                    s.exr.display(),
-                    s.stats_page.display()
-                );
-            }
+            let opts = a.glossy_options()?;
+            show(a.quiet, pipeline::preview::glossy::run(&opts)?);
         }
-        Command::Merge(args) => {
-            let job = pipeline::merge::MergeJob {
-                parts: args.parts,
-                out: args.out,
-                command: command_line(),
-            };
-            let summary = pipeline::merge::run(&job)?;
-            if !args.quiet {
-                println!("{summary}");
-            }
-        }
+        Command::Merge(args) => show(args.quiet, pipeline::merge::run(&args.job())?),
         Command::Compare(args) => {
-            let dir = args
-                .out
-                .clone()
-                .unwrap_or_else(|| compare::default_dir(&args.scene));
-            let opts = args.options(dir.clone());
             let mode = ProgressMode::detect(args.common.quiet);
-            let rows = pipeline::compare::run(&args.scene, args.common.threads, &opts, mode)?;
-            if !args.common.quiet {
-                println!("{}", gradtrace::output::report::markdown_table(&rows));
-                println!("wrote {}", dir.join("report.html").display());
-            }
+            let opts = args.options();
+            let summary = pipeline::compare::run(&args.scene, args.common.threads, &opts, mode)?;
+            show(args.common.quiet, summary);
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A command's summary on stdout, unless `--quiet`.
+fn show(quiet: bool, summary: impl std::fmt::Display) {
+    if !quiet {
+        println!("{summary}");
+    }
 }

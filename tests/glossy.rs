@@ -435,21 +435,10 @@ fn glossy_benchmark() {
     let scene = gradtrace::scene::load(&scene_path).unwrap();
     let accel = gradtrace::accel::Accel::build(&scene.meshes, &scene.spheres);
     // Where `run` looks for the cache; an existing one is reused.
-    let key = {
-        use sha2::Digest;
-        let mut h = sha2::Sha256::new();
-        h.update(scene.content_hash().unwrap().as_bytes());
-        h.update(format!("{:?}", opts.settings).as_bytes());
-        h.update(env!("CARGO_PKG_VERSION").as_bytes());
-        h.finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect::<String>()
-    };
-    let cache = opts
-        .out_dir
-        .join("cache")
-        .join(format!("glossy-{}.bin", &key[..16]));
+    let entry =
+        gradtrace::pipeline::preview::glossy::transfer_entry(&scene, &opts.out_dir, &opts.settings)
+            .unwrap();
+    let cache = entry.path().to_path_buf();
     let mut cpu_s = f64::NAN;
     if !cache.is_file() {
         let (wall, cpu) = (std::time::Instant::now(), cpu_seconds());
@@ -470,8 +459,9 @@ fn glossy_benchmark() {
             wall.elapsed().as_secs_f64(),
             t.stats
         );
-        std::fs::create_dir_all(cache.parent().unwrap()).unwrap();
-        std::fs::write(&cache, t.encode(&key)).unwrap();
+        entry
+            .write_bytes(&t.encode(entry.key()), t.stats.precompute_s)
+            .unwrap();
     }
     let s = run(&opts).unwrap();
     assert!(

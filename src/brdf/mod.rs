@@ -58,12 +58,14 @@ mod glossy;
 mod lambert;
 mod mirror;
 pub mod normalization;
+mod preview;
 
 use crate::math::scalar::{dot, Scalar};
 use crate::math::{Vec2, Vec3};
 use glam::DVec3;
 
 pub use glossy::MIN_LH;
+pub use preview::PreviewParts;
 
 /// Largest exponent honoured; larger (or infinite) exponents are clamped to it. At 1e7
 /// the lobe is ~6e-4 rad wide, still resolvable with f32 directions.

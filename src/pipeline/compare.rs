@@ -149,14 +149,28 @@ pub fn default_dir(scene: &Path) -> PathBuf {
     Path::new("out").join(name)
 }
 
+/// What `gradtrace compare` prints: the report's table and where it went.
+#[derive(Clone, Debug)]
+pub struct CompareSummary {
+    pub rows: Vec<ReportRow>,
+    pub report: PathBuf,
+}
+
+impl std::fmt::Display for CompareSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        writeln!(f, "{}", report::markdown_table(&self.rows))?;
+        write!(f, "wrote {}", self.report.display())
+    }
+}
+
 /// `gradtrace compare`: checks the options, loads the scene, runs [`compare`] with
-/// one progress line per step, and returns the report's rows.
+/// one progress line per step, and returns what the command prints.
 pub fn run(
     scene_path: &Path,
     threads: Option<u32>,
     opts: &CompareOptions,
     mode: super::progress::ProgressMode,
-) -> Result<Vec<ReportRow>> {
+) -> Result<CompareSummary> {
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
     let oidn = crate::denoise::available();
@@ -174,7 +188,11 @@ pub fn run(
         }
         phase.message(msg);
     };
-    super::with_threads(threads, || compare(&scene, &accel, opts, &progress))?
+    let rows = super::with_threads(threads, || compare(&scene, &accel, opts, &progress))??;
+    Ok(CompareSummary {
+        rows,
+        report: opts.out_dir.join("report.html"),
+    })
 }
 
 /// The run settings shared by every render of a comparison.
@@ -831,23 +849,9 @@ fn keep_exrs(
     Ok(())
 }
 
-/// The reference's cache key: SHA-256 over the scene's content hash, every render
-/// setting of the reference and the renderer's pixel epoch — any change re-renders.
-fn reference_key(scene_hash: &str, opts: &RenderOptions) -> String {
-    use sha2::{Digest, Sha256};
-    let text = format!(
-        "gradtrace reference v2\nscene {scene_hash}\noptions {opts:?}\npixels {}\n",
-        super::PIXEL_EPOCH
-    );
-    Sha256::digest(text.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
-/// The reference image, rendered once and cached as `reference-<key>.exr` with a
-/// JSON sidecar (spp, time, full key, scene hash); reused only when the key of the
-/// present inputs matches the sidecar's.
+/// The reference image, rendered once and cached (`pipeline::cache`) as
+/// `reference-<key>.exr` beside the report; reused only when its key (scene
+/// content, every render setting, the pixel epoch) is the present inputs'.
 ///
 /// Its random numbers come from a seed of its own (derived from the runs' seed):
 /// with the runs' seed, its first `spp` samples per pixel would be the full render's
@@ -866,94 +870,43 @@ fn cached_reference(plan: &Plan, scene_hash: &str) -> Result<(Vec<Vec3>, Referen
         aovs: false,
         ..plan.base.clone()
     };
-    let key = reference_key(scene_hash, &opts);
-    let dir = &plan.opts.out_dir;
-    let stem = format!("reference-{}", &key[..16]);
-    let (exr, meta) = (
-        dir.join(format!("{stem}.exr")),
-        dir.join(format!("{stem}.json")),
+    let entry = super::cache::Cache::beside(&plan.opts.out_dir).entry(
+        "reference",
+        "exr",
+        super::cache::Epoch::Pixels,
+        scene_hash,
+        &format!("{opts:?}"),
     );
-    if let Some((pixels, time_s)) = read_cached(&exr, &meta, &key, plan.size) {
+    let (w, h) = plan.size;
+    // A damaged entry (a NaN written by another tool, a flipped bit) is a miss,
+    // found before the runs (issue 54, defect 15), and rendered anew.
+    let hit = entry
+        .read_exr(|img| (img.width, img.height) == (w as usize, h as usize))
+        .and_then(|hit| Some((hit.value.vec3("", crate::output::names::RGB)?, hit.seconds)));
+    if let Some((pixels, time_s)) = hit {
         let info = ReferenceInfo {
             spp: plan.reference_spp,
             time_s,
-            cache_key: key,
+            cache_key: entry.key().to_string(),
             reused: true,
         };
         return Ok((pixels, info));
     }
     let (out, secs) = timed_render(plan, &opts)?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
-        path: dir.clone(),
-        message: format!("cannot create the folder: {e}"),
-    })?;
     let header = super::render::provenance(plan.scene, &opts, &plan.opts.command, &out)?;
-    crate::output::atomic::write_exr_with_id(&exr, &image_of_render(&out), &header, &out.beauty)?;
-    let sidecar = serde_json::json!({
-        "cache_key": key, "scene_hash": scene_hash, "spp": plan.reference_spp,
-        "time_s": secs, "options": format!("{opts:?}"), "version": super::VERSION,
-    });
-    crate::output::write_atomic(&meta, |f| {
-        use std::io::Write;
-        writeln!(f, "{sidecar:#}").map_err(|e| e.to_string())
-    })?;
+    entry.write_exr(&image_of_render(&out), &header, &out.beauty, secs)?;
     let info = ReferenceInfo {
         spp: plan.reference_spp,
         time_s: secs,
-        cache_key: key,
+        cache_key: entry.key().to_string(),
         reused: false,
     };
     Ok((out.beauty, info))
 }
 
-/// The cached reference's pixels and render time, if its sidecar carries `key` and
-/// its size is right.
-fn read_cached(exr: &Path, meta: &Path, key: &str, (w, h): (u32, u32)) -> Option<(Vec<Vec3>, f64)> {
-    let sidecar: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(meta).ok()?).ok()?;
-    if sidecar["cache_key"].as_str() != Some(key) {
-        return None;
-    }
-    let img = crate::output::read_exr(exr).ok()?;
-    if (img.width, img.height) != (w as usize, h as usize) {
-        return None;
-    }
-    let pixels = img.vec3("", crate::output::names::RGB)?;
-    // A damaged cache (a NaN written by another tool, a flipped bit) is a miss,
-    // found before the runs, and replaced by the fresh reference; scoring
-    // against it used to fail only after every run (issue 54, defect 15).
-    if !pixels.iter().all(|p| p.is_finite()) {
-        return None;
-    }
-    Some((pixels, sidecar["time_s"].as_f64().unwrap_or(0.0)))
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{erode, read_cached};
-
-    #[test]
-    fn a_cached_reference_with_a_nan_is_a_miss() {
-        let dir = std::env::temp_dir().join(format!("gradtrace-cache-nan-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let (exr, meta) = (dir.join("r.exr"), dir.join("r.json"));
-        std::fs::write(&meta, r#"{"cache_key": "k", "time_s": 1.5}"#).unwrap();
-        let write = |nan: bool| {
-            exr::prelude::write_rgb_file(&exr, 2, 1, |x, _| {
-                let v = if nan && x == 0 { f32::NAN } else { 0.5 };
-                (v, v, v)
-            })
-            .unwrap()
-        };
-        write(false);
-        assert_eq!(
-            read_cached(&exr, &meta, "k", (2, 1)).map(|c| c.1),
-            Some(1.5)
-        );
-        write(true);
-        assert!(read_cached(&exr, &meta, "k", (2, 1)).is_none());
-        let _ = std::fs::remove_dir_all(&dir);
-    }
+    use super::erode;
 
     #[test]
     fn erode_shrinks_by_the_radius() {

@@ -80,6 +80,20 @@ impl DiffReport {
     pub fn exceeds_threshold(&self) -> bool {
         self.threshold.is_some_and(|t| self.value() > t)
     }
+
+    /// Why the run fails, when the metric is above the threshold.
+    pub fn threshold_error(&self) -> Option<String> {
+        self.exceeds_threshold().then(|| {
+            format!(
+                "{} differs from {}: {} {:.6e} is above --threshold {}",
+                self.image.display(),
+                self.reference.display(),
+                self.metric.name(),
+                self.value(),
+                self.threshold.unwrap_or_default()
+            )
+        })
+    }
 }
 
 impl fmt::Display for DiffReport {

@@ -5,6 +5,7 @@
 //! the previews in [`preview`].
 
 pub mod adaptive;
+pub mod cache;
 pub mod compare;
 pub mod diff;
 pub mod memory;

@@ -153,6 +153,28 @@ impl Phase {
     pub fn callback(&self) -> impl Fn(usize, usize) + Sync + '_ {
         move |done, total| self.set(done as u64, total as u64)
     }
+
+    /// The callback of a stage that runs named steps one after another, each
+    /// counting (done, total) of its own (the glossy precompute's refinement
+    /// steps): one bar over them all, each step's total added as it starts,
+    /// its name beside the bar.
+    pub fn steps(&self) -> impl Fn(&str, u64, u64) + Sync + '_ {
+        // The step running, the work of the steps before it, its total.
+        let state = Mutex::new((String::new(), 0u64, 0u64));
+        move |step, done, total| {
+            let Ok(mut s) = state.lock() else {
+                return;
+            };
+            let (name, base, step_total) = &mut *s;
+            if name != step {
+                *base += *step_total;
+                step.clone_into(name);
+                self.step(step);
+            }
+            *step_total = total;
+            self.set(*base + done, *base + total);
+        }
+    }
 }
 
 impl Drop for Phase {

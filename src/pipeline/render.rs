@@ -153,6 +153,16 @@ fn rate(rays: u64, seconds: f64) -> String {
     }
 }
 
+/// The exit status of a render that Ctrl-C ended early after writing what it
+/// had (the shell's 128 + SIGINT), so that a script can tell it from a render
+/// that ran to its end.
+pub const EXIT_INTERRUPTED: u8 = 130;
+
+/// What such a render says on stderr.
+pub fn interrupted_note() -> String {
+    format!("interrupted: wrote the passes finished before Ctrl-C (exit status {EXIT_INTERRUPTED})")
+}
+
 /// Renders `job.scene` and writes the EXR + PNG set. The output paths are settled
 /// before any work, so a bad `--out` costs nothing; so are the resume file and the
 /// crop and sample range (checked against the scene before tracing).

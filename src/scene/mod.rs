@@ -193,7 +193,14 @@ pub struct Scene {
     pub stats: SceneStats,
     /// The `[animation]` block, if any (`preview shadow-field --frames`).
     pub animation: Option<animation::Animation>,
+    /// [`Scene::content_hash`], once computed (`Default` when building a scene).
+    pub content_hash_memo: ContentHashMemo,
 }
+
+/// The content hash, computed once per loaded scene: it re-reads every input
+/// file, and a run asks for it at each cache lookup and header it writes.
+#[derive(Clone, Debug, Default)]
+pub struct ContentHashMemo(std::sync::OnceLock<String>);
 
 impl Scene {
     /// The scene's name: the file stem (`scenes/cornell.toml` → `cornell`).
@@ -209,7 +216,17 @@ impl Scene {
     /// MTL libraries of its OBJs. Keys caches (references, precomputed fields) so
     /// that an edited input is never answered from a stale file. Paths enter only
     /// relative to the scene's folder, so a moved project keeps its caches.
+    /// Memoised: the files are read at the first call (`path` and `assets`
+    /// do not change after loading).
     pub fn content_hash(&self) -> crate::Result<String> {
+        if let Some(h) = self.content_hash_memo.0.get() {
+            return Ok(h.clone());
+        }
+        let h = self.hash_files()?;
+        Ok(self.content_hash_memo.0.get_or_init(|| h).clone())
+    }
+
+    fn hash_files(&self) -> crate::Result<String> {
         use sha2::{Digest, Sha256};
         let base = self.path.parent().unwrap_or(Path::new(""));
         let mut files = vec![self.path.clone()];

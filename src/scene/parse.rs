@@ -456,6 +456,7 @@ impl<'a> Builder<'a> {
             object_names: self.object_names,
             stats,
             animation,
+            content_hash_memo: Default::default(),
         })
     }
 

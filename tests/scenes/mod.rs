@@ -52,6 +52,7 @@ pub fn empty_scene(camera: Camera) -> Scene {
         object_names: vec![],
         stats: SceneStats::default(),
         animation: None,
+        content_hash_memo: Default::default(),
     }
 }
 

@@ -14,14 +14,13 @@
 use crate::accel::Accel;
 use crate::math::{luminance, Vec2, Vec3};
 use crate::output::{self, OutputImage};
+use crate::pipeline::cache::{Cache, Entry, Epoch};
 use crate::pipeline::preview::figures::{self, Figures, Timing};
 use crate::pipeline::preview::PreviewSet;
 use crate::pipeline::progress::{Phase, ProgressMode};
 use crate::preview::glossy::{self, PrefilteredEnv, Settings, Transfer};
 use crate::render::{self, RenderOptions};
 use crate::scene::{Camera, Integrator, Scene};
-use sha2::{Digest, Sha256};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -95,6 +94,26 @@ pub struct GlossySummary {
     pub figures: Figures,
 }
 
+/// The command's one summary line.
+impl std::fmt::Display for GlossySummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "glossy: {} → {} vertices, precompute {:.1} s{}, frame {:.1} ms, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {} and {}",
+            self.vertices_initial,
+            self.vertices_final,
+            self.precompute_s,
+            if self.cached { " (cached)" } else { "" },
+            self.render_ms,
+            self.rmse,
+            100.0 * self.rmse / self.reference_mean.max(1e-12),
+            self.figures.summary(),
+            self.exr.display(),
+            self.stats_page.display()
+        )
+    }
+}
+
 fn out_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
     crate::Error::Output {
         path: path.to_path_buf(),
@@ -102,63 +121,36 @@ fn out_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
     }
 }
 
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
-}
-
-/// The cache key: the scene's content, every precompute setting, the source.
-fn cache_key(scene: &Scene, settings: &Settings) -> crate::Result<String> {
-    let mut h = Sha256::new();
-    h.update(scene.content_hash()?.as_bytes());
-    h.update(format!("{settings:?}").as_bytes());
-    h.update(crate::pipeline::SOURCE_EPOCH.as_bytes());
-    Ok(hex(&h.finalize()))
-}
-
-fn write_bytes(path: &Path, bytes: &[u8]) -> crate::Result<()> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| out_err(dir, e))?;
-    }
-    output::write_atomic(path, |w| w.write_all(bytes).map_err(|e| e.to_string()))
+/// The transfer's cache entry: the scene's content, every precompute setting,
+/// the source (public for the benchmark, which fills the cache the run reads).
+pub fn transfer_entry(scene: &Scene, out_dir: &Path, settings: &Settings) -> crate::Result<Entry> {
+    Ok(Cache::under(out_dir).entry(
+        "glossy",
+        "bin",
+        Epoch::Source,
+        &scene.content_hash()?,
+        &format!("{settings:?}"),
+    ))
 }
 
 /// The transfer from the cache, or precomputed (and cached) with a progress bar.
 fn transfer(scene: &Scene, accel: &Accel, opts: &GlossyOptions) -> crate::Result<Transfer> {
-    let key = cache_key(scene, &opts.settings)?;
-    let path = opts
-        .out_dir
-        .join("cache")
-        .join(format!("glossy-{}.bin", &key[..16]));
-    if let Ok(bytes) = std::fs::read(&path) {
-        if let Some(t) = Transfer::decode(&bytes, &key, scene, &opts.settings) {
+    let entry = transfer_entry(scene, &opts.out_dir, &opts.settings)?;
+    if let Some(hit) = entry.read_bytes() {
+        if let Some(t) = Transfer::decode(&hit.value, entry.key(), scene, &opts.settings) {
             return Ok(t);
         }
     }
-    // One phase over every step's vertices (each refinement step adds its own
-    // count to the total as it starts); the bar names the step.
+    // One phase over every refinement step's vertices.
     let phase = Phase::new(
         ProgressMode::detect(opts.quiet),
         "glossy precompute",
         0,
         "vertices",
     );
-    let steps = std::sync::Mutex::new((String::new(), 0u64, 0u64));
-    let progress = |step: &str, done: u64, total: u64| {
-        let Ok(mut s) = steps.lock() else {
-            return;
-        };
-        let (name, base, step_total) = &mut *s;
-        if name != step {
-            *base += *step_total;
-            *name = step.to_string();
-            phase.step(step);
-        }
-        *step_total = total;
-        phase.set(*base + done, *base + total);
-    };
-    let t = glossy::precompute(scene, accel, &opts.settings, &progress)?;
+    let t = glossy::precompute(scene, accel, &opts.settings, &phase.steps())?;
     drop(phase);
-    write_bytes(&path, &t.encode(&key))?;
+    entry.write_bytes(&t.encode(entry.key()), t.stats.precompute_s)?;
     Ok(t)
 }
 
@@ -174,37 +166,6 @@ fn reference(
     seed: u32,
 ) -> crate::Result<(Vec<Vec3>, f64)> {
     let seed = (seed > 0).then_some(0x6c05_5000 + seed);
-    let mut h = Sha256::new();
-    h.update(scene.content_hash()?.as_bytes());
-    h.update(
-        format!(
-            "{spp} {}x{} {}",
-            camera.width,
-            camera.height,
-            env!("CARGO_PKG_VERSION")
-        )
-        .as_bytes(),
-    );
-    if let Some(seed) = seed {
-        h.update(format!(" seed {seed}").as_bytes());
-    }
-    let path = opts
-        .out_dir
-        .join("cache")
-        .join(format!("reference-{}.exr", &hex(&h.finalize())[..16]));
-    if let Ok(img) = output::read_exr(&path) {
-        if let (Some(rgb), Some(t)) = (img.vec3("", ["R", "G", "B"]), img.channel("time.s")) {
-            if rgb.len() == (camera.width * camera.height) as usize {
-                return Ok((rgb, t.data.first().copied().unwrap_or(0.0) as f64));
-            }
-        }
-    }
-    let phase = Phase::new(
-        ProgressMode::detect(opts.quiet),
-        &format!("reference at {spp} spp"),
-        0,
-        "pixels",
-    );
     let ropts = RenderOptions {
         spp: Some(spp),
         seed,
@@ -213,19 +174,34 @@ fn reference(
         resolution: Some((camera.width, camera.height)),
         ..Default::default()
     };
+    let entry = Cache::under(&opts.out_dir).entry(
+        "reference",
+        "exr",
+        Epoch::Pixels,
+        &scene.content_hash()?,
+        &format!("{ropts:?}"),
+    );
+    let size = (camera.width as usize, camera.height as usize);
+    if let Some(hit) = entry.read_exr(|img| (img.width, img.height) == size) {
+        if let Some(rgb) = hit.value.vec3("", ["R", "G", "B"]) {
+            return Ok((rgb, hit.seconds));
+        }
+    }
+    let phase = Phase::new(
+        ProgressMode::detect(opts.quiet),
+        &format!("reference at {spp} spp"),
+        0,
+        "pixels",
+    );
     let start = Instant::now();
     let out = render::render(scene, accel, &ropts, &phase.callback())?;
     let secs = start.elapsed().as_secs_f64();
     drop(phase);
     let mut img = OutputImage::new(out.width, out.height);
     img.push_vec3("", ["R", "G", "B"], &out.beauty);
-    img.push_scalar("time.s", vec![secs as f32; out.width * out.height]);
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| out_err(dir, e))?;
-    }
     let header =
         crate::pipeline::render::provenance(scene, &ropts, &crate::pipeline::command_line(), &out)?;
-    output::atomic::write_exr_with_id(&path, &img, &header, &out.beauty)?;
+    entry.write_exr(&img, &header, &out.beauty, secs)?;
     Ok((out.beauty, secs))
 }
 

@@ -3,8 +3,8 @@
 //! Writes `DIR/<scene>.exr` (`R,G,B` = preview, `reference.R/G/B`, `error.Y`),
 //! `DIR/<scene>.png` and `DIR/preview.json`; with `--frames N` one EXR/PNG per frame
 //! (`<scene>-fNNN`), all as one set under one render id, `preview.json` (its
-//! index) last. Fields are cached under `DIR/cache/`, keyed by the scene's
-//! content hash, every precompute setting and a hash of the source (`pipeline::SOURCE_EPOCH`).
+//! index) last. Fields are cached under `DIR/cache/` (`pipeline::cache`), keyed
+//! by the scene's content hash, every precompute setting and the source's hash.
 
 use crate::accel::Accel;
 use crate::math::sh::ShF;
@@ -105,6 +105,24 @@ pub struct ShadowFieldSummary {
     pub rmse_worst_frame: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rmse_worst_frame_relative: Option<f64>,
+}
+
+/// The command's one summary line.
+impl std::fmt::Display for ShadowFieldSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {}",
+            self.entities,
+            self.precompute_s,
+            if self.precompute_cached { " (cached)" } else { "" },
+            self.render_s,
+            self.rmse,
+            100.0 * self.rmse_relative,
+            self.figures.summary(),
+            self.exr.display()
+        )
+    }
 }
 
 /// Runs the whole command. See the module doc for what it writes.
@@ -290,31 +308,20 @@ fn summarise(
 
 /// Loads the fields from the cache or precomputes (and stores) them.
 fn cached_fields(scene: &Scene, opts: &ShadowFieldOptions) -> Result<(Fields, f64, bool)> {
-    use sha2::{Digest, Sha256};
+    use crate::pipeline::cache::{Cache, Epoch};
     let settings = &opts.settings;
-    let mut h = Sha256::new();
-    for part in [
-        scene.content_hash()?,
-        settings.key(),
-        crate::pipeline::SOURCE_EPOCH.to_string(),
-    ] {
-        h.update((part.len() as u64).to_le_bytes());
-        h.update(part.as_bytes());
-    }
-    let key: String = h
-        .finalize()
-        .iter()
-        .take(12)
-        .map(|b| format!("{b:02x}"))
-        .collect();
-    let dir = opts.out_dir.join("cache");
-    let bin = dir.join(format!("shadow_field-{}-{key}.bin", scene.name()));
-    let meta = bin.with_extension("txt");
+    let entry = Cache::under(&opts.out_dir).entry(
+        &format!("shadow_field-{}", scene.name()),
+        "bin",
+        Epoch::Source,
+        &scene.content_hash()?,
+        &settings.key(),
+    );
     let entities = sf::precompute::entities(scene);
     if opts.cache {
-        if let (Ok(bytes), Ok(text)) = (std::fs::read(&bin), std::fs::read_to_string(&meta)) {
-            if let Some(f) = sf::cache::from_bytes(&bytes, scene, &entities, settings) {
-                return Ok((f, text.trim().parse().unwrap_or(0.0), true));
+        if let Some(hit) = entry.read_bytes() {
+            if let Some(f) = sf::cache::from_bytes(&hit.value, scene, &entities, settings) {
+                return Ok((f, hit.seconds, true));
             }
         }
     }
@@ -329,16 +336,7 @@ fn cached_fields(scene: &Scene, opts: &ShadowFieldOptions) -> Result<(Fields, f6
     let secs = start.elapsed().as_secs_f64();
     drop(phase);
     if opts.cache {
-        create_dir(&dir)?;
-        let bytes = sf::cache::to_bytes(&fields);
-        output::write_atomic(&bin, |f| {
-            use std::io::Write;
-            f.write_all(&bytes).map_err(|e| e.to_string())
-        })?;
-        output::write_atomic(&meta, |f| {
-            use std::io::Write;
-            writeln!(f, "{secs}").map_err(|e| e.to_string())
-        })?;
+        entry.write_bytes(&sf::cache::to_bytes(&fields), secs)?;
     }
     Ok((fields, secs, false))
 }

@@ -65,36 +65,10 @@ pub struct MaterialFit {
     pub glossy: Option<(Material, Vec<GlossyEntry>)>,
 }
 
-/// A material's diffuse and glossy parts, or why the preview cannot take it.
-fn split(material: &Material) -> Result<(Vec3, Option<Material>), String> {
-    match material {
-        Material::Lambert { albedo } => Ok((*albedo, None)),
-        Material::BlinnPhong { kd, ks, exponent } => Ok((
-            *kd,
-            Some(Material::BlinnPhong {
-                kd: Vec3::ZERO,
-                ks: *ks,
-                exponent: *exponent,
-            }),
-        )),
-        Material::CookTorrance { kd, ks, exponent } => Ok((
-            *kd,
-            Some(Material::CookTorrance {
-                kd: Vec3::ZERO,
-                ks: *ks,
-                exponent: *exponent,
-            }),
-        )),
-        Material::Mirror { .. } => {
-            Err("a mirror is a delta lobe, which one vMF lobe per path type cannot hold".into())
-        }
-    }
-}
-
 impl MaterialFit {
     /// Fits `material` with `samples` BRDF samples per view direction.
     pub fn new(material: &Material, ico: &Icosphere, samples: u32) -> Result<Self, String> {
-        let (kd, glossy) = split(material)?;
+        let crate::brdf::PreviewParts { kd, glossy } = material.preview_parts()?;
         let diffuse = (luminance(kd) > 0.0).then_some(Material::Lambert { albedo: kd });
         let glossy = glossy.map(|g| {
             let table = (0..ico.slot_end[FIT_LEVEL] as u32)

@@ -332,7 +332,7 @@ impl<'a> Receivers<'a> {
         } else {
             (shading_n, self_vis)
         };
-        let albedo = diffuse_albedo(&self.scene.materials[material as usize]);
+        let albedo = self.scene.materials[material as usize].diffuse_albedo();
         if albedo == Vec3::ZERO || n == Vec3::ZERO {
             return (emission, false, 0);
         }
@@ -344,17 +344,6 @@ impl<'a> Receivers<'a> {
         let (e, count) = combiner.shade(sp.p, n, own, self_vis.as_ref());
         let value = emission + albedo * e.max(Vec3::ZERO);
         (crate::math::finite_or_zero(value), true, count)
-    }
-}
-
-/// The diffuse albedo the preview shades with (glossy lobes are left out: the
-/// issue's bars are for diffuse scenes; a mirror is black).
-pub fn diffuse_albedo(m: &crate::brdf::Material) -> Vec3 {
-    use crate::brdf::Material;
-    match m {
-        Material::Lambert { albedo } => *albedo,
-        Material::BlinnPhong { kd, .. } | Material::CookTorrance { kd, .. } => *kd,
-        Material::Mirror { .. } => Vec3::ZERO,
     }
 }
 
@@ -414,7 +403,7 @@ pub fn shade_vertices(receivers: &Receivers, combiner: &Combiner, mesh: usize) -
         .get(m.object_id as usize)
         .copied()
         .flatten();
-    let albedo = diffuse_albedo(&scene.materials[m.material as usize]);
+    let albedo = scene.materials[m.material as usize].diffuse_albedo();
     let self_vis = receivers.mesh_self.get(mesh).and_then(|s| s.as_ref());
     (0..m.positions.len())
         .into_par_iter()
