@@ -3,17 +3,26 @@
 
 use super::{sanitize, BsdfSample};
 use crate::math::{warp, Vec2, Vec3};
-use std::f32::consts::FRAC_1_PI;
 
 /// f = albedo/π (the caller has checked both directions are above the horizon).
 pub(super) fn eval(albedo: Vec3) -> Vec3 {
-    sanitize(albedo) * FRAC_1_PI
+    super::lambert_f(sanitize(albedo))
 }
 
 /// Cosine-weighted density cos θi / π, from the normalised cos θi (the caller
 /// has checked it is positive).
 pub(super) fn pdf(cos: f64) -> f64 {
     cos * std::f64::consts::FRAC_1_PI
+}
+
+/// [`pdf`] of `wi`, its cos θi normalised at f64; zero below the horizon
+/// (and for a zero, NaN or infinite `wi`).
+#[inline]
+pub(super) fn pdf_wi(wi: Vec3) -> f64 {
+    match super::unit_z(wi) {
+        Some(z) if z > 0.0 => pdf(z),
+        _ => 0.0,
+    }
 }
 
 /// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the

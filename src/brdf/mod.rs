@@ -59,6 +59,7 @@ mod lambert;
 mod mirror;
 pub mod normalization;
 
+use crate::math::lanes::{Lanes, Vector3};
 use crate::math::scalar::{dot, Scalar};
 use crate::math::{Vec2, Vec3};
 use glam::DVec3;
@@ -146,10 +147,13 @@ impl Material {
         let p = match self {
             // cos θi / π needs only wi's normalised z, and wo only its side: the
             // same bits as normalising both at f64, without five of the divisions.
-            Material::Lambert { .. } => match (upper(wo), unit_z(wi)) {
-                (true, Some(z)) if z > 0.0 => lambert::pdf(z),
-                _ => 0.0,
-            },
+            Material::Lambert { .. } => {
+                if upper(wo) {
+                    lambert::pdf_wi(wi)
+                } else {
+                    0.0
+                }
+            }
             Material::BlinnPhong { .. } | Material::CookTorrance { .. } => upper_pair(wo, wi)
                 .map_or(0.0, |(wo, wi)| self.glossy().map_or(0.0, |g| g.pdf(wo, wi))),
             Material::Mirror { .. } => 0.0,
@@ -338,6 +342,64 @@ fn finite_nonneg(x: f32) -> f32 {
 fn to_f32(c: DVec3) -> Vec3 {
     let v = c.as_vec3a();
     Vec3::new(finite_nonneg(v.x), finite_nonneg(v.y), finite_nonneg(v.z))
+}
+
+/// What the lane kernel (`render::lanes`) shades a material as: the
+/// materials it takes, with the colour it reads (sanitised, as a sample's
+/// weight is).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LaneBsdf {
+    /// f = albedo/π ([`lambert_f`]), pdf [`lambert_pdf`], cosine-weighted
+    /// samples ([`crate::math::warp::cosine_hemisphere`]).
+    Lambert { albedo: Vec3 },
+    /// The reflection about the normal, its weight the reflectance.
+    Mirror { reflectance: Vec3 },
+}
+
+impl LaneBsdf {
+    /// The colour a sample's weight carries: the albedo or the reflectance.
+    pub fn weight(self) -> Vec3 {
+        match self {
+            LaneBsdf::Lambert { albedo } => albedo,
+            LaneBsdf::Mirror { reflectance } => reflectance,
+        }
+    }
+
+    pub fn is_mirror(self) -> bool {
+        matches!(self, LaneBsdf::Mirror { .. })
+    }
+}
+
+// The lanes' view of the materials, kept apart from the methods above.
+impl Material {
+    /// How the lanes shade this material; `None` for those only the path
+    /// tracer's `li` shades (the glossy ones).
+    pub fn lane_bsdf(&self) -> Option<LaneBsdf> {
+        match self {
+            Material::Lambert { albedo } => Some(LaneBsdf::Lambert {
+                albedo: sanitize(*albedo),
+            }),
+            Material::Mirror { reflectance } => Some(LaneBsdf::Mirror {
+                reflectance: sanitize(*reflectance),
+            }),
+            Material::BlinnPhong { .. } | Material::CookTorrance { .. } => None,
+        }
+    }
+}
+
+/// [`Material::pdf`] of a Lambertian for a `wo` above the horizon: `wi`'s z
+/// normalised at f64, over π, made finite. The lane kernel calls it lane by
+/// lane (an f64 formula has no eight-wide f32 form).
+#[inline]
+pub fn lambert_pdf(wi: Vec3) -> f32 {
+    finite_nonneg(lambert::pdf_wi(wi) as f32)
+}
+
+/// A Lambertian's f = albedo/π from its sanitised albedo, on one colour
+/// ([`Material::eval`]) or eight (the lane kernel).
+#[inline(always)]
+pub fn lambert_f<V: Vector3>(albedo: V) -> V {
+    albedo.map(|a| a * V::L::splat(std::f32::consts::FRAC_1_PI))
 }
 
 #[cfg(test)]

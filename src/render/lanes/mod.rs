@@ -32,14 +32,13 @@ use crate::accel::{
     sphere_point, triangle_normal, triangle_point_with_normal, Hit, PrimRef, RayStream,
     SurfacePoint,
 };
-use crate::brdf::Material;
+use crate::brdf::{LaneBsdf, Material};
 use crate::math::sampler::PixelSampler;
 use crate::math::{warp, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use kernel::Shaded8;
 
 mod kernel;
-mod simd;
 
 /// Lanes per shading step: AVX's width (two SSE registers each on a build
 /// without it).
@@ -98,15 +97,14 @@ impl LaneScene {
         let lights = light_set.lane_lights(scene);
         let other_lights = lights.iter().any(|l| !matches!(l, LaneLight::Area(_)));
         // As a Lambertian or mirror sample's weight is; whether a mirror.
-        let material = |m: u32| match scene.materials.get(m as usize) {
-            Some(Material::Lambert { albedo }) => Some((crate::brdf::sanitize(*albedo), false)),
-            Some(Material::Mirror { reflectance }) => {
-                Some((crate::brdf::sanitize(*reflectance), true))
-            }
-            _ => None,
+        let bsdf = |m: u32| {
+            scene
+                .materials
+                .get(m as usize)
+                .and_then(Material::lane_bsdf)
         };
-        let albedo = |m: u32| material(m).map(|(a, _)| a);
-        let mirror = |m: u32| material(m).is_some_and(|(_, mirror)| mirror);
+        let albedo = |m: u32| bsdf(m).map(LaneBsdf::weight);
+        let mirror = |m: u32| bsdf(m).is_some_and(LaneBsdf::is_mirror);
         let sphere_albedo = scene
             .spheres
             .iter()
@@ -446,10 +444,11 @@ fn shadow_ray(s: &Shaded8, l: usize) -> Ray {
 /// `None` when they do.
 pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
     let lambert = |m: u32| {
-        matches!(
-            scene.materials.get(m as usize),
-            Some(Material::Lambert { .. } | Material::Mirror { .. })
-        )
+        scene
+            .materials
+            .get(m as usize)
+            .and_then(Material::lane_bsdf)
+            .is_some()
     };
     let materials = scene.meshes.iter().map(|m| m.material);
     let bumps = scene.meshes.iter().map(|m| m.bump);
