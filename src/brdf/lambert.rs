@@ -15,14 +15,15 @@ pub(super) fn pdf(cos: f64) -> f64 {
     cos * std::f64::consts::FRAC_1_PI
 }
 
-/// [`pdf`] of `wi`, its cos θi normalised at f64; zero below the horizon
-/// (and for a zero, NaN or infinite `wi`).
-#[inline]
-pub(super) fn pdf_wi(wi: Vec3) -> f64 {
-    match super::unit_z(wi) {
-        Some(z) if z > 0.0 => pdf(z),
-        _ => 0.0,
-    }
+/// [`pdf`] of `wi`, its cos θi normalised at f64, as an f32 made finite: zero
+/// below the horizon and for a zero, NaN or infinite `wi` (whose z over its
+/// length is then NaN, infinite or zero). Components, not a `Vec3`: the lane
+/// kernel calls it lane by lane.
+#[inline(always)]
+pub(super) fn pdf_wi(x: f32, y: f32, z: f32) -> f32 {
+    let (x, y, z) = (f64::from(x), f64::from(y), f64::from(z));
+    let len2 = x * x + y * y + z * z;
+    super::finite_nonneg(pdf(z / len2.sqrt()) as f32)
 }
 
 /// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the

@@ -148,11 +148,7 @@ impl Material {
             // cos θi / π needs only wi's normalised z, and wo only its side: the
             // same bits as normalising both at f64, without five of the divisions.
             Material::Lambert { .. } => {
-                if upper(wo) {
-                    lambert::pdf_wi(wi)
-                } else {
-                    0.0
-                }
+                return if upper(wo) { lambert_pdf(wi) } else { 0.0 };
             }
             Material::BlinnPhong { .. } | Material::CookTorrance { .. } => upper_pair(wo, wi)
                 .map_or(0.0, |(wo, wi)| self.glossy().map_or(0.0, |g| g.pdf(wo, wi))),
@@ -300,14 +296,6 @@ fn unit(v: Vec3) -> Option<DVec3> {
     Some(d / len2.sqrt())
 }
 
-/// z of `v` normalised at f64 (the bits [`unit`] gives it), or `None` where
-/// `unit` has none: one division instead of three.
-fn unit_z(v: Vec3) -> Option<f64> {
-    let d = v.as_dvec3();
-    let len2 = d.length_squared();
-    (len2 > 0.0 && len2.is_finite()).then(|| d.z / len2.sqrt())
-}
-
 /// Whether `v` normalised (by [`unit`]) is strictly above the horizon: only the
 /// sign of its z matters, so no square root.
 fn upper(v: Vec3) -> bool {
@@ -390,16 +378,25 @@ impl Material {
 /// [`Material::pdf`] of a Lambertian for a `wo` above the horizon: `wi`'s z
 /// normalised at f64, over π, made finite. The lane kernel calls it lane by
 /// lane (an f64 formula has no eight-wide f32 form).
-#[inline]
+#[inline(always)]
 pub fn lambert_pdf(wi: Vec3) -> f32 {
-    finite_nonneg(lambert::pdf_wi(wi) as f32)
+    lambert::pdf_wi(wi.x, wi.y, wi.z)
+}
+
+/// [`lambert_pdf`] of eight directions given by their components.
+#[inline(always)]
+pub fn lambert_pdf8(x: [f32; 8], y: [f32; 8], z: [f32; 8]) -> [f32; 8] {
+    std::array::from_fn(|l| lambert::pdf_wi(x[l], y[l], z[l]))
 }
 
 /// A Lambertian's f = albedo/π from its sanitised albedo, on one colour
 /// ([`Material::eval`]) or eight (the lane kernel).
 #[inline(always)]
 pub fn lambert_f<V: Vector3>(albedo: V) -> V {
-    albedo.map(|a| a * V::L::splat(std::f32::consts::FRAC_1_PI))
+    albedo.map(
+        #[inline(always)]
+        |a| a * V::L::splat(std::f32::consts::FRAC_1_PI),
+    )
 }
 
 #[cfg(test)]

@@ -453,6 +453,9 @@ impl<L: Lanes> V3<L> {
     pub fn dot(self, o: Self) -> L {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
+    /// `f` on each component. (The methods below spell their components
+    /// out: a closure in a generic function is a function of its own, which
+    /// the compiler may leave out of line, and then its AVX operations too.)
     #[inline(always)]
     pub fn map(self, f: impl Fn(L) -> L) -> Self {
         Self {
@@ -471,31 +474,59 @@ impl<L: Lanes> V3<L> {
     }
     #[inline(always)]
     pub fn add(self, o: Self) -> Self {
-        self.zip(o, |a, b| a + b)
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
     }
     #[inline(always)]
     pub fn sub(self, o: Self) -> Self {
-        self.zip(o, |a, b| a - b)
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
     }
     #[inline(always)]
     pub fn mul(self, s: L) -> Self {
-        self.map(|a| a * s)
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
     }
     #[inline(always)]
     pub fn mul_v(self, o: Self) -> Self {
-        self.zip(o, |a, b| a * b)
+        Self {
+            x: self.x * o.x,
+            y: self.y * o.y,
+            z: self.z * o.z,
+        }
     }
     #[inline(always)]
     pub fn div(self, s: L) -> Self {
-        self.map(|a| a / s)
+        Self {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
     }
     #[inline(always)]
     pub fn neg(self) -> Self {
-        self.map(|a| -a)
+        Self {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
     }
     #[inline(always)]
     pub fn abs(self) -> Self {
-        self.map(L::abs)
+        Self {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
     }
     #[inline(always)]
     pub fn is_finite(self) -> L {
@@ -507,7 +538,11 @@ impl<L: Lanes> V3<L> {
     /// Lanes of `t` where the mask `m` is set, of `f` elsewhere.
     #[inline(always)]
     pub fn select(m: L, t: Self, f: Self) -> Self {
-        t.zip(f, |t, f| m.select(t, f))
+        Self {
+            x: m.select(t.x, f.x),
+            y: m.select(t.y, f.y),
+            z: m.select(t.z, f.z),
+        }
     }
     /// glam's `normalize_or_zero`: times 1/|v| where that is finite and
     /// positive, else zero.
@@ -560,6 +595,8 @@ pub trait Vector3: Copy {
     /// The dot product (glam's order), wherever a component of
     /// [`zip`](Self::zip) reads it.
     fn dot(self, o: Self) -> Self::L;
+    /// `f` on each component (callers mark `f` `#[inline(always)]`: see
+    /// [`V3::map`]).
     fn map(self, f: impl Fn(Self::L) -> Self::L) -> Self;
     fn zip(self, o: Self, f: impl Fn(Self::L, Self::L) -> Self::L) -> Self;
 }

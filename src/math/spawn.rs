@@ -14,16 +14,25 @@ use super::lanes::{Lanes, Vector3};
 pub fn offset_ray_origin<V: Vector3>(p: V, p_error: V, n: V, dir: V) -> V {
     let zero = V::L::splat(0.0);
     let one = V::L::splat(1.0);
-    let d = n.map(Lanes::abs).dot(p_error);
+    let d = n
+        .map(
+            #[inline(always)]
+            |c| c.abs(),
+        )
+        .dot(p_error);
     let flip = dir.dot(n).lt(zero);
-    p.zip(n, |p, n| {
-        let offset = n * d;
-        let offset = flip.select(-offset, offset);
-        let po = p + offset;
-        // The offset's direction: 0 where it is 0, else its sign.
-        let away = offset
-            .eq(zero)
-            .select(zero, offset.is_sign_negative().select(-one, one));
-        po + away * (po.abs() * V::L::splat(f32::EPSILON)).max(V::L::splat(f32::MIN_POSITIVE))
-    })
+    p.zip(
+        n,
+        #[inline(always)]
+        |p, n| {
+            let offset = n * d;
+            let offset = flip.select(-offset, offset);
+            let po = p + offset;
+            // The offset's direction: 0 where it is 0, else its sign.
+            let away = offset
+                .eq(zero)
+                .select(zero, offset.is_sign_negative().select(-one, one));
+            po + away * (po.abs() * V::L::splat(f32::EPSILON)).max(V::L::splat(f32::MIN_POSITIVE))
+        },
+    )
 }

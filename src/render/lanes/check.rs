@@ -62,9 +62,8 @@ pub fn compare_with_li(scene: &Scene, opts: &RenderOptions, avx2: bool) -> Resul
     lanes.avx2 = avx2 && super::avx2();
     let (w, h) = (setup.camera.width, setup.camera.height);
     let bits = |r: &SampleResult| r.radiance.to_array().map(f32::to_bits);
-    let aov = |f: &Option<FirstHit>| {
-        f.map(|f| (f.normal, f.depth, f.albedo, f.object_id, f.back_facing))
-    };
+    let aov =
+        |f: &Option<FirstHit>| f.map(|f| (f.normal, f.depth, f.albedo, f.object_id, f.back_facing));
     let mut compared = 0;
     for pixel in (0..w * h).step_by(97) {
         let corner = Vec2::new((pixel % w) as f32, (pixel / w) as f32);
@@ -90,7 +89,9 @@ pub fn compare_with_li(scene: &Scene, opts: &RenderOptions, avx2: bool) -> Resul
         let got: Vec<SampleResult> = batch.results().collect();
         for (g, wo) in got.iter().zip(without.results()) {
             if bits(g) != bits(&wo) || g.rays != wo.rays || wo.first_hit.is_some() {
-                return Err(format!("pixel {pixel}: traced without first hits, it differs"));
+                return Err(format!(
+                    "pixel {pixel}: traced without first hits, it differs"
+                ));
             }
         }
         for (e, g) in expected.iter().zip(&got) {

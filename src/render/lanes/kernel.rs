@@ -8,11 +8,10 @@
 //! scattering.
 
 use super::{Gathered, LightKind, Rows, LANES};
-use crate::brdf::{lambert_f, lambert_pdf};
+use crate::brdf::{lambert_f, lambert_pdf8};
 use crate::math::lanes::{LaneFrame, Lanes8, V3};
 use crate::math::spawn::offset_ray_origin;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf_z};
-use crate::math::Vec3;
 use crate::render::path::power_heuristic;
 
 /// What [`shade8`] writes, per lane. About 1.1 KB: the kernel writes it in
@@ -107,10 +106,7 @@ unsafe fn shade8<L: Lanes8>(g: &Gathered, out: &mut Shaded8) {
         .and(light.wi.dot(h.ng).gt(zero))
         .and(f_nonzero);
     // `Material::pdf` (Lambert), lane by lane: an f64 formula.
-    let [x, y, z] = [wil.x.store(), wil.y.store(), wil.z.store()];
-    let bsdf_pdf = L::load(std::array::from_fn(|l| {
-        lambert_pdf(Vec3::new(x[l], y[l], z[l]))
-    }));
+    let bsdf_pdf = L::load(lambert_pdf8(wil.x.store(), wil.y.store(), wil.z.store()));
     let weight_mis = power_heuristic(light.pdf, bsdf_pdf);
     let ld = V3::load(&g.beta)
         .mul_v(f)
@@ -192,7 +188,11 @@ fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     };
     // `interaction`'s floor: spawned rays clear the tree's padded boxes.
     let floor = L::splat(g.spawn_floor);
-    let p_error = p_error.map(|e| e.max(floor));
+    let p_error = V3 {
+        x: p_error.x.max(floor),
+        y: p_error.y.max(floor),
+        z: p_error.z.max(floor),
+    };
     // `triangle_interaction`'s shading normal: the vertices' normals
     // interpolated and normalised, the geometric one where that gives zero.
     let n = V3::load(&g.n);
