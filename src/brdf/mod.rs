@@ -383,6 +383,13 @@ pub fn lambert_pdf(wi: Vec3) -> f32 {
     lambert::pdf_wi(wi.x, wi.y, wi.z)
 }
 
+/// A mirror's sampled direction for `wo` in the local frame, on lanes: the
+/// one formula of [`Material::sample`]'s mirror arm.
+#[inline(always)]
+pub fn mirror_reflect<L: Lanes>(wo: crate::math::lanes::V3<L>) -> crate::math::lanes::V3<L> {
+    mirror::reflect(wo)
+}
+
 /// [`lambert_pdf`] of eight directions given by their components.
 #[inline(always)]
 pub fn lambert_pdf8(x: [f32; 8], y: [f32; 8], z: [f32; 8]) -> [f32; 8] {

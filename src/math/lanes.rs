@@ -56,10 +56,16 @@ impl Lanes for f32 {
     fn splat(x: f32) -> Self {
         x
     }
+    /// By the sign bit, as `blendv`: the compiler sees the comparison
+    /// behind the mask and emits one select (as bit operations, a `li`
+    /// render took 0.8 % more instructions).
     #[inline(always)]
     fn select(self, t: Self, f: Self) -> Self {
-        let m = self.to_bits();
-        f32::from_bits((m & t.to_bits()) | (!m & f.to_bits()))
+        if self.is_sign_negative() {
+            t
+        } else {
+            f
+        }
     }
     #[inline(always)]
     fn and(self, o: Self) -> Self {

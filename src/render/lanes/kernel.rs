@@ -8,10 +8,11 @@
 //! scattering.
 
 use super::{Gathered, LightKind, Rows, LANES};
-use crate::brdf::{lambert_f, lambert_pdf8};
+use crate::brdf::{lambert_f, lambert_pdf8, mirror_reflect};
 use crate::math::lanes::{LaneFrame, Lanes8, V3};
 use crate::math::spawn::offset_ray_origin;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf_z};
+use crate::render::interaction::face_ray;
 use crate::render::path::power_heuristic;
 
 /// What [`shade8`] writes, per lane. About 1.1 KB: the kernel writes it in
@@ -123,12 +124,7 @@ unsafe fn shade8<L: Lanes8>(g: &Gathered, out: &mut Shaded8) {
         // lobe), the reflection about the normal, an infinite density (the
         // next emitter counts in full).
         let mirror = L::load(g.mirror).gt(zero);
-        let reflected = V3 {
-            x: -h.wo.x,
-            y: -h.wo.y,
-            z: h.wo.z,
-        }
-        .normalize_or_zero();
+        let reflected = mirror_reflect(h.wo);
         (
             mirror.select(zero.ne(zero), direct),
             V3::select(mirror, reflected, local),
@@ -206,11 +202,7 @@ fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     };
     // `interaction::finish`: normals toward the ray, the shading normal folded
     // back where it is not above the surface, the frame.
-    let front = dir.dot(n).lt(zero);
-    let sign = front.select(one, -one);
-    let ng = n.mul(sign);
-    let ns = ns.mul(sign);
-    let ns = V3::select(ns.dot(ng).le(L::splat(1e-4)), ng, ns);
+    let (ng, ns, _) = face_ray(dir, n, ns);
     let frame = LaneFrame::from_normal(ns);
     let wo = frame.to_local(dir.neg());
     Hit8 {
