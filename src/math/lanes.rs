@@ -449,6 +449,9 @@ pub struct V3<L> {
     pub z: L,
 }
 
+// Methods rather than operators: `mul` and `div` take a lane, `mul_v` a
+// vector, and a chain reads in the order the scalar code computes.
+#[allow(clippy::should_implement_trait)]
 impl<L: Lanes> V3<L> {
     #[inline(always)]
     pub fn splat(v: L) -> Self {
