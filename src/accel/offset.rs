@@ -43,23 +43,12 @@ fn default_error(p: Vec3) -> Vec3 {
     Vec3::splat(p.abs().max_element() * DEFAULT_REL_ERROR + 1.0e-30)
 }
 
-/// pbrt-v4's `OffsetRayOrigin`: `d = dot(|n|, p_error)`, move `p` by `d·n` towards
-/// the side of `dir`, then move every moved component at least one ulp further
-/// away, so that the rounding of `p + offset` cannot pull the origin back onto
-/// the surface. pbrt steps exactly one ulp with `NextFloatUp`/`Down`; here the
-/// step is |x|·2⁻²³ (one to two ulps, at least the smallest normal float),
-/// which needs no branch per component: this runs for every ray the path
-/// tracer spawns.
+/// pbrt-v4's `OffsetRayOrigin` ([`crate::math::spawn::offset_ray_origin`],
+/// the lane kernel's rule) on one vector, in three-wide instructions: this
+/// runs for every ray the path tracer spawns.
 #[inline]
 pub fn offset_ray_origin_with_error(p: Vec3, p_error: Vec3, n_geo: Vec3, dir: Vec3) -> Vec3 {
-    let d = n_geo.abs().dot(p_error);
-    let mut offset = d * n_geo;
-    if dir.dot(n_geo) < 0.0 {
-        offset = -offset;
-    }
-    let po = p + offset;
-    let away = Vec3::select(offset.cmpeq(Vec3::ZERO), Vec3::ZERO, offset.signum());
-    po + away * (po.abs() * f32::EPSILON).max(Vec3::splat(f32::MIN_POSITIVE))
+    crate::math::spawn::offset_ray_origin(p, p_error, n_geo, dir)
 }
 
 /// A hit point recomputed from its primitive, with an absolute error bound and

@@ -10,6 +10,7 @@
 //!   scale; our barycentrics come straight out of the watertight test (U, V, W
 //!   divided by their sum), so they are exact and sum to one.
 
+use crate::math::lanes::Lanes;
 use crate::math::Vec3;
 use wide::f32x4;
 
@@ -34,85 +35,12 @@ pub(crate) const fn gamma(n: i32) -> f32 {
 fn t_error_bound<F: Lanes>(x: [F; 3], y: [F; 3], z: [F; 3], e: [F; 3], abs_rcp_det: F) -> F {
     let max3 = |p: [F; 3]| p[0].abs().max(p[1].abs()).max(p[2].abs());
     let (max_x, max_y, max_z, max_e) = (max3(x), max3(y), max3(z), max3(e));
-    let g = |n: i32| F::from(gamma(n));
+    let g = |n: i32| F::splat(gamma(n));
     let delta_z = g(3) * max_z;
     let delta_x = g(5) * (max_x + max_z);
     let delta_y = g(5) * (max_y + max_z);
-    let delta_e = F::from(2.0) * (g(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    F::from(3.0) * (g(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * abs_rcp_det
-}
-
-/// One f32 or four: the arithmetic [`t_error_bound`] needs.
-trait Lanes:
-    Copy
-    + std::ops::Add<Output = Self>
-    + std::ops::Sub<Output = Self>
-    + std::ops::Mul<Output = Self>
-    + std::ops::Div<Output = Self>
-    + From<f32>
-{
-    fn abs(self) -> Self;
-    fn max(self, other: Self) -> Self;
-}
-
-/// `Lanes` from the type's own `abs` and `max`.
-macro_rules! lanes {
-    ($($t:ty),*) => {$(
-        impl Lanes for $t {
-            #[inline(always)]
-            fn abs(self) -> Self {
-                <$t>::abs(self)
-            }
-            #[inline(always)]
-            fn max(self, other: Self) -> Self {
-                <$t>::max(self, other)
-            }
-        }
-    )*};
-}
-lanes!(f32, f32x4);
-
-/// Lanes that compare: each comparison gives a lane mask (all ones where it
-/// holds, ordered: false for NaN, but `ne` true), and `bits` its sign bits.
-trait MaskLanes: Lanes + std::ops::BitAnd<Output = Self> + std::ops::BitOr<Output = Self> {
-    fn eq(self, o: Self) -> Self;
-    fn ne(self, o: Self) -> Self;
-    fn lt(self, o: Self) -> Self;
-    fn gt(self, o: Self) -> Self;
-    fn le(self, o: Self) -> Self;
-    fn ge(self, o: Self) -> Self;
-    fn bits(self) -> u32;
-}
-
-impl MaskLanes for f32x4 {
-    #[inline(always)]
-    fn eq(self, o: Self) -> Self {
-        self.simd_eq(o)
-    }
-    #[inline(always)]
-    fn ne(self, o: Self) -> Self {
-        self.simd_ne(o)
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> Self {
-        self.simd_lt(o)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> Self {
-        self.simd_gt(o)
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> Self {
-        self.simd_le(o)
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> Self {
-        self.simd_ge(o)
-    }
-    #[inline(always)]
-    fn bits(self) -> u32 {
-        self.to_bitmask()
-    }
+    let delta_e = F::splat(2.0) * (g(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    F::splat(3.0) * (g(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * abs_rcp_det
 }
 
 /// The watertight test's arithmetic on SIMD lanes, one triangle per lane:
@@ -148,7 +76,7 @@ fn lane_test<F: Lanes>(rel: impl Fn(usize, usize) -> F, [sx, sy, sz]: [F; 3]) ->
     // Scaled hit distance (paper eq. 5).
     let (az, bz, cz) = (sz * a[2], sz * b[2], sz * c[2]);
     let t_scaled = u * az + v * bz + w * cz;
-    let rcp_det = F::from(1.0) / det;
+    let rcp_det = F::splat(1.0) / det;
     LaneTest {
         x: [ax, bx, cx],
         y: [ay, by, cy],
@@ -174,7 +102,7 @@ impl<F: Lanes> LaneTest<F> {
     }
 }
 
-impl<F: MaskLanes> LaneTest<F> {
+impl<F: Lanes> LaneTest<F> {
     /// The scalar test's decisions on every lane, as bit masks: `(hits,
     /// on_edge)`, the lanes hit with t in [t_min, t_max] (and t > δt on
     /// forward rays), and those with an edge function exactly zero, which the
@@ -182,7 +110,7 @@ impl<F: MaskLanes> LaneTest<F> {
     #[inline(always)]
     fn decide(&self, t_min: f32, t_max: f32) -> (u32, u32) {
         let forward = if t_min >= 0.0 { u32::MAX } else { 0 };
-        self.decide_in(F::from(t_min), F::from(t_max), forward)
+        self.decide_in(F::splat(t_min), F::splat(t_max), forward)
     }
 
     /// [`LaneTest::decide`] with each lane's own interval (one ray per lane,
@@ -191,17 +119,18 @@ impl<F: MaskLanes> LaneTest<F> {
     #[inline(always)]
     fn decide_in(&self, t_min: F, t_max: F, forward: u32) -> (u32, u32) {
         let [u, v, w] = self.e;
-        let zero = F::from(0.0);
-        let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
-        let negative = u.lt(zero) | v.lt(zero) | w.lt(zero);
-        let positive = u.gt(zero) | v.gt(zero) | w.gt(zero);
-        let in_range = self.t.ge(t_min) & self.t.le(t_max);
+        let zero = F::splat(0.0);
+        let on_edge = u.eq(zero).or(v.eq(zero)).or(w.eq(zero)).bitmask();
+        let negative = u.lt(zero).or(v.lt(zero)).or(w.lt(zero));
+        let positive = u.gt(zero).or(v.gt(zero)).or(w.gt(zero));
+        let in_range = self.t.ge(t_min).and(self.t.le(t_max));
         // `ne` is true for a NaN det, as the scalar test's `det == 0` is false.
-        let mut hits =
-            (in_range & self.det.ne(zero)).bits() & !(negative & positive).bits() & !on_edge;
+        let mut hits = in_range.and(self.det.ne(zero)).bitmask()
+            & !negative.and(positive).bitmask()
+            & !on_edge;
         // The scalar test's t > δt for forward rays, on the (few) blocks with a hit.
         if hits & forward != 0 {
-            hits &= !(self.t.le(self.t_error_bound()).bits() & forward);
+            hits &= !(self.t.le(self.t_error_bound()).bitmask() & forward);
         }
         (hits, on_edge)
     }
@@ -475,99 +404,14 @@ impl WatertightRay4 {
 /// the blocks that fill both.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx {
-    use super::{lane_test, LaneTest, Lanes, MaskLanes, Tri4, WatertightRay};
+    use super::{lane_test, LaneTest, Tri4, WatertightRay};
+    use crate::math::lanes::{Lanes, Lanes8};
     use std::arch::x86_64::*;
 
-    /// Eight f32 lanes; its operators must only run inside an AVX function
-    /// (they are `#[inline(always)]` so that they inline into one).
-    #[derive(Clone, Copy)]
-    pub(crate) struct F8(pub(crate) __m256);
-
-    /// `impl $op for F8` by the intrinsic `$f`.
-    macro_rules! binary_ops {
-        ($($op:ident $method:ident $f:ident),*) => {$(
-            impl std::ops::$op for F8 {
-                type Output = Self;
-                #[inline(always)]
-                fn $method(self, o: Self) -> Self {
-                    // SAFETY: only used by `intersect8`, which requires AVX2;
-                    // `#[inline(always)]` places the intrinsic in its body.
-                    Self(unsafe { $f(self.0, o.0) })
-                }
-            }
-        )*};
-    }
-    binary_ops!(
-        Add add _mm256_add_ps, Sub sub _mm256_sub_ps, Mul mul _mm256_mul_ps, Div div _mm256_div_ps,
-        BitAnd bitand _mm256_and_ps, BitOr bitor _mm256_or_ps
-    );
-
-    impl From<f32> for F8 {
-        #[inline(always)]
-        fn from(x: f32) -> Self {
-            Self(unsafe { _mm256_set1_ps(x) })
-        }
-    }
-
-    impl Lanes for F8 {
-        #[inline(always)]
-        fn abs(self) -> Self {
-            Self(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
-        }
-        /// `maxps`: the larger lane, as `f32::max` for the finite, non-NaN
-        /// values whose bits matter (a NaN lane is never a hit).
-        #[inline(always)]
-        fn max(self, o: Self) -> Self {
-            Self(unsafe { _mm256_max_ps(self.0, o.0) })
-        }
-    }
-
-    impl F8 {
-        #[inline(always)]
-        fn cmp<const OP: i32>(self, o: Self) -> Self {
-            Self(unsafe { _mm256_cmp_ps::<OP>(self.0, o.0) })
-        }
-
-        #[inline(always)]
-        fn to_array(self) -> [f32; 8] {
-            let mut out = [0.0; 8];
-            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), self.0) };
-            out
-        }
-    }
-
-    /// The ordered predicates (false for NaN), `ne` unordered (true for NaN),
-    /// as `wide`'s `simd_*` on the 4-wide test.
-    impl MaskLanes for F8 {
-        #[inline(always)]
-        fn eq(self, o: Self) -> Self {
-            self.cmp::<_CMP_EQ_OQ>(o)
-        }
-        #[inline(always)]
-        fn ne(self, o: Self) -> Self {
-            self.cmp::<_CMP_NEQ_UQ>(o)
-        }
-        #[inline(always)]
-        fn lt(self, o: Self) -> Self {
-            self.cmp::<_CMP_LT_OQ>(o)
-        }
-        #[inline(always)]
-        fn gt(self, o: Self) -> Self {
-            self.cmp::<_CMP_GT_OQ>(o)
-        }
-        #[inline(always)]
-        fn le(self, o: Self) -> Self {
-            self.cmp::<_CMP_LE_OQ>(o)
-        }
-        #[inline(always)]
-        fn ge(self, o: Self) -> Self {
-            self.cmp::<_CMP_GE_OQ>(o)
-        }
-        #[inline(always)]
-        fn bits(self) -> u32 {
-            unsafe { _mm256_movemask_ps(self.0) as u32 }
-        }
-    }
+    /// Eight f32 lanes (`math::lanes`' AVX type); its operations must only
+    /// run inside an AVX function (they are `#[inline(always)]` so that they
+    /// inline into one).
+    pub(crate) use crate::math::lanes::Avx as F8;
 
     /// [`super::Hits4`] for eight lanes.
     #[derive(Default)]
@@ -588,12 +432,12 @@ pub(crate) mod avx {
                 ([0.0; 8], [0.0; 8])
             } else {
                 let (b1, b2) = lt.barycentrics();
-                (b1.to_array(), b2.to_array())
+                (b1.store(), b2.store())
             };
             Hits8 {
                 hits,
                 fallback: on_edge,
-                t: lt.t.to_array(),
+                t: lt.t.store(),
                 b1,
                 b2,
             }
@@ -616,7 +460,7 @@ pub(crate) mod avx {
         t_min: f32,
         t_max: f32,
     ) -> Hits8 {
-        let org = wr.org.to_array().map(F8::from);
+        let org = wr.org.to_array().map(F8::splat);
         // SAFETY: a `wide::f32x4` is four f32 in 16 aligned bytes; `axis` is
         // below 3 (see `pick`).
         let load = |k: usize, axis: usize| {
@@ -626,7 +470,7 @@ pub(crate) mod avx {
         let axes = wr.axes.get();
         let lt = lane_test(
             |k, i| load(k, axes[i]) - super::pick(&org, axes[i]),
-            wr.shear.to_array().map(F8::from),
+            wr.shear.to_array().map(F8::splat),
         );
         let decided = lt.decide(t_min, t_max);
         Hits8::new::<ANY>(&lt, decided)
@@ -675,7 +519,7 @@ pub(crate) mod avx {
                 shear,
                 is_y: is(1),
                 is_z: is(2),
-                forward: t_min.ge(F8::from(0.0)).bits(),
+                forward: t_min.ge(F8::splat(0.0)).bitmask(),
                 t_min,
             }
         }
@@ -697,7 +541,7 @@ pub(crate) mod avx {
     ) -> Hits8 {
         // Each vertex splatted once, then its coordinate along each lane's
         // axis i picked by two blends.
-        let splat = |p: [f32; 3]| [F8::from(p[0]), F8::from(p[1]), F8::from(p[2])];
+        let splat = |p: [f32; 3]| p.map(F8::splat);
         let vertices = [splat(v[0]), splat(v[1]), splat(v[2])];
         let pick = |k: usize, i: usize| {
             let [x, y, z] = vertices[k];
@@ -707,17 +551,6 @@ pub(crate) mod avx {
         let lt = lane_test(|k, i| pick(k, i) - rays.org[i], rays.shear);
         let decided = lt.decide_in(rays.t_min, t_max, rays.forward);
         Hits8::new::<ANY>(&lt, decided)
-    }
-
-    impl F8 {
-        /// Lane `l` is the f32 at `base + offsets[l]` (offsets in f32s).
-        ///
-        /// # Safety
-        /// AVX2; every lane's address inside one allocation, f32-aligned.
-        #[inline(always)]
-        pub(crate) unsafe fn gather(base: *const f32, offsets: __m256i) -> Self {
-            F8(_mm256_i32gather_ps::<4>(base, offsets))
-        }
     }
 }
 

@@ -3,17 +3,27 @@
 
 use super::{sanitize, BsdfSample};
 use crate::math::{warp, Vec2, Vec3};
-use std::f32::consts::FRAC_1_PI;
 
 /// f = albedo/π (the caller has checked both directions are above the horizon).
 pub(super) fn eval(albedo: Vec3) -> Vec3 {
-    sanitize(albedo) * FRAC_1_PI
+    super::lambert_f(sanitize(albedo))
 }
 
 /// Cosine-weighted density cos θi / π, from the normalised cos θi (the caller
 /// has checked it is positive).
 pub(super) fn pdf(cos: f64) -> f64 {
     cos * std::f64::consts::FRAC_1_PI
+}
+
+/// [`pdf`] of `wi`, its cos θi normalised at f64, as an f32 made finite: zero
+/// below the horizon and for a zero, NaN or infinite `wi` (whose z over its
+/// length is then NaN, infinite or zero). Components, not a `Vec3`: the lane
+/// kernel calls it lane by lane.
+#[inline(always)]
+pub(super) fn pdf_wi(x: f32, y: f32, z: f32) -> f32 {
+    let (x, y, z) = (f64::from(x), f64::from(y), f64::from(z));
+    let len2 = x * x + y * y + z * z;
+    super::finite_nonneg(pdf(z / len2.sqrt()) as f32)
 }
 
 /// Malley's method via [`warp::square_to_cosine_hemisphere`]; `wo` is above the

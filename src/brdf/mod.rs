@@ -60,6 +60,7 @@ mod mirror;
 pub mod normalization;
 mod preview;
 
+use crate::math::lanes::{Lanes, Vector3};
 use crate::math::scalar::{dot, Scalar};
 use crate::math::{Vec2, Vec3};
 use glam::DVec3;
@@ -148,10 +149,9 @@ impl Material {
         let p = match self {
             // cos θi / π needs only wi's normalised z, and wo only its side: the
             // same bits as normalising both at f64, without five of the divisions.
-            Material::Lambert { .. } => match (upper(wo), unit_z(wi)) {
-                (true, Some(z)) if z > 0.0 => lambert::pdf(z),
-                _ => 0.0,
-            },
+            Material::Lambert { .. } => {
+                return if upper(wo) { lambert_pdf(wi) } else { 0.0 };
+            }
             Material::BlinnPhong { .. } | Material::CookTorrance { .. } => upper_pair(wo, wi)
                 .map_or(0.0, |(wo, wi)| self.glossy().map_or(0.0, |g| g.pdf(wo, wi))),
             Material::Mirror { .. } => 0.0,
@@ -298,14 +298,6 @@ fn unit(v: Vec3) -> Option<DVec3> {
     Some(d / len2.sqrt())
 }
 
-/// z of `v` normalised at f64 (the bits [`unit`] gives it), or `None` where
-/// `unit` has none: one division instead of three.
-fn unit_z(v: Vec3) -> Option<f64> {
-    let d = v.as_dvec3();
-    let len2 = d.length_squared();
-    (len2 > 0.0 && len2.is_finite()).then(|| d.z / len2.sqrt())
-}
-
 /// Whether `v` normalised (by [`unit`]) is strictly above the horizon: only the
 /// sign of its z matters, so no square root.
 fn upper(v: Vec3) -> bool {
@@ -340,6 +332,80 @@ fn finite_nonneg(x: f32) -> f32 {
 fn to_f32(c: DVec3) -> Vec3 {
     let v = c.as_vec3a();
     Vec3::new(finite_nonneg(v.x), finite_nonneg(v.y), finite_nonneg(v.z))
+}
+
+/// What the lane kernel (`render::lanes`) shades a material as: the
+/// materials it takes, with the colour it reads (sanitised, as a sample's
+/// weight is).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LaneBsdf {
+    /// f = albedo/π ([`lambert_f`]), pdf [`lambert_pdf`], cosine-weighted
+    /// samples ([`crate::math::warp::cosine_hemisphere`]).
+    Lambert { albedo: Vec3 },
+    /// The reflection about the normal, its weight the reflectance.
+    Mirror { reflectance: Vec3 },
+}
+
+impl LaneBsdf {
+    /// The colour a sample's weight carries: the albedo or the reflectance.
+    pub fn weight(self) -> Vec3 {
+        match self {
+            LaneBsdf::Lambert { albedo } => albedo,
+            LaneBsdf::Mirror { reflectance } => reflectance,
+        }
+    }
+
+    pub fn is_mirror(self) -> bool {
+        matches!(self, LaneBsdf::Mirror { .. })
+    }
+}
+
+// The lanes' view of the materials, kept apart from the methods above.
+impl Material {
+    /// How the lanes shade this material; `None` for those only the path
+    /// tracer's `li` shades (the glossy ones).
+    pub fn lane_bsdf(&self) -> Option<LaneBsdf> {
+        match self {
+            Material::Lambert { albedo } => Some(LaneBsdf::Lambert {
+                albedo: sanitize(*albedo),
+            }),
+            Material::Mirror { reflectance } => Some(LaneBsdf::Mirror {
+                reflectance: sanitize(*reflectance),
+            }),
+            Material::BlinnPhong { .. } | Material::CookTorrance { .. } => None,
+        }
+    }
+}
+
+/// [`Material::pdf`] of a Lambertian for a `wo` above the horizon: `wi`'s z
+/// normalised at f64, over π, made finite. The lane kernel calls it lane by
+/// lane (an f64 formula has no eight-wide f32 form).
+#[inline(always)]
+pub fn lambert_pdf(wi: Vec3) -> f32 {
+    lambert::pdf_wi(wi.x, wi.y, wi.z)
+}
+
+/// A mirror's sampled direction for `wo` in the local frame, on lanes: the
+/// one formula of [`Material::sample`]'s mirror arm.
+#[inline(always)]
+pub fn mirror_reflect<L: Lanes>(wo: crate::math::lanes::V3<L>) -> crate::math::lanes::V3<L> {
+    mirror::reflect(wo)
+}
+
+/// [`lambert_pdf`] of eight directions given by their components.
+#[inline(always)]
+pub fn lambert_pdf8(x: [f32; 8], y: [f32; 8], z: [f32; 8]) -> [f32; 8] {
+    std::array::from_fn(|l| lambert::pdf_wi(x[l], y[l], z[l]))
+}
+
+/// A Lambertian's f = albedo/π from its sanitised albedo, on one colour
+/// ([`Material::eval`]) or eight (the lane kernel).
+#[inline(always)]
+pub fn lambert_f<V: Vector3>(albedo: V) -> V {
+    albedo.map(
+        #[inline(always)]
+        |a| a * V::L::splat(std::f32::consts::FRAC_1_PI),
+    )
 }
 
 #[cfg(test)]

@@ -4,10 +4,12 @@
 
 pub mod distribution;
 pub mod dual;
+pub mod lanes;
 pub mod quadrature;
 pub mod sampler;
 pub mod scalar;
 pub mod sh;
+pub mod spawn;
 pub mod vmf;
 pub mod warp;
 
@@ -78,13 +80,14 @@ pub struct Frame {
 impl Frame {
     /// Builds a frame around a unit normal (Duff et al. 2017, "Building an
     /// Orthonormal Basis, Revisited": branchless and without the singularity at -z).
+    /// [`lanes::LaneFrame::from_normal`] at `f32`, the lane kernel's formula.
     pub fn from_normal(n: Vec3) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
-        Self { s, t, n }
+        let f = lanes::LaneFrame::<f32>::from_normal(lanes::V3::from_vec3(n));
+        Self {
+            s: f.s.to_vec3(),
+            t: f.t.to_vec3(),
+            n,
+        }
     }
 
     pub fn to_local(&self, v: Vec3) -> Vec3 {

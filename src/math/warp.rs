@@ -1,70 +1,83 @@
 //! Warps from the unit square to directions and points, each with its density.
 //! Densities are with respect to solid angle (directions) or area (points).
 
+use super::lanes::{Lanes, V3};
 use super::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// Concentric (Shirley–Chiu) map from the square to the unit disk: low distortion,
 /// so stratification of the input survives.
 pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
-    concentric(u).0
+    let (x, y, _) = concentric(u.x, u.y);
+    Vec2::new(x, y)
 }
 
-/// The concentric map's point and its radius r (the major coordinate's magnitude).
+/// The concentric map's point (x, y) and its radius r (the major
+/// coordinate's magnitude), over any [`Lanes`]: the one formula for the
+/// path tracer and the lane kernel.
 #[inline(always)]
-fn concentric(u: Vec2) -> (Vec2, f32) {
-    let o = 2.0 * u - Vec2::ONE;
-    if o.x == 0.0 && o.y == 0.0 {
-        return (Vec2::ZERO, 0.0);
-    }
-    // Which wedge is a coin flip per sample: SIMD blends, not a branch the CPU
+pub fn concentric<L: Lanes>(u0: L, u1: L) -> (L, L, L) {
+    let zero = L::splat(0.0);
+    let one = L::splat(1.0);
+    let ox = L::splat(2.0) * u0 - one;
+    let oy = L::splat(2.0) * u1 - one;
+    let centre = ox.eq(zero).and(oy.eq(zero));
+    // Which wedge is a coin flip per sample: selects, not a branch the CPU
     // would mispredict half the time. θ = π/4 · ratio in the x wedges and
     // π/2 − π/4 · ratio in the y wedges, whose cosine and sine are the sine
     // and cosine of π/4 · ratio: one short polynomial instead of a libm call
     // (`sincosf` was 4 % of a cornell render).
-    let x_major = glam::BVec4A::splat(o.x.abs() > o.y.abs());
-    let [r, other, ..] = glam::Vec4::select(
-        x_major,
-        glam::Vec4::new(o.x, o.y, 0.0, 0.0),
-        glam::Vec4::new(o.y, o.x, 0.0, 0.0),
+    let x_major = ox.abs().gt(oy.abs());
+    let r = x_major.select(ox, oy);
+    let other = x_major.select(oy, ox);
+    let (s, c) = sin_cos_quarter(L::splat(std::f32::consts::FRAC_PI_4) * (other / r));
+    let (cos, sin) = (x_major.select(c, s), x_major.select(s, c));
+    let r = centre.select(zero, r);
+    (
+        centre.select(zero, r * cos),
+        centre.select(zero, r * sin),
+        r.abs(),
     )
-    .to_array();
-    let (s, c) = sin_cos_quarter(std::f32::consts::FRAC_PI_4 * (other / r));
-    let [cos, sin, ..] = glam::Vec4::select(
-        x_major,
-        glam::Vec4::new(c, s, 0.0, 0.0),
-        glam::Vec4::new(s, c, 0.0, 0.0),
-    )
-    .to_array();
-    (r * Vec2::new(cos, sin), r.abs())
 }
 
 /// (sin x, cos x) for |x| ≤ π/4 within 2 ulp: Cephes' `sinf`/`cosf`
 /// minimax polynomials on that interval (S. Moshier), which is all the
 /// concentric map needs (no range reduction).
 #[inline(always)]
-fn sin_cos_quarter(x: f32) -> (f32, f32) {
+fn sin_cos_quarter<L: Lanes>(x: L) -> (L, L) {
+    let k = L::splat;
     let z = x * x;
-    let sin = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
-    let cos = ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
+    let sin = ((k(-1.951_529_6e-4) * z + k(8.332_161e-3)) * z - k(1.666_665_5e-1)) * z * x + x;
+    let cos = ((k(2.443_315_7e-5) * z - k(1.388_731_6e-3)) * z + k(4.166_664_6e-2)) * z * z
+        - k(0.5) * z
+        + k(1.0);
     (sin, cos)
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method).
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
-    let (d, r) = concentric(u);
-    // z from the radius, not from |d|²: the same value to a few ulp, but its
-    // square root no longer waits for the division and the polynomial.
-    let z = (1.0 - r * r).max(0.0).sqrt();
-    Vec3::new(d.x, d.y, z)
+    cosine_hemisphere(u.x, u.y).to_vec3()
+}
+
+/// [`square_to_cosine_hemisphere`] over any [`Lanes`]. z from the radius, not
+/// from |d|²: the same value to a few ulp, but its square root no longer
+/// waits for the division and the polynomial.
+#[inline(always)]
+pub fn cosine_hemisphere<L: Lanes>(u0: L, u1: L) -> V3<L> {
+    let (x, y, r) = concentric(u0, u1);
+    let z = (L::splat(1.0) - r * r).max(L::splat(0.0)).sqrt();
+    V3 { x, y, z }
 }
 
 pub fn cosine_hemisphere_pdf(v: Vec3) -> f32 {
-    if v.z > 0.0 {
-        v.z * FRAC_1_PI
-    } else {
-        0.0
-    }
+    cosine_hemisphere_pdf_z(v.z)
+}
+
+/// [`cosine_hemisphere_pdf`] from the direction's z, over any [`Lanes`].
+#[inline(always)]
+pub fn cosine_hemisphere_pdf_z<L: Lanes>(z: L) -> L {
+    z.gt(L::splat(0.0))
+        .select(z * L::splat(FRAC_1_PI), L::splat(0.0))
 }
 
 pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
@@ -165,7 +178,7 @@ mod tests {
         let n = 200_000;
         for i in 0..=n {
             let x = std::f32::consts::FRAC_PI_4 * (2.0 * i as f32 / n as f32 - 1.0);
-            let (s, c) = sin_cos_quarter(x);
+            let (s, c): (f32, f32) = sin_cos_quarter(x);
             let (ws, wc) = x.sin_cos();
             assert!(
                 (s - ws).abs() <= 2.0 * f32::EPSILON * ws.abs().max(f32::MIN_POSITIVE),
@@ -176,7 +189,7 @@ mod tests {
                 "cos {x}: {c} vs {wc}"
             );
         }
-        assert_eq!(sin_cos_quarter(0.0), (0.0, 1.0));
+        assert_eq!(sin_cos_quarter(0.0f32), (0.0, 1.0));
     }
 
     #[test]

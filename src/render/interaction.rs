@@ -5,6 +5,7 @@
 use crate::accel::{
     sphere_point, triangle_normal, triangle_point_with_normal, Accel, Hit, PrimRef, SurfacePoint,
 };
+use crate::math::lanes::{Lanes, Vector3};
 use crate::math::{cross, Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use std::f32::consts::{PI, TAU};
@@ -155,6 +156,34 @@ fn sphere_interaction(scene: &Scene, ray: &Ray, hit: &Hit, i: u32) -> Interactio
     )
 }
 
+/// The geometric and shading normals turned toward the ray `dir` comes
+/// along (two-sided materials), the shading normal folded back onto the
+/// geometric one where it is not above it (on the far side it would let
+/// light leak): on one hit, or on the lane kernel's eight. The mask: the
+/// front faces.
+#[inline(always)]
+pub(crate) fn face_ray<V: Vector3>(dir: V, ng: V, ns: V) -> (V, V, V::L) {
+    let zero = V::L::splat(0.0);
+    let one = V::L::splat(1.0);
+    let front = dir.dot(ng).lt(zero);
+    let sign = front.select(one, -one);
+    let ng = ng.map(
+        #[inline(always)]
+        |c| c * sign,
+    );
+    let ns = ns.map(
+        #[inline(always)]
+        |c| c * sign,
+    );
+    let fold = ns.dot(ng).le(V::L::splat(1e-4));
+    let ns = ns.zip(
+        ng,
+        #[inline(always)]
+        |s, g| fold.select(g, s),
+    );
+    (ng, ns, front)
+}
+
 /// Shared tail: applies the bump map, orients normals toward the ray, builds the frame.
 /// Inlined into both shapes' set-up: called, its dozen arguments and 144-byte
 /// result went through the stack on every hit.
@@ -179,15 +208,8 @@ fn finish(
     if let Some(b) = bump {
         ns = bumped_normal(&scene.bumps[b as usize], uv, ns, dpdu, dpdv);
     }
-    let front_face = ray.dir.dot(sp.n_geo) < 0.0;
-    let sign = if front_face { 1.0 } else { -1.0 };
-    let ng = sp.n_geo * sign;
-    let mut ns = ns * sign;
-    // A shading normal on the far side of the geometric one would let light leak;
-    // fold it back to the visible hemisphere.
-    if ns.dot(ng) <= 1e-4 {
-        ns = ng;
-    }
+    let (ng, ns, front) = face_ray(ray.dir, sp.n_geo, ns);
+    let front_face = front.bitmask() & 1 != 0;
     // The frame is a function of the normal alone, continuous across a mesh:
     // samples stratified over a pixel (BSDF and cosine-sky directions) stay
     // stratified across the triangles the pixel covers. A frame aligned with

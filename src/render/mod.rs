@@ -5,6 +5,8 @@
 pub mod gradients;
 pub mod interaction;
 mod lanes;
+#[doc(hidden)]
+pub use lanes::check as lane_check;
 pub mod lights;
 pub mod noise_adaptive;
 pub mod path;

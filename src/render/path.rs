@@ -11,6 +11,7 @@ use super::interaction::{interaction, Interaction};
 use super::lights::{LightSet, LineLight};
 use crate::accel::{Accel, PrimRef};
 use crate::brdf::{BsdfSample, Material};
+use crate::math::lanes::Lanes;
 use crate::math::sampler::PixelSampler;
 use crate::math::{finite_or_zero, Frame, Ray, Vec2, Vec3};
 use crate::scene::Scene;
@@ -144,15 +145,15 @@ impl FirstHit {
 
 /// Power heuristic with β = 2 (Veach 1997), written to stay finite when one
 /// density is infinite or both are zero.
-pub fn power_heuristic(f: f32, g: f32) -> f32 {
+/// Generic over [`Lanes`]: `li` runs it at `f32`, the lane kernel on eight.
+#[inline(always)]
+pub fn power_heuristic<L: Lanes>(f: L, g: L) -> L {
     let (f2, g2) = (f * f, g * g);
-    if f2.is_infinite() {
-        return 1.0;
-    }
-    if f2 + g2 <= 0.0 {
-        return 0.0;
-    }
-    f2 / (f2 + g2)
+    let sum = f2 + g2;
+    f2.is_inf().select(
+        L::splat(1.0),
+        sum.le(L::splat(0.0)).select(L::splat(0.0), f2 / sum),
+    )
 }
 
 /// The state a path carries from bounce to bounce.

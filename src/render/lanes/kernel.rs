@@ -1,192 +1,19 @@
 //! The lane kernel: eight path vertices shaded at once, each lane the
 //! operations of `interaction`, `LightSet::sample`, the Lambertian
 //! `Material::eval`/`pdf`/`sample`, `power_heuristic` and `accel::offset` in
-//! their order (so a lane's bits are the scalar code's), over any [`Lanes`].
+//! their order (so a lane's bits are the scalar code's), over any [`Lanes8`].
+//! The shading formulas are the scalar code's own functions, generic over
+//! `math::lanes::Lanes` (`math::warp`, `math::spawn`, `LaneFrame`, `path::power_heuristic`,
+//! `brdf::lambert_f`/`lambert_pdf`); what is here is gathering, masking and
+//! scattering.
 
-use super::simd::Lanes;
 use super::{Gathered, LightKind, Rows, LANES};
-
-/// Three planes of lanes: eight vectors.
-#[derive(Clone, Copy)]
-struct V8<L> {
-    x: L,
-    y: L,
-    z: L,
-}
-
-impl<L: Lanes> V8<L> {
-    #[inline(always)]
-    fn splat(v: L) -> Self {
-        Self { x: v, y: v, z: v }
-    }
-    #[inline(always)]
-    fn load(rows: &Rows) -> Self {
-        let [x, y, z] = L::from_rows(rows);
-        Self { x, y, z }
-    }
-    #[inline(always)]
-    fn store(self) -> Rows {
-        L::to_rows([self.x, self.y, self.z])
-    }
-    /// glam's order: (x·x' + y·y') + z·z'.
-    #[inline(always)]
-    fn dot(self, o: Self) -> L {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-    #[inline(always)]
-    fn mul(self, s: L) -> Self {
-        Self {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-    #[inline(always)]
-    fn mul_v(self, o: Self) -> Self {
-        Self {
-            x: self.x * o.x,
-            y: self.y * o.y,
-            z: self.z * o.z,
-        }
-    }
-    #[inline(always)]
-    fn div(self, s: L) -> Self {
-        Self {
-            x: self.x / s,
-            y: self.y / s,
-            z: self.z / s,
-        }
-    }
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Self {
-            x: -self.x,
-            y: -self.y,
-            z: -self.z,
-        }
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        Self {
-            x: self.x.abs(),
-            y: self.y.abs(),
-            z: self.z.abs(),
-        }
-    }
-    #[inline(always)]
-    fn is_finite(self) -> L {
-        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
-    }
-    /// glam's `normalize_or_zero`: times 1/|v| where that is finite and
-    /// positive, else zero.
-    #[inline(always)]
-    fn normalize_or_zero(self) -> Self {
-        let zero = L::splat(0.0);
-        let rcp = L::splat(1.0) / self.dot(self).sqrt();
-        select_v(
-            rcp.is_finite() & rcp.gt(zero),
-            self.mul(rcp),
-            V8::splat(zero),
-        )
-    }
-}
-
-/// `Frame`'s basis in lanes.
-struct Frame8<L> {
-    s: V8<L>,
-    t: V8<L>,
-    n: V8<L>,
-}
-
-impl<L: Lanes> Frame8<L> {
-    /// `Frame::from_normal` (Duff et al. 2017), operation for operation.
-    #[inline(always)]
-    fn from_normal(n: V8<L>) -> Self {
-        let one = L::splat(1.0);
-        let sign = n.z.is_sign_negative().select(-one, one);
-        let a = -one / (sign + n.z);
-        let b = n.x * n.y * a;
-        Self {
-            s: V8 {
-                x: one + sign * n.x * n.x * a,
-                y: sign * b,
-                z: -sign * n.x,
-            },
-            t: V8 {
-                x: b,
-                y: sign + n.y * n.y * a,
-                z: -n.y,
-            },
-            n,
-        }
-    }
-    #[inline(always)]
-    fn to_local(&self, v: V8<L>) -> V8<L> {
-        V8 {
-            x: v.dot(self.s),
-            y: v.dot(self.t),
-            z: v.dot(self.n),
-        }
-    }
-    #[inline(always)]
-    fn to_world(&self, v: V8<L>) -> V8<L> {
-        self.s.mul(v.x).add(self.t.mul(v.y)).add(self.n.mul(v.z))
-    }
-}
-
-/// `accel::offset_ray_origin_with_error` in lanes.
-#[inline(always)]
-fn offset8<L: Lanes>(p: V8<L>, p_error: V8<L>, n: V8<L>, dir: V8<L>) -> V8<L> {
-    let zero = L::splat(0.0);
-    let one = L::splat(1.0);
-    let d = n.abs().dot(p_error);
-    let offset = n.mul(d);
-    let offset = select_v(dir.dot(n).lt(zero), offset.neg(), offset);
-    let po = p.add(offset);
-    V8 {
-        x: po.x + away(offset.x, zero, one) * step(po.x),
-        y: po.y + away(offset.y, zero, one) * step(po.y),
-        z: po.z + away(offset.z, zero, one) * step(po.z),
-    }
-}
-
-/// The offset's direction per axis: 0 where it is 0, else its sign.
-#[inline(always)]
-fn away<L: Lanes>(o: L, zero: L, one: L) -> L {
-    o.eq(zero)
-        .select(zero, o.is_sign_negative().select(-one, one))
-}
-
-/// One more ulp-sized step past the offset point.
-#[inline(always)]
-fn step<L: Lanes>(po: L) -> L {
-    (po.abs() * L::splat(f32::EPSILON)).max(L::splat(f32::MIN_POSITIVE))
-}
-
-#[inline(always)]
-fn select_v<L: Lanes>(m: L, t: V8<L>, f: V8<L>) -> V8<L> {
-    V8 {
-        x: m.select(t.x, f.x),
-        y: m.select(t.y, f.y),
-        z: m.select(t.z, f.z),
-    }
-}
+use crate::brdf::{lambert_f, lambert_pdf8, mirror_reflect};
+use crate::math::lanes::{LaneFrame, Lanes8, V3};
+use crate::math::spawn::offset_ray_origin;
+use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf_z};
+use crate::render::interaction::face_ray;
+use crate::render::path::power_heuristic;
 
 /// What [`shade8`] writes, per lane. About 1.1 KB: the kernel writes it in
 /// place (a slot of the batch's vector), since returning it by value cost a
@@ -221,7 +48,7 @@ pub(super) struct Shaded8 {
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn shade8_avx2(g: &Gathered, out: &mut Shaded8) {
     // SAFETY: this function runs only where the CPU has AVX2 (its contract).
-    unsafe { shade8::<super::simd::Avx>(g, out) }
+    unsafe { shade8::<crate::math::lanes::Avx>(g, out) }
 }
 
 /// [`shade8`] in `wide`'s lanes, which any build's CPU runs.
@@ -230,193 +57,92 @@ pub(super) fn shade8_wide(g: &Gathered, out: &mut Shaded8) {
     unsafe { shade8::<wide::f32x8>(g, out) }
 }
 
+/// A lane's hit as `interaction` sets it up.
+struct Hit8<L> {
+    p: V3<L>,
+    p_error: V3<L>,
+    /// The geometric normal, toward the ray.
+    ng: V3<L>,
+    frame: LaneFrame<L>,
+    wo: V3<L>,
+}
+
+/// A lane's light sample: its point `q` (for a shadow segment), the
+/// direction, density and whether it is a direction only (`unbounded`).
+struct Light8<L> {
+    q: V3<L>,
+    d: V3<L>,
+    wi: V3<L>,
+    pdf: L,
+    sampled: L,
+    unbounded: L,
+}
+
 /// The shading of eight hits: `interaction`, the light sample, the
 /// Lambertian eval, pdf and sample, MIS and both rays' offsets, as `li` and
 /// the functions it calls compute them.
 ///
 /// # Safety
-/// The CPU must run `L`'s instructions (AVX2 for `simd::Avx`): the lane
-/// types' methods are safe functions that do not check.
+/// The CPU must run `L`'s instructions (AVX2 for `Avx`): the lane types'
+/// methods are safe functions that do not check.
 #[inline(always)]
-unsafe fn shade8<L: Lanes>(g: &Gathered, out: &mut Shaded8) {
+unsafe fn shade8<L: Lanes8>(g: &Gathered, out: &mut Shaded8) {
     let zero = L::splat(0.0);
-    let one = L::splat(1.0);
-    let frac_1_pi = L::splat(std::f32::consts::FRAC_1_PI);
-    let dir = V8::<L>::load(&g.dir);
-    let (b1, b2) = (L::load(g.bary[0]), L::load(g.bary[1]));
-    // `triangle_point_with_normal`: the vertices weighted, and the error bound.
-    let b0 = one - b1 - b2;
-    let t0 = V8::load(&g.v[0]).mul(b0);
-    let t1 = V8::load(&g.v[1]).mul(b1);
-    let t2 = V8::load(&g.v[2]).mul(b2);
-    let p = t0.add(t1).add(t2);
-    let gamma7 = L::splat(crate::accel::gamma_bound(7));
-    let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
-    // A sphere's lanes: `sphere_point`'s, computed while gathering.
-    let (p, p_error) = if g.spheres {
-        let sphere = L::load(g.sphere).gt(zero);
-        (
-            select_v(sphere, V8::load(&g.sphere_p), p),
-            select_v(sphere, V8::load(&g.sphere_error), p_error),
-        )
-    } else {
-        (p, p_error)
-    };
-    // `interaction`'s floor: spawned rays clear the tree's padded boxes.
-    let floor = L::splat(g.spawn_floor);
-    let p_error = V8 {
-        x: p_error.x.max(floor),
-        y: p_error.y.max(floor),
-        z: p_error.z.max(floor),
-    };
-    // `triangle_interaction`'s shading normal: the vertices' normals
-    // interpolated and normalised, the geometric one where that gives zero.
-    let n = V8::load(&g.n);
-    let ns = if g.smooth {
-        let [n0, n1, n2] = [0, 1, 2].map(|k| V8::<L>::load(&g.vn[k]));
-        let s = n0.mul(b0).add(n1.mul(b1)).add(n2.mul(b2));
-        let s = s.normalize_or_zero();
-        select_v(s.x.eq(zero) & s.y.eq(zero) & s.z.eq(zero), n, s)
-    } else {
-        n
-    };
-    // `interaction::finish`: normals toward the ray, the shading normal folded
-    // back where it is not above the surface, the frame.
-    let front = dir.dot(n).lt(zero);
-    let sign = front.select(one, -one);
-    let ng = n.mul(sign);
-    let ns = ns.mul(sign);
-    let ns = select_v(ns.dot(ng).le(L::splat(1e-4)), ng, ns);
-    let frame = Frame8::from_normal(ns);
-    let wo = frame.to_local(dir.neg());
-    let alive = wo.z.gt(zero);
-    let albedo = V8::load(&g.albedo);
-    let beta = V8::load(&g.beta);
-
-    // The light sample (`LightSet::sample` → `sample_area_point`).
-    let kind = L::load(g.kind);
-    let w = V8::load(&g.light_w);
-    let q = V8::load(&g.light[0])
-        .mul(w.x)
-        .add(V8::load(&g.light[1]).mul(w.y))
-        .add(V8::load(&g.light[2]).mul(w.z));
-    let kind_is = |k: LightKind| kind.eq(L::splat(k as u32 as f32));
-    // A drawn point's lanes (a sphere light's sample).
-    let q = if g.other_lights {
-        select_v(kind_is(LightKind::DrawnPoint), V8::load(&g.drawn_q), q)
-    } else {
-        q
-    };
-    let d = q.sub(p);
-    let dist2 = d.dot(d);
-    let area = L::load(g.light_area);
-    let wi = d.div(dist2.sqrt());
-    let ln = V8::load(&g.light_n);
-    let cos_l = -ln.dot(wi);
-    let light_pdf = dist2 / (area * cos_l) * L::load(g.light_pick);
-    let sampled = kind_is(LightKind::Area)
-        & dist2.gt(zero)
-        & area.gt(zero)
-        & cos_l.gt(zero)
-        & light_pdf.gt(zero)
-        & light_pdf.is_finite();
-    // The other lights' lanes: a sample drawn before the kernel (its
-    // density checked there), or a constant sky's cosine-weighted direction
-    // in this frame (`LightSet::sample_env`).
-    let (unbounded, wi, light_pdf, sampled) = if g.other_lights {
-        let drawn = kind_is(LightKind::Drawn) | kind_is(LightKind::DrawnPoint);
-        let in_frame = kind_is(LightKind::EnvInFrame);
-        let wi_frame = frame.to_world(cosine_hemisphere8(
-            L::load(g.u_light[0]),
-            L::load(g.u_light[1]),
-        ));
-        // `env_pdf`'s cosine density, then the pick.
-        let pdf_frame = wi_frame.dot(frame.n).max(zero) * frac_1_pi * L::load(g.light_pick);
-        let other = drawn | in_frame;
-        let wi_other = select_v(drawn, V8::load(&g.drawn_wi), wi_frame);
-        let pdf_other = drawn.select(L::load(g.drawn_pdf), pdf_frame);
-        (
-            kind_is(LightKind::Drawn) | in_frame,
-            select_v(other, wi_other, wi),
-            other.select(pdf_other, light_pdf),
-            drawn | in_frame & pdf_frame.gt(zero) & pdf_frame.is_finite() | sampled,
-        )
-    } else {
-        (zero.ne(zero), wi, light_pdf, sampled)
-    };
+    let h = hit8::<L>(g);
+    let alive = h.wo.z.gt(zero);
+    let albedo = V3::<L>::load(&g.albedo);
+    let light = light8(g, &h);
     // `Material::eval` (Lambert) and the checks of `sample_ld`.
-    let wil = frame.to_local(wi);
-    let upper = wo.is_finite() & wil.is_finite() & wo.z.gt(zero) & wil.z.gt(zero);
-    let f = albedo.mul(frac_1_pi);
-    let f_nonzero = f.x.ne(zero) | f.y.ne(zero) | f.z.ne(zero);
-    let direct = alive & sampled & upper & wi.dot(ng).gt(zero) & f_nonzero;
-    // `Material::pdf` (Lambert): wi's z normalised at f64, as `unit_z` does.
-    let bsdf_pdf = L::load(lambert_pdf8([wil.x.store(), wil.y.store(), wil.z.store()]));
-    let weight_mis = power_heuristic8(light_pdf, bsdf_pdf);
-    let le = V8::load(&g.light_le);
-    let ld = beta
+    let wil = h.frame.to_local(light.wi);
+    let upper =
+        h.wo.is_finite()
+            .and(wil.is_finite())
+            .and(h.wo.z.gt(zero))
+            .and(wil.z.gt(zero));
+    let f = lambert_f(albedo);
+    let f_nonzero = f.x.ne(zero).or(f.y.ne(zero)).or(f.z.ne(zero));
+    let direct = alive
+        .and(light.sampled)
+        .and(upper)
+        .and(light.wi.dot(h.ng).gt(zero))
+        .and(f_nonzero);
+    // `Material::pdf` (Lambert), lane by lane: an f64 formula.
+    let bsdf_pdf = L::load(lambert_pdf8(wil.x.store(), wil.y.store(), wil.z.store()));
+    let weight_mis = power_heuristic(light.pdf, bsdf_pdf);
+    let ld = V3::load(&g.beta)
         .mul_v(f)
         .mul(wil.z)
-        .mul_v(le)
-        .mul(weight_mis / light_pdf);
-    // `spawn_ray_to`: both ends offset, then `SurfacePoint::segment`; toward
-    // the environment `spawn_ray`, unbounded.
-    let shadow_o = offset8(p, p_error, ng, select_v(unbounded, wi, d));
-    let q_error = {
-        let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
-        let e = m * L::splat(crate::accel::DEFAULT_REL_ERROR) + L::splat(1.0e-30);
-        V8 { x: e, y: e, z: e }
-    };
-    let shadow_end = offset8(q, q_error, ln, d.neg());
-    let span = shadow_end.sub(shadow_o);
-    let len = span.dot(span).sqrt();
-    // Not positive (NaN included) or infinite.
-    let degenerate = len.gt(zero).select(len.is_inf(), zero.eq(zero));
-    let shadow_d = select_v(
-        degenerate,
-        V8 {
-            x: zero,
-            y: zero,
-            z: one,
-        },
-        span.div(len),
-    );
-    let shadow_t = degenerate.select(zero, len * L::splat(1.0 - crate::accel::SHADOW_EPSILON));
-    let shadow_d = select_v(unbounded, wi, shadow_d);
-    let shadow_t = unbounded.select(L::splat(f32::INFINITY), shadow_t);
+        .mul_v(V3::load(&g.light_le))
+        .mul(weight_mis / light.pdf);
+    let (shadow_o, shadow_d, shadow_t) = shadow8(g, &h, &light);
 
     // The BSDF sample (`lambert::sample`).
-    let local = cosine_hemisphere8(L::load(g.u_dir[0]), L::load(g.u_dir[1]));
-    let pdf = local.z.gt(zero).select(local.z * frac_1_pi, zero);
+    let local = cosine_hemisphere(L::load(g.u_dir[0]), L::load(g.u_dir[1]));
+    let pdf = cosine_hemisphere_pdf_z(local.z);
     let (direct, local, pdf, sampled_dir) = if g.mirrors {
         // A mirror's lanes (`mirror::sample`): no light sample (a delta
         // lobe), the reflection about the normal, an infinite density (the
         // next emitter counts in full).
         let mirror = L::load(g.mirror).gt(zero);
-        let reflected = V8 {
-            x: -wo.x,
-            y: -wo.y,
-            z: wo.z,
-        }
-        .normalize_or_zero();
+        let reflected = mirror_reflect(h.wo);
         (
             mirror.select(zero.ne(zero), direct),
-            select_v(mirror, reflected, local),
+            V3::select(mirror, reflected, local),
             mirror.select(L::splat(f32::INFINITY), pdf),
             mirror.select(reflected.z.gt(zero), pdf.gt(zero)),
         )
     } else {
         (direct, local, pdf, pdf.gt(zero))
     };
-    let wi_next = frame.to_world(local);
+    let wi_next = h.frame.to_world(local);
     // (`continue_path` also asks for a finite weight: the albedo was
     // sanitised when the lane scene was built.)
-    let next = alive & sampled_dir & wi_next.dot(ng).gt(zero);
-    let next_o = offset8(p, p_error, ng, wi_next);
+    let next = alive.and(sampled_dir).and(wi_next.dot(h.ng).gt(zero));
+    let next_o = offset_ray_origin(h.p, h.p_error, h.ng, wi_next);
     *out = Shaded8 {
         alive: alive.bitmask(),
-        p: p.store(),
-        normal: frame.n.store(),
+        p: h.p.store(),
+        normal: h.frame.n.store(),
         direct: direct.bitmask(),
         ld: ld.store(),
         shadow_o: shadow_o.store(),
@@ -430,70 +156,168 @@ unsafe fn shade8<L: Lanes>(g: &Gathered, out: &mut Shaded8) {
     };
 }
 
-/// `warp::square_to_cosine_hemisphere` in lanes: the concentric map, z from
-/// its radius.
+/// `interaction`'s set-up of the lanes' hits: the surface point and its
+/// error bound, the normals toward the ray, the frame and ω_o in it.
 #[inline(always)]
-fn cosine_hemisphere8<L: Lanes>(u0: L, u1: L) -> V8<L> {
+fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     let zero = L::splat(0.0);
     let one = L::splat(1.0);
-    let ox = L::splat(2.0) * u0 - one;
-    let oy = L::splat(2.0) * u1 - one;
-    let centre = ox.eq(zero) & oy.eq(zero);
-    let x_major = ox.abs().gt(oy.abs());
-    let r = x_major.select(ox, oy);
-    let other = x_major.select(oy, ox);
-    let (s, c) = sin_cos_quarter8(L::splat(std::f32::consts::FRAC_PI_4) * (other / r));
-    let (cos, sin) = (x_major.select(c, s), x_major.select(s, c));
-    let r = centre.select(zero, r);
-    let rr = r.abs();
-    V8 {
-        x: centre.select(zero, r * cos),
-        y: centre.select(zero, r * sin),
-        z: (one - rr * rr).max(zero).sqrt(),
+    let dir = V3::<L>::load(&g.dir);
+    let (b1, b2) = (L::load(g.bary[0]), L::load(g.bary[1]));
+    // `triangle_point_with_normal`: the vertices weighted, and the error bound.
+    let b0 = one - b1 - b2;
+    let t0 = V3::load(&g.v[0]).mul(b0);
+    let t1 = V3::load(&g.v[1]).mul(b1);
+    let t2 = V3::load(&g.v[2]).mul(b2);
+    let p = t0.add(t1).add(t2);
+    let gamma7 = L::splat(crate::accel::gamma_bound(7));
+    let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
+    // A sphere's lanes: `sphere_point`'s, computed while gathering.
+    let (p, p_error) = if g.spheres {
+        let sphere = L::load(g.sphere).gt(zero);
+        (
+            V3::select(sphere, V3::load(&g.sphere_p), p),
+            V3::select(sphere, V3::load(&g.sphere_error), p_error),
+        )
+    } else {
+        (p, p_error)
+    };
+    // `interaction`'s floor: spawned rays clear the tree's padded boxes.
+    let floor = L::splat(g.spawn_floor);
+    let p_error = V3 {
+        x: p_error.x.max(floor),
+        y: p_error.y.max(floor),
+        z: p_error.z.max(floor),
+    };
+    // `triangle_interaction`'s shading normal: the vertices' normals
+    // interpolated and normalised, the geometric one where that gives zero.
+    let n = V3::load(&g.n);
+    let ns = if g.smooth {
+        let [n0, n1, n2] = [0, 1, 2].map(|k| V3::<L>::load(&g.vn[k]));
+        let s = n0.mul(b0).add(n1.mul(b1)).add(n2.mul(b2));
+        let s = s.normalize_or_zero();
+        V3::select(s.x.eq(zero).and(s.y.eq(zero)).and(s.z.eq(zero)), n, s)
+    } else {
+        n
+    };
+    // `interaction::finish`: normals toward the ray, the shading normal folded
+    // back where it is not above the surface, the frame.
+    let (ng, ns, _) = face_ray(dir, n, ns);
+    let frame = LaneFrame::from_normal(ns);
+    let wo = frame.to_local(dir.neg());
+    Hit8 {
+        p,
+        p_error,
+        ng,
+        frame,
+        wo,
     }
 }
 
-/// `warp::sin_cos_quarter` in lanes, operation for operation.
+/// The lanes' light samples (`LightSet::sample` → `sample_area_point`; the
+/// other lights' drawn before the kernel, or a constant sky's mapped here).
 #[inline(always)]
-fn sin_cos_quarter8<L: Lanes>(x: L) -> (L, L) {
-    let z = x * x;
-    let s = ((L::splat(-1.951_529_6e-4) * z + L::splat(8.332_161e-3)) * z
-        - L::splat(1.666_665_5e-1))
-        * z
-        * x
-        + x;
-    let c = ((L::splat(2.443_315_7e-5) * z - L::splat(1.388_731_6e-3)) * z
-        + L::splat(4.166_664_6e-2))
-        * z
-        * z
-        - L::splat(0.5) * z
-        + L::splat(1.0);
-    (s, c)
+fn light8<L: Lanes8>(g: &Gathered, h: &Hit8<L>) -> Light8<L> {
+    let zero = L::splat(0.0);
+    let kind = L::load(g.kind);
+    let w = V3::<L>::load(&g.light_w);
+    let q = V3::load(&g.light[0])
+        .mul(w.x)
+        .add(V3::load(&g.light[1]).mul(w.y))
+        .add(V3::load(&g.light[2]).mul(w.z));
+    let kind_is = |k: LightKind| kind.eq(L::splat(k as u32 as f32));
+    // A drawn point's lanes (a sphere light's sample).
+    let q = if g.other_lights {
+        V3::select(kind_is(LightKind::DrawnPoint), V3::load(&g.drawn_q), q)
+    } else {
+        q
+    };
+    let d = q.sub(h.p);
+    let dist2 = d.dot(d);
+    let area = L::load(g.light_area);
+    let wi = d.div(dist2.sqrt());
+    let ln = V3::<L>::load(&g.light_n);
+    let cos_l = -ln.dot(wi);
+    let light_pdf = dist2 / (area * cos_l) * L::load(g.light_pick);
+    let sampled = kind_is(LightKind::Area)
+        .and(dist2.gt(zero))
+        .and(area.gt(zero))
+        .and(cos_l.gt(zero))
+        .and(light_pdf.gt(zero))
+        .and(light_pdf.is_finite());
+    if !g.other_lights {
+        return Light8 {
+            q,
+            d,
+            wi,
+            pdf: light_pdf,
+            sampled,
+            unbounded: zero.ne(zero),
+        };
+    }
+    // The other lights' lanes: a sample drawn before the kernel (its
+    // density checked there), or a constant sky's cosine-weighted direction
+    // in this frame (`LightSet::sample_env`).
+    let drawn = kind_is(LightKind::Drawn).or(kind_is(LightKind::DrawnPoint));
+    let in_frame = kind_is(LightKind::EnvInFrame);
+    let wi_frame = h.frame.to_world(cosine_hemisphere(
+        L::load(g.u_light[0]),
+        L::load(g.u_light[1]),
+    ));
+    // `env_pdf`'s cosine density, then the pick.
+    let pdf_frame = wi_frame.dot(h.frame.n).max(zero)
+        * L::splat(std::f32::consts::FRAC_1_PI)
+        * L::load(g.light_pick);
+    let other = drawn.or(in_frame);
+    let wi_other = V3::select(drawn, V3::load(&g.drawn_wi), wi_frame);
+    let pdf_other = drawn.select(L::load(g.drawn_pdf), pdf_frame);
+    let frame_ok = in_frame.and(pdf_frame.gt(zero)).and(pdf_frame.is_finite());
+    Light8 {
+        q,
+        d,
+        wi: V3::select(other, wi_other, wi),
+        pdf: other.select(pdf_other, light_pdf),
+        sampled: drawn.or(frame_ok).or(sampled),
+        unbounded: kind_is(LightKind::Drawn).or(in_frame),
+    }
 }
 
-/// `path::power_heuristic` in lanes.
+/// The shadow rays: `spawn_ray_to` (both ends offset, then
+/// `SurfacePoint::segment`); toward the environment `spawn_ray`, unbounded.
 #[inline(always)]
-fn power_heuristic8<L: Lanes>(f: L, g: L) -> L {
-    let (f2, g2) = (f * f, g * g);
-    let sum = f2 + g2;
-    f2.is_inf().select(
-        L::splat(1.0),
-        sum.le(L::splat(0.0)).select(L::splat(0.0), f2 / sum),
+fn shadow8<L: Lanes8>(g: &Gathered, h: &Hit8<L>, light: &Light8<L>) -> (V3<L>, V3<L>, L) {
+    let zero = L::splat(0.0);
+    let one = L::splat(1.0);
+    let (q, d) = (light.q, light.d);
+    let shadow_o = offset_ray_origin(
+        h.p,
+        h.p_error,
+        h.ng,
+        V3::select(light.unbounded, light.wi, d),
+    );
+    // `offset_ray_origin`'s default error bound, for a light's point.
+    let q_error = {
+        let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
+        V3::splat(m * L::splat(crate::accel::DEFAULT_REL_ERROR) + L::splat(1.0e-30))
+    };
+    let shadow_end = offset_ray_origin(q, q_error, V3::load(&g.light_n), d.neg());
+    let span = shadow_end.sub(shadow_o);
+    let len = span.dot(span).sqrt();
+    // Not positive (NaN included) or infinite.
+    let degenerate = len.gt(zero).select(len.is_inf(), zero.eq(zero));
+    let shadow_d = V3::select(
+        degenerate,
+        V3 {
+            x: zero,
+            y: zero,
+            z: one,
+        },
+        span.div(len),
+    );
+    let shadow_t = degenerate.select(zero, len * L::splat(1.0 - crate::accel::SHADOW_EPSILON));
+    (
+        shadow_o,
+        V3::select(light.unbounded, light.wi, shadow_d),
+        light.unbounded.select(L::splat(f32::INFINITY), shadow_t),
     )
-}
-
-/// `Material::pdf` of a Lambertian for a direction above the horizon (the
-/// caller masks the rest): cos θ normalised at f64, over π, made finite.
-#[inline(always)]
-fn lambert_pdf8(v: [[f32; LANES]; 3]) -> [f32; LANES] {
-    std::array::from_fn(|l| {
-        let (x, y, z) = (f64::from(v[0][l]), f64::from(v[1][l]), f64::from(v[2][l]));
-        let len2 = x * x + y * y + z * z;
-        let p = (z / len2.sqrt() * std::f64::consts::FRAC_1_PI) as f32;
-        if p > 0.0 && p.is_finite() {
-            p
-        } else {
-            0.0
-        }
-    })
 }

@@ -32,14 +32,14 @@ use crate::accel::{
     sphere_point, triangle_normal, triangle_point_with_normal, Hit, PrimRef, RayStream,
     SurfacePoint,
 };
-use crate::brdf::Material;
+use crate::brdf::{LaneBsdf, Material};
 use crate::math::sampler::PixelSampler;
 use crate::math::{warp, Ray, Vec2, Vec3};
 use crate::scene::Scene;
 use kernel::Shaded8;
 
+pub mod check;
 mod kernel;
-mod simd;
 
 /// Lanes per shading step: AVX's width (two SSE registers each on a build
 /// without it).
@@ -98,15 +98,14 @@ impl LaneScene {
         let lights = light_set.lane_lights(scene);
         let other_lights = lights.iter().any(|l| !matches!(l, LaneLight::Area(_)));
         // As a Lambertian or mirror sample's weight is; whether a mirror.
-        let material = |m: u32| match scene.materials.get(m as usize) {
-            Some(Material::Lambert { albedo }) => Some((crate::brdf::sanitize(*albedo), false)),
-            Some(Material::Mirror { reflectance }) => {
-                Some((crate::brdf::sanitize(*reflectance), true))
-            }
-            _ => None,
+        let bsdf = |m: u32| {
+            scene
+                .materials
+                .get(m as usize)
+                .and_then(Material::lane_bsdf)
         };
-        let albedo = |m: u32| material(m).map(|(a, _)| a);
-        let mirror = |m: u32| material(m).is_some_and(|(_, mirror)| mirror);
+        let albedo = |m: u32| bsdf(m).map(LaneBsdf::weight);
+        let mirror = |m: u32| bsdf(m).is_some_and(LaneBsdf::is_mirror);
         let sphere_albedo = scene
             .spheres
             .iter()
@@ -446,10 +445,11 @@ fn shadow_ray(s: &Shaded8, l: usize) -> Ray {
 /// `None` when they do.
 pub(crate) fn refusal(scene: &Scene) -> Option<&'static str> {
     let lambert = |m: u32| {
-        matches!(
-            scene.materials.get(m as usize),
-            Some(Material::Lambert { .. } | Material::Mirror { .. })
-        )
+        scene
+            .materials
+            .get(m as usize)
+            .and_then(Material::lane_bsdf)
+            .is_some()
     };
     let materials = scene.meshes.iter().map(|m| m.material);
     let bumps = scene.meshes.iter().map(|m| m.bump);
@@ -806,332 +806,5 @@ impl Gathered {
         {
             p[to] = p[from];
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::math::Vec2;
-    use crate::render::{camera_ray, camera_sample_at, RenderOptions, Setup};
-
-    fn load(path: &str) -> Scene {
-        crate::scene::load(std::path::Path::new(path)).expect("bundled scene")
-    }
-
-    /// `f` over `scene`'s set-up under `opts`, its tracer and its lanes (the
-    /// scene must take them).
-    fn with_lanes<R>(
-        scene: &Scene,
-        opts: &RenderOptions,
-        f: impl FnOnce(&Setup, &PathTracer, &LaneScene) -> R,
-    ) -> R {
-        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-        let setup = Setup::new(scene, opts).expect("setup");
-        let tracer = setup.tracer(scene, &accel);
-        f(&setup, &tracer, setup.lanes().expect("a lane scene"))
-    }
-
-    /// Every sample of a cornell render, traced by `li` and by the lanes with
-    /// the same sampler: the same radiance bit for bit, the same AOVs, the
-    /// same ray count.
-    #[test]
-    fn lanes_trace_the_paths_li_traces() {
-        let scene = load("scenes/validation/cornell_256.toml");
-        let accel = crate::accel::Accel::build(&scene.meshes, &scene.spheres);
-        let setup = Setup::new(&scene, &RenderOptions::default()).expect("setup");
-        let tracer = setup.tracer(&scene, &accel);
-        assert!(setup.lanes().is_some(), "cornell is a lane scene");
-        let mut compared = 0;
-        // Both kernels: `wide`'s, and AVX's where this CPU has it.
-        for avx2 in [false, avx2()] {
-            let lights = crate::render::lights::LightSet::build(&scene);
-            let mut lanes = LaneScene::build(&scene, &lights).expect("a lane scene");
-            lanes.avx2 = avx2;
-            compared += compare_with_li(&setup, &tracer, &lanes);
-        }
-        assert!(compared > 16_000, "{compared}");
-    }
-
-    /// Paths cut short: no bounce shaded (the first hit's AOVs from the
-    /// scalar set-up), one bounce, and Russian roulette from the second.
-    #[test]
-    fn lanes_stop_where_li_stops() {
-        let mut scene = load("scenes/validation/cornell_256.toml");
-        scene.settings.rr_depth = 2;
-        for max_depth in [1, 2, 6] {
-            let opts = RenderOptions {
-                max_depth: Some(max_depth),
-                ..Default::default()
-            };
-            with_lanes(&scene, &opts, |setup, tracer, lanes| {
-                assert!(compare_with_li(setup, tracer, lanes) > 8000, "{max_depth}");
-            });
-        }
-    }
-
-    /// Shading normals: interpolated, one of zero length (the geometric
-    /// normal instead) and some below the surface (folded back), bit for bit.
-    #[test]
-    fn lanes_interpolate_shading_normals_as_li_does() {
-        let mut scene = load("scenes/validation/cornell_256.toml");
-        for (k, m) in scene.meshes.iter_mut().enumerate() {
-            m.normals = (0..m.positions.len())
-                .map(|i| match (k + i) % 5 {
-                    0 => Vec3::ZERO,
-                    1 => Vec3::new(0.3, -0.8, 0.5).normalize(),
-                    _ => Vec3::new(0.2 * i as f32, 1.0, -0.1 * k as f32).normalize(),
-                })
-                .collect();
-        }
-        with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
-            assert!(lanes.smooth);
-            assert!(compare_with_li(setup, tracer, lanes) > 8000);
-        });
-    }
-
-    /// Emitting triangles (the light's rectangle dropped, so it is two
-    /// triangle lights) and a second emitter, a wall, picked by power: the
-    /// triangle map, the pick and the MIS weights of emitter hits, bit for bit.
-    #[test]
-    fn lanes_trace_triangle_lights_as_li_does() {
-        let mut scene = load("scenes/validation/cornell_256.toml");
-        let light = scene
-            .meshes
-            .iter()
-            .position(|m| m.emission != Vec3::ZERO)
-            .expect("an emitter");
-        scene.meshes[light].rect = None;
-        let wall = (0..scene.meshes.len())
-            .find(|&i| i != light)
-            .expect("a wall");
-        scene.meshes[wall].emission = Vec3::new(0.4, 0.2, 0.1);
-        scene.meshes[wall].rect = None;
-        with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
-            assert!(
-                lanes.lights.len() > 3
-                    && lanes
-                        .lights
-                        .iter()
-                        .all(|l| matches!(l, LaneLight::Area(a) if !a.rect))
-            );
-            assert!(compare_with_li(setup, tracer, lanes) > 8000);
-        });
-    }
-
-    /// Environments: the constant sky's cosine map in the kernel, the image's
-    /// and the Gaussian sky's directions drawn before it, alone and beside an
-    /// area light (the pick between them), with rays that leave the scene
-    /// (the escaped light's MIS weight), bit for bit.
-    #[test]
-    fn lanes_trace_environments_as_li_does() {
-        use crate::scene::Environment;
-        let load = |p: &str| {
-            let mut s = load(p);
-            s.spheres.clear();
-            s
-        };
-        let sky = Environment::GaussianSky {
-            direction: Vec3::new(0.3, 0.8, -0.2).normalize(),
-            sharpness: 12.0,
-            peak: Vec3::new(4.0, 3.0, 2.0),
-            ambient: Vec3::new(0.1, 0.2, 0.3),
-        };
-        let mut cornell = load("scenes/validation/cornell_256.toml");
-        cornell.environment = Some(Environment::Constant {
-            radiance: Vec3::new(0.5, 0.6, 0.7),
-        });
-        // The Cornell box's open side faces the camera: escaped rays, and a
-        // pick between the sky and the rectangle light.
-        let mut cornell_sky = cornell.clone();
-        cornell_sky.environment = Some(sky.clone());
-        let mut floor_sky = load("scenes/validation/env_constant.toml");
-        floor_sky.environment = Some(sky);
-        for (name, scene, in_frame) in [
-            (
-                "constant",
-                load("scenes/validation/env_constant.toml"),
-                true,
-            ),
-            ("image", load("scenes/validation/env_image.toml"), false),
-            ("gaussian sky", floor_sky, false),
-            ("cornell + constant", cornell, true),
-            ("cornell + gaussian sky", cornell_sky, false),
-        ] {
-            with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
-                assert_eq!(lanes.sky_in_frame.is_some(), in_frame, "{name}");
-                assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
-            });
-        }
-    }
-
-    /// Spheres: hit (their surface point from `sphere_point`), and lights
-    /// (their samples drawn from the hit point), beside triangles with and
-    /// without shading normals, a rectangle light and environments, bit for
-    /// bit.
-    #[test]
-    fn lanes_trace_spheres_as_li_does() {
-        use crate::scene::Sphere;
-        let mut cornell = load("scenes/validation/cornell_256.toml");
-        let white = cornell.meshes[0].material;
-        let ball = |center: Vec3, radius: f32, emission: Vec3, object_id: u32| Sphere {
-            name: "ball".into(),
-            center,
-            radius,
-            material: white,
-            emission,
-            bump: None,
-            object_id,
-        };
-        cornell.spheres = vec![
-            ball(Vec3::new(-0.4, -0.6, 0.3), 0.35, Vec3::ZERO, 90),
-            ball(Vec3::new(0.5, 0.4, -0.2), 0.2, Vec3::new(3.0, 2.0, 1.0), 91),
-        ];
-        let mut smooth = cornell.clone();
-        for m in &mut smooth.meshes {
-            m.normals = (0..m.positions.len())
-                .map(|i| Vec3::new(0.1 * i as f32, 1.0, 0.3).normalize())
-                .collect();
-        }
-        for (name, scene) in [
-            ("cornell + a ball and a sphere light", cornell),
-            ("the same with shading normals", smooth),
-            (
-                "three spheres, Gaussian sky",
-                load("scenes/three_spheres_env.toml"),
-            ),
-            (
-                "bunny, sphere light, constant sky",
-                load("scenes/shadowfield_bunny.toml"),
-            ),
-        ] {
-            with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
-                assert!(!lanes.sphere_albedo.is_empty(), "{name}");
-                assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
-            });
-        }
-    }
-
-    /// Mirrors: no light sample, the reflection, an infinite density for the
-    /// next hit's MIS; on a sphere (the Mitsuba validation scenes, under a
-    /// sphere light, a constant sky, an image) and on a wall of the Cornell
-    /// box, bit for bit.
-    #[test]
-    fn lanes_trace_mirrors_as_li_does() {
-        let mut cornell = load("scenes/validation/cornell_256.toml");
-        let back = cornell.meshes.len() - 1;
-        let mirror = cornell.materials.len() as u32;
-        cornell.materials.push(Material::Mirror {
-            reflectance: Vec3::new(0.9, 0.8, 0.7),
-        });
-        cornell.meshes[back].material = mirror;
-        for (name, scene) in [
-            ("spheres", load("scenes/validation/spheres.toml")),
-            ("constant sky", load("scenes/validation/env_constant.toml")),
-            ("image sky", load("scenes/validation/env_image.toml")),
-            ("cornell with a mirror wall", cornell),
-        ] {
-            with_lanes(&scene, &RenderOptions::default(), |setup, tracer, lanes| {
-                assert!(lanes.mirrors, "{name}");
-                assert!(compare_with_li(setup, tracer, lanes) > 400, "{name}");
-            });
-        }
-    }
-
-    /// Samples of every 97th pixel through `li` and through `lanes`: how many
-    /// agreed (all of them, or it panics). Traced again without first hits,
-    /// the lanes give the same radiance and ray counts and no first hit.
-    fn compare_with_li(setup: &Setup, tracer: &PathTracer, lanes: &LaneScene) -> usize {
-        let (w, h) = (setup.camera.width, setup.camera.height);
-        let mut compared = 0;
-        for pixel in (0..w * h).step_by(97) {
-            let corner = Vec2::new((pixel % w) as f32, (pixel / w) as f32);
-            let mut batch = LaneBatch::default();
-            let mut without = LaneBatch::default();
-            let mut expected = Vec::new();
-            for s in 0..13 {
-                expected.push(camera_sample_at(
-                    tracer,
-                    &setup.camera,
-                    corner,
-                    pixel,
-                    s,
-                    5,
-                    false,
-                ));
-                let (ray, sampler) = camera_ray(&setup.camera, corner, pixel, s, 5);
-                batch.push(ray, sampler.clone());
-                without.push(ray, sampler);
-            }
-            lanes.trace(tracer, &mut batch, true);
-            lanes.trace(tracer, &mut without, false);
-            let got: Vec<SampleResult> = batch.results().collect();
-            for (g, w) in got.iter().zip(without.results()) {
-                assert_eq!(
-                    g.radiance.to_array().map(f32::to_bits),
-                    w.radiance.to_array().map(f32::to_bits)
-                );
-                assert_eq!(g.rays, w.rays, "pixel {pixel}");
-                assert!(w.first_hit.is_none(), "pixel {pixel}");
-            }
-            for (e, g) in expected.iter().zip(&got) {
-                assert_eq!(
-                    e.radiance.to_array().map(f32::to_bits),
-                    g.radiance.to_array().map(f32::to_bits),
-                    "pixel {pixel}: {} vs {}",
-                    e.radiance,
-                    g.radiance
-                );
-                assert_eq!(e.rays, g.rays, "pixel {pixel}");
-                let aov = |f: &Option<FirstHit>| {
-                    f.map(|f| (f.normal, f.depth, f.albedo, f.object_id, f.back_facing))
-                };
-                assert_eq!(aov(&e.first_hit), aov(&g.first_hit), "pixel {pixel}");
-                compared += 1;
-            }
-        }
-        compared
-    }
-
-    /// Only what the lanes shade exactly as `li` does gets them.
-    #[test]
-    fn lane_scenes_are_lambertian_or_mirror_without_bump_maps() {
-        let lanes = |s: &Scene| {
-            let lights = crate::render::lights::LightSet::build(s);
-            LaneScene::build(s, &lights).is_some()
-        };
-        let mut cornell = load("scenes/cornell.toml");
-        assert!(lanes(&cornell));
-        for scene in [
-            "scenes/three_spheres_env.toml",
-            "scenes/shadowfield_bunny.toml",
-            "scenes/validation/env_constant.toml",
-        ] {
-            assert!(lanes(&load(scene)), "{scene}");
-        }
-        for (scene, why) in [
-            ("scenes/spheres_table.toml", "a glossy material"),
-            ("scenes/glossy_teapot.toml", "a glossy material"),
-            ("scenes/bunny_env.toml", "a glossy material"),
-            ("scenes/objects_bumpy.toml", "bump maps"),
-        ] {
-            assert!(!lanes(&load(scene)), "{scene}: {why}");
-        }
-        // A bump map on a sphere alone.
-        let mut bumpy = load("scenes/three_spheres_env.toml");
-        let bumped = load("scenes/objects_bumpy.toml");
-        bumpy.spheres[0].bump = Some(0);
-        bumpy.bumps = bumped.bumps.clone();
-        assert!(!lanes(&bumpy));
-        // No light at all: still the lanes' (every light pick comes back empty).
-        let mut dark = cornell.clone();
-        for m in &mut dark.meshes {
-            m.emission = Vec3::ZERO;
-        }
-        assert!(lanes(&dark));
-        // A glossy material on one mesh.
-        let glossy = load("scenes/glossy_teapot.toml");
-        cornell.materials[cornell.meshes[0].material as usize] = glossy.materials[0].clone();
-        assert!(!lanes(&cornell));
     }
 }
