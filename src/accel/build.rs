@@ -8,7 +8,7 @@
 //!    brings the largest coordinate into [1, 2): every area is finite, and since
 //!    scaling by a power of two is exact, every comparison — Morton codes, PLOC
 //!    costs, reinsertion, collapse — gives the same result as in world space
-//!    would. The BVH4's boxes are brought back to world space exactly (`· 2^e`).
+//!    would. The wide tree's boxes are brought back to world space exactly (`· 2^e`).
 //! 2. **Coincident boxes.** PLOC pairs mutual nearest neighbours, and obvhs
 //!    breaks cost ties towards the *farthest* candidate (`cost <= best`), so among
 //!    identical boxes (every triangle of a mesh whose vertices collapsed to a few

@@ -42,7 +42,7 @@ impl<N: WideNode> Bvh<N> {
                 (b.max * inv_scale).to_array(),
             )
         };
-        // (BVH2 node, parent BVH4 node or EMPTY for the root, slot, depth)
+        // (BVH2 node, parent wide node or EMPTY for the root, slot, depth)
         let mut work = vec![(0usize, EMPTY, 0usize, 0u32)];
         while let Some((n, parent, slot, depth)) = work.pop() {
             let as_leaf = match &sah {

@@ -103,7 +103,7 @@ pub(super) const EMPTY_LANE: u32 = u32::MAX;
 const PREFETCH_LEAVES_FROM: usize = 1 << 20;
 
 /// A leaf's `count` field once it refers to blocks: 1 + (blocks − 1) + 2 ×
-/// (some lane is a sphere), in the 1..=8 the BVH4 encoding holds.
+/// (some lane is a sphere), in the 1..=8 the tree's leaf encoding holds.
 pub(super) struct LeafCode;
 
 impl LeafCode {

@@ -7,7 +7,7 @@
 //! analytic spheres and triangles use the watertight test.
 //!
 //! obvhs builds the tree (PLOC + reinsertion, `build.rs`); we collapse it into
-//! our own uncompressed wide BVH at least SAH cost (`bvh4::SahCollapse`, the
+//! our own uncompressed wide BVH at least SAH cost (`collapse::SahCollapse`, the
 //! collapse obvhs does only for its CWBVH) and traverse that: 8-wide with AVX2
 //! where the CPU has it (`bvh8.rs`, detected at run time), else 4-wide (`bvh4.rs`);
 //! leaves hold triangle4 blocks (`LeafBlock`), and the 8-wide tree tests a
@@ -285,7 +285,7 @@ impl Accel {
         work
     }
 
-    /// Any-hit traversal that counts BVH4 node tests (see [`Accel::closest_hit_work`]).
+    /// Any-hit traversal that counts node tests (see [`Accel::closest_hit_work`]).
     #[doc(hidden)]
     pub fn occluded_work(&self, ray: &Ray) -> u32 {
         if !self.traversable(ray) {

@@ -1,23 +1,14 @@
 //! The single-ray queries: closest hit and any hit, each the one traversal
-//! loop ([`traverse`]) with its leaf test over the blocks (`leaf.rs`): a
+//! loop (`traverse.rs`) with its leaf test over the blocks (`leaf.rs`): a
 //! leaf's four- or eight-lane triangle test, the scalar test for spheres and
 //! edge fallbacks, and the tie rule ([`nearer`]).
-//!
-//! Each width's entry into the loop (`Bvh4::traverse`, `Bvh8::traverse`)
-//! lives here, beside the leaf tests it calls: rustc places a function in
-//! the codegen unit of its module, and with the 8-wide loop in another unit
-//! than the closest-hit leaf test LLVM stopped inlining that test into it
-//! (+2.6 % instructions on cornell, callgrind).
 
 use super::bvh4::BoxRay;
-use super::bvh4::{Bvh4, Node4};
-#[cfg(target_arch = "x86_64")]
-use super::bvh8::{Bvh8, Node8, Ray8};
 use super::leaf::{nearer, LeafBlock, LeafCode, Leaves};
 #[cfg(target_arch = "x86_64")]
 use super::primitive;
 use super::primitive::{WatertightRay, WatertightRay4};
-use super::traverse::{traverse, Entry, LeafTest};
+use super::traverse::{Entry, LeafTest};
 use super::tree::Tree;
 use super::Hit;
 use crate::math::{Ray, Vec2, Vec3};
@@ -354,66 +345,4 @@ pub(super) fn with_stack<R>(size: usize, f: impl FnOnce(&mut [Entry]) -> R) -> R
         }
         f(stack)
     })
-}
-
-impl Bvh4 {
-    /// [`traverse`] on four children per node. Out of line, as the 8-wide
-    /// one: inlined with its leaf test, it made the query too large for LLVM
-    /// to inline into `Accel::intersect`.
-    #[inline(never)]
-    fn traverse<const SORTED: bool>(
-        &self,
-        ray: &BoxRay,
-        t_hi: f32,
-        stack: &mut [Entry],
-        nodes_visited: &mut u32,
-        leaf: impl LeafTest,
-    ) {
-        // SAFETY: the 4-wide test needs nothing beyond the build's target.
-        unsafe { traverse::<Node4, SORTED>(self, ray, t_hi, stack, nodes_visited, leaf) }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Bvh8 {
-    /// [`traverse`] on eight children per node, in an AVX2 function.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 (`bvh8::supported`).
-    #[target_feature(enable = "avx2")]
-    unsafe fn traverse<const SORTED: bool>(
-        &self,
-        ray: &BoxRay,
-        t_hi: f32,
-        stack: &mut [Entry],
-        nodes_visited: &mut u32,
-        leaf: impl LeafTest,
-    ) {
-        let ray = Ray8::new(ray);
-        traverse::<Node8, SORTED>(self, &ray, t_hi, stack, nodes_visited, leaf)
-    }
-}
-
-impl Tree {
-    /// [`traverse`] on either width (see there).
-    #[inline(always)]
-    pub(super) fn traverse<const SORTED: bool>(
-        &self,
-        ray: &BoxRay,
-        t_hi: f32,
-        stack: &mut [Entry],
-        nodes_visited: &mut u32,
-        leaf: impl LeafTest,
-    ) {
-        match self {
-            Tree::Four(t) => t.traverse::<SORTED>(ray, t_hi, stack, nodes_visited, leaf),
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: an 8-wide tree is only built when `bvh8::supported()`.
-            Tree::Eight(t) => unsafe {
-                t.traverse::<SORTED>(ray, t_hi, stack, nodes_visited, leaf)
-            },
-            #[cfg(not(target_arch = "x86_64"))]
-            Tree::Eight(_) => unreachable!("8-wide trees need x86_64"),
-        }
-    }
 }

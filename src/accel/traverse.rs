@@ -2,10 +2,12 @@
 //! descent with a stack ([`traverse`]), generic over the node's slab test
 //! ([`NodeTest`]: four children with `wide::f32x4`, eight with AVX2
 //! intrinsics). Everything it calls is `#[inline(always)]`, so each width's
-//! instance (made in `query.rs`, beside the leaf tests) compiles to the loop
-//! it had when written out twice.
+//! instance compiles to the loop it had when written out twice.
 
-use super::tree::{decode_leaf, Bvh, WideNode, EMPTY, LEAF_BIT, WIDEN};
+use super::bvh4::{BoxRay, Bvh4, Node4};
+#[cfg(target_arch = "x86_64")]
+use super::bvh8::{Bvh8, Node8, Ray8};
+use super::tree::{decode_leaf, Bvh, Tree, WideNode, EMPTY, LEAF_BIT, WIDEN};
 use std::ops::IndexMut;
 
 /// A node width's slab test, as the loop needs it.
@@ -64,7 +66,7 @@ pub(super) struct Entry {
 /// As [`NodeTest`]: the CPU has what `N`'s test needs, and the caller is
 /// compiled with it.
 #[inline(always)]
-pub(super) unsafe fn traverse<N: NodeTest, const SORTED: bool>(
+unsafe fn traverse<N: NodeTest, const SORTED: bool>(
     tree: &Bvh<N>,
     ray: &N::Ray,
     t_hi: f32,
@@ -166,6 +168,68 @@ pub(super) unsafe fn traverse<N: NodeTest, const SORTED: bool>(
                 cur = e.node;
                 break;
             }
+        }
+    }
+}
+
+impl Bvh4 {
+    /// [`traverse`] on four children per node. Out of line, as the 8-wide
+    /// one: inlined with its leaf test, it made the query too large for LLVM
+    /// to inline into `Accel::intersect`.
+    #[inline(never)]
+    fn traverse<const SORTED: bool>(
+        &self,
+        ray: &BoxRay,
+        t_hi: f32,
+        stack: &mut [Entry],
+        nodes_visited: &mut u32,
+        leaf: impl LeafTest,
+    ) {
+        // SAFETY: the 4-wide test needs nothing beyond the build's target.
+        unsafe { traverse::<Node4, SORTED>(self, ray, t_hi, stack, nodes_visited, leaf) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Bvh8 {
+    /// [`traverse`] on eight children per node, in an AVX2 function.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 (`bvh8::supported`).
+    #[target_feature(enable = "avx2")]
+    unsafe fn traverse<const SORTED: bool>(
+        &self,
+        ray: &BoxRay,
+        t_hi: f32,
+        stack: &mut [Entry],
+        nodes_visited: &mut u32,
+        leaf: impl LeafTest,
+    ) {
+        let ray = Ray8::new(ray);
+        traverse::<Node8, SORTED>(self, &ray, t_hi, stack, nodes_visited, leaf)
+    }
+}
+
+impl Tree {
+    /// [`traverse`] on either width (see there).
+    #[inline(always)]
+    pub(super) fn traverse<const SORTED: bool>(
+        &self,
+        ray: &BoxRay,
+        t_hi: f32,
+        stack: &mut [Entry],
+        nodes_visited: &mut u32,
+        leaf: impl LeafTest,
+    ) {
+        match self {
+            Tree::Four(t) => t.traverse::<SORTED>(ray, t_hi, stack, nodes_visited, leaf),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: an 8-wide tree is only built when `bvh8::supported()`.
+            Tree::Eight(t) => unsafe {
+                t.traverse::<SORTED>(ray, t_hi, stack, nodes_visited, leaf)
+            },
+            #[cfg(not(target_arch = "x86_64"))]
+            Tree::Eight(_) => unreachable!("8-wide trees need x86_64"),
         }
     }
 }
