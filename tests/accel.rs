@@ -91,6 +91,49 @@ fn bunny() -> Mesh {
     mesh("bunny", positions, triangles)
 }
 
+/// The reference closest and any hit: every primitive tested with
+/// [`Accel::intersect_primitive`] (the traversal's own exact tests), no
+/// tree; a tie goes to the primitive first in input order (triangles of
+/// mesh 0, mesh 1, …, then spheres), as the traversal's do.
+struct BruteForce<'a> {
+    accel: &'a Accel,
+    prims: Vec<PrimRef>,
+}
+
+impl<'a> BruteForce<'a> {
+    fn new(accel: &'a Accel, meshes: &[Mesh], spheres: &[Sphere]) -> Self {
+        let triangles = meshes.iter().enumerate().flat_map(|(m, mesh)| {
+            (0..mesh.triangles.len() as u32).map(move |tri| PrimRef::Triangle {
+                mesh: m as u32,
+                tri,
+            })
+        });
+        let spheres = (0..spheres.len() as u32).map(PrimRef::Sphere);
+        Self {
+            accel,
+            prims: triangles.chain(spheres).collect(),
+        }
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        for &prim in &self.prims {
+            if let Some(h) = self.accel.intersect_primitive(ray, prim) {
+                if best.is_none_or(|b| h.t < b.t) {
+                    best = Some(h);
+                }
+            }
+        }
+        best
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.prims
+            .iter()
+            .any(|&prim| self.accel.intersect_primitive(ray, prim).is_some())
+    }
+}
+
 /// Checks a BVH closest hit against the brute-force one: the same hit bit for bit
 /// (both use the same primitive routine, and an exact tie in t goes to the
 /// primitive first in input order, whatever order either visits them in).
@@ -137,6 +180,7 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
     let mut rng = Rng::new(7);
     let (meshes, spheres) = mixed_scene(&mut rng);
     let accel = Accel::build(&meshes, &spheres);
+    let brute = BruteForce::new(&accel, &meshes, &spheres);
     let tris: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     assert_eq!(accel.triangle_count(), tris);
     assert_eq!(accel.sphere_count(), spheres.len());
@@ -165,7 +209,7 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
             ray = Ray::segment(origin, d.normalize(), d.length());
         }
         let a = accel.intersect(&ray);
-        let b = accel.intersect_brute_force(&ray);
+        let b = brute.intersect(&ray);
         same_hit(a, b, &ray);
         if let Some(h) = a {
             hits += 1;
@@ -203,7 +247,7 @@ fn bvh_agrees_with_brute_force_on_mixed_scene() {
         let occ = accel.occluded(&ray);
         assert_eq!(occ, b.is_some(), "{ray:?}");
         if i % 8 == 0 {
-            assert_eq!(occ, accel.occluded_brute_force(&ray), "{ray:?}");
+            assert_eq!(occ, brute.occluded(&ray), "{ray:?}");
         }
         occluded += occ as usize;
     }
@@ -235,10 +279,11 @@ fn t_min_and_t_max_are_respected() {
         ]);
         triangles.extend([[b, b + 1, b + 2], [b, b + 2, b + 3]]);
     }
-    let accel = Accel::build(
-        &[mesh("stack", positions, triangles)],
-        &[sphere(Vec3::new(0.0, 0.0, 20.0), 1.0)],
+    let (meshes, spheres) = (
+        [mesh("stack", positions, triangles)],
+        [sphere(Vec3::new(0.0, 0.0, 20.0), 1.0)],
     );
+    let accel = Accel::build(&meshes, &spheres);
     let o = Vec3::new(0.1, 0.2, 0.0);
     let hit_t = |t_min: f32, t_max: f32| {
         let ray = Ray {
@@ -276,7 +321,8 @@ fn t_min_and_t_max_are_respected() {
     };
     let t = accel.intersect(&behind).expect("hit behind the origin").t;
     assert!((t + 1.5).abs() < 1e-6, "{t}");
-    assert_eq!(accel.intersect_brute_force(&behind).map(|h| h.t), Some(t));
+    let brute = BruteForce::new(&accel, &meshes, &spheres);
+    assert_eq!(brute.intersect(&behind).map(|h| h.t), Some(t));
     // Hits closer than obvhs' internal 1e-4 node epsilon are still found.
     let ray = Ray::new(Vec3::new(0.1, 0.2, 1.0 - 3.0e-5), Vec3::Z);
     let h = accel.intersect(&ray).expect("hit at t = 3e-5");
@@ -513,6 +559,7 @@ fn pathological_deep_scene_matches_brute_force() {
         .map(|k| sphere(Vec3::new(3.0, 0.0, 0.0), 0.01 * 1.005f32.powi(k)))
         .collect();
     let accel = Accel::build(&meshes, &onion);
+    let brute = BruteForce::new(&accel, &meshes, &onion);
     println!(
         "deep scene: depth {}, stack: {}, nodes {}",
         accel.depth(),
@@ -533,7 +580,7 @@ fn pathological_deep_scene_matches_brute_force() {
             let o = Vec3::new(3.0, 0.0, 0.0) + rng.vec(-0.1, 0.1);
             let ray = Ray::new(o, rng.unit());
             let a = accel.intersect(&ray);
-            same_hit(a, accel.intersect_brute_force(&ray), &ray);
+            same_hit(a, brute.intersect(&ray), &ray);
             assert!(matches!(a.map(|h| h.prim), Some(PrimRef::Sphere(_))));
             hits += 1;
             continue;
@@ -552,7 +599,7 @@ fn pathological_deep_scene_matches_brute_force() {
         let o = target + rng.unit() * x * rng.range(1e-2, 2.0);
         let ray = Ray::new(o, (target - o).normalize());
         let a = accel.intersect(&ray);
-        same_hit(a, accel.intersect_brute_force(&ray), &ray);
+        same_hit(a, brute.intersect(&ray), &ray);
         assert_eq!(accel.occluded(&ray), a.is_some());
         hits += a.is_some() as usize;
     }
@@ -822,7 +869,14 @@ fn grid(n: u32, offset: Vec3) -> Mesh {
 }
 
 /// BVH closest and any hit against brute force for random rays through `lo..hi`.
-fn check_against_brute_force(accel: &Accel, lo: Vec3, hi: Vec3, rays: usize, seed: u64) -> usize {
+fn check_against_brute_force(
+    brute: &BruteForce,
+    lo: Vec3,
+    hi: Vec3,
+    rays: usize,
+    seed: u64,
+) -> usize {
+    let accel = brute.accel;
     let mut rng = Rng::new(seed);
     let mut hits = 0;
     for _ in 0..rays {
@@ -830,7 +884,7 @@ fn check_against_brute_force(accel: &Accel, lo: Vec3, hi: Vec3, rays: usize, see
         let target = lo + (hi - lo) * t;
         let origin = target - rng.unit() * (hi - lo).max_element() * 2.0;
         let ray = Ray::new(origin, (target - origin).normalize());
-        let b = accel.intersect_brute_force(&ray);
+        let b = brute.intersect(&ray);
         same_hit(accel.intersect(&ray), b, &ray);
         assert_eq!(accel.occluded(&ray), b.is_some(), "{ray:?}");
         hits += b.is_some() as usize;
@@ -845,10 +899,12 @@ fn huge_primitives_build_without_panic() {
     let g = grid(10, Vec3::ZERO);
     for radius in [1.0e19f32, 1.0e30] {
         let big = sphere(Vec3::new(0.0, -2.0 * radius, 0.0), radius);
-        let accel = Accel::build(std::slice::from_ref(&g), &[big, sphere(Vec3::Y, 0.5)]);
+        let spheres = [big, sphere(Vec3::Y, 0.5)];
+        let accel = Accel::build(std::slice::from_ref(&g), &spheres);
+        let brute = BruteForce::new(&accel, std::slice::from_ref(&g), &spheres);
         assert_eq!(accel.primitive_count(), 202, "radius {radius}");
         // The small primitives are still found exactly.
-        let hits = check_against_brute_force(&accel, Vec3::ZERO, Vec3::new(1.0, 1.5, 1.0), 300, 3);
+        let hits = check_against_brute_force(&brute, Vec3::ZERO, Vec3::new(1.0, 1.5, 1.0), 300, 3);
         assert!(hits > 100, "{hits}");
         // A ray straight down onto the huge sphere (beside the grid): the BVH
         // finds what brute force finds. (How well the f32 sphere test resolves
@@ -856,7 +912,7 @@ fn huge_primitives_build_without_panic() {
         // |o − c|² overflows and it reports the far root.)
         let down = Ray::new(Vec3::new(-0.5, 1.0, -0.5), -Vec3::Y);
         let hit = accel.intersect(&down);
-        same_hit(hit, accel.intersect_brute_force(&down), &down);
+        same_hit(hit, brute.intersect(&down), &down);
         if radius == 1.0e19 {
             assert_eq!(hit.map(|h| h.prim), Some(PrimRef::Sphere(0)));
         }
@@ -864,17 +920,19 @@ fn huge_primitives_build_without_panic() {
     // Corners at ±1e30 (the triangle test's products overflow there, so only the
     // BVH's agreement with brute force is asked for).
     let corners = cube(Vec3::splat(-1.0e30), Vec3::splat(1.0e30));
-    let accel = Accel::build(&[corners, g.clone()], &[]);
+    let meshes = [corners, g.clone()];
+    let accel = Accel::build(&meshes, &[]);
+    let brute = BruteForce::new(&accel, &meshes, &[]);
     assert_eq!(accel.primitive_count(), 212);
     for dir in [Vec3::Y, -Vec3::X, Vec3::new(0.3, -0.2, 0.9).normalize()] {
         let from_inside = Ray::new(Vec3::new(0.3, 5.0, 0.2), dir);
         same_hit(
             accel.intersect(&from_inside),
-            accel.intersect_brute_force(&from_inside),
+            brute.intersect(&from_inside),
             &from_inside,
         );
     }
-    let hits = check_against_brute_force(&accel, Vec3::ZERO, Vec3::new(1.0, 0.5, 1.0), 200, 4);
+    let hits = check_against_brute_force(&brute, Vec3::ZERO, Vec3::new(1.0, 0.5, 1.0), 200, 4);
     assert!(hits > 50, "{hits}");
     // Tiny scales (down to subnormal coordinates) build too: the frame's scale
     // and the pad's 1e-30 floor keep every exponent in range.
@@ -884,12 +942,9 @@ fn huge_primitives_build_without_panic() {
             *p *= scale;
         }
         let accel = Accel::build(std::slice::from_ref(&tiny), &[]);
+        let brute = BruteForce::new(&accel, std::slice::from_ref(&tiny), &[]);
         let ray = Ray::new(Vec3::new(0.5, 1.0, 0.5) * scale, -Vec3::Y);
-        same_hit(
-            accel.intersect(&ray),
-            accel.intersect_brute_force(&ray),
-            &ray,
-        );
+        same_hit(accel.intersect(&ray), brute.intersect(&ray), &ray);
     }
     // Beyond the build's own limit (far past the scene's): rejected, not a panic.
     let beyond = sphere(Vec3::ZERO, 1.0e37);
@@ -943,9 +998,11 @@ fn bvh_agrees_with_brute_force_with_coincident_boxes() {
         ],
         vec![[0, 1, 2]; 300],
     );
-    let accel = Accel::build(&[tri, grid(30, Vec3::ZERO)], &[]);
+    let meshes = [tri, grid(30, Vec3::ZERO)];
+    let accel = Accel::build(&meshes, &[]);
     assert!(accel.depth() < 24, "depth {}", accel.depth());
-    let hits = check_against_brute_force(&accel, Vec3::splat(-0.1), Vec3::splat(1.1), 3000, 5);
+    let brute = BruteForce::new(&accel, &meshes, &[]);
+    let hits = check_against_brute_force(&brute, Vec3::splat(-0.1), Vec3::splat(1.1), 3000, 5);
     assert!(hits > 1000, "{hits}");
     let mut collapsed = grid(40, Vec3::ZERO);
     for p in &mut collapsed.positions {
@@ -953,7 +1010,8 @@ fn bvh_agrees_with_brute_force_with_coincident_boxes() {
     }
     let accel = Accel::build(std::slice::from_ref(&collapsed), &[]);
     let (lo, hi) = accel.bounds().unwrap();
-    let hits = check_against_brute_force(&accel, lo, hi + Vec3::Y, 500, 6);
+    let brute = BruteForce::new(&accel, std::slice::from_ref(&collapsed), &[]);
+    let hits = check_against_brute_force(&brute, lo, hi + Vec3::Y, 500, 6);
     assert!(hits > 100, "{hits}");
 }
 
@@ -979,6 +1037,7 @@ fn ties_on_shared_edges_go_the_same_way_for_every_tree_width_and_leaf_size() {
             ));
         }
     }
+    let brute = BruteForce::new(&trees[0].1, &meshes, &[]);
     let mut rays = 0;
     let mut multi = 0;
     for j in 0..=n {
@@ -987,7 +1046,7 @@ fn ties_on_shared_edges_go_the_same_way_for_every_tree_width_and_leaf_size() {
                 let target = Vec3::new(i as f32 + di, 0.0, j as f32 + dj) / n as f32;
                 let origin = target + Vec3::new(0.3, 1.0, -0.2);
                 let ray = Ray::new(origin, (target - origin).normalize());
-                let want = trees[0].1.intersect_brute_force(&ray);
+                let want = brute.intersect(&ray);
                 for (what, accel) in &trees {
                     let got = accel.intersect(&ray);
                     assert_eq!(got, want, "{what:?}: {ray:?}");

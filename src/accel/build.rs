@@ -1,4 +1,4 @@
-//! Primitive boxes → obvhs BVH2 → our BVH4 (`bvh4.rs`), built so that it cannot fail on any finite input
+//! Primitive boxes → obvhs BVH2 → our wide tree (`collapse.rs`), built so that it cannot fail on any finite input
 //! and stays O(n log n) when many boxes coincide.
 //!
 //! Two defects of building directly with obvhs 0.4 in world space (issue 18):
@@ -8,7 +8,7 @@
 //!    brings the largest coordinate into [1, 2): every area is finite, and since
 //!    scaling by a power of two is exact, every comparison — Morton codes, PLOC
 //!    costs, reinsertion, collapse — gives the same result as in world space
-//!    would. The BVH4's boxes are brought back to world space exactly (`· 2^e`).
+//!    would. The wide tree's boxes are brought back to world space exactly (`· 2^e`).
 //! 2. **Coincident boxes.** PLOC pairs mutual nearest neighbours, and obvhs
 //!    breaks cost ties towards the *farthest* candidate (`cost <= best`), so among
 //!    identical boxes (every triangle of a mesh whose vertices collapsed to a few
@@ -18,7 +18,7 @@
 //!    box per distinct value, and each duplicate group becomes a balanced subtree
 //!    under its representative's leaf.
 
-use super::bvh4::{Bvh, WideNode};
+use super::tree::{Bvh, Tree, WideNode};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -49,7 +49,7 @@ pub struct BuildPreset {
     pub max_prims_per_leaf: u32,
     /// Children per node: 8 (taken only where the CPU has AVX2) or 4.
     pub node_width: usize,
-    /// `Some(c)`: the SAH-optimal collapse (`bvh4::SahCollapse`) with a leaf's
+    /// `Some(c)`: the SAH-optimal collapse (`collapse::SahCollapse`) with a leaf's
     /// triangle4 block costing `c` wide node tests; `None`: the greedy collapse
     /// (fill every slot, largest box first). `Some(1.0)` against greedy on the
     /// bunny, 8-wide: +10 % / +23 % closest-hit and +10 % / +25 % any-hit rays/s
@@ -78,9 +78,19 @@ pub(super) fn box_pad(magnitude: f32) -> f32 {
     (magnitude * (1.0 / 65_536.0)).max(1.0e-30)
 }
 
+/// The tree over `boxes` (as [`build_tree`]): 8-wide where the preset asks
+/// for it and the CPU has AVX2, else 4-wide.
+pub(super) fn build(boxes: &[Aabb], preset: &BuildPreset) -> Tree {
+    if preset.node_width == 8 && super::bvh8::supported() {
+        Tree::Eight(build_tree(boxes, preset))
+    } else {
+        Tree::Four(build_tree(boxes, preset))
+    }
+}
+
 /// Builds the 4- or 8-wide tree over `boxes` (unpadded, finite, within
 /// [`MAX_BUILD_MAGNITUDE`]); `leaf_order` refers to `boxes`.
-pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> Bvh<N> {
+fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> Bvh<N> {
     if boxes.is_empty() {
         return Bvh::from_bvh2(&Bvh2::default(), 1.0, 1, None);
     }
@@ -105,7 +115,7 @@ pub(super) fn build_tree<N: WideNode>(boxes: &[Aabb], preset: &BuildPreset) -> B
 
     let groups = DuplicateGroups::new(&scaled);
     // obvhs' PLOC + reinsertion (as in its `medium_build`), then our own
-    // collapse to the uncompressed BVH4 that traversal uses (`bvh4.rs`).
+    // collapse to the uncompressed wide tree that traversal uses (`collapse.rs`).
     let mut bvh2 = PlocBuilder::with_capacity(groups.unique.len()).build(
         preset.search_distance,
         &groups.unique,

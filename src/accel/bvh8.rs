@@ -4,7 +4,11 @@
 //! 256-bit `std::arch` intrinsics. Half the levels of the BVH4, so an
 //! incoherent ray waits on fewer dependent node loads.
 
-use super::bvh4::{decode_leaf, BoxRay, Bvh, Entry, WideNode, EMPTY, LEAF_BIT, WIDEN};
+#[cfg(target_arch = "x86_64")]
+use super::bvh4::BoxRay;
+#[cfg(target_arch = "x86_64")]
+use super::traverse::NodeTest;
+use super::tree::{Bvh, WideNode, EMPTY};
 
 /// Eight child boxes: `bounds[2·axis]` the minima, `bounds[2·axis + 1]` the
 /// maxima along `axis`; empty slots hold the inverted box (+∞, −∞).
@@ -38,6 +42,7 @@ impl WideNode for Node8 {
         ([c(0), c(2), c(4)], [c(1), c(3), c(5)])
     }
 
+    #[inline(always)]
     fn children(&self) -> &[u32] {
         &self.children
     }
@@ -103,129 +108,67 @@ pub(super) fn supported() -> bool {
     }
 }
 
+/// The ray as the 8-wide node test reads it: the [`BoxRay`]'s origin,
+/// reciprocals and lower end splatted into AVX registers once per query,
+/// and each axis's near-plane row.
 #[cfg(target_arch = "x86_64")]
-impl Bvh8 {
-    /// [`super::bvh4::Bvh4::traverse`] on eight children per node.
-    ///
+pub(super) struct Ray8 {
+    org: [std::arch::x86_64::__m256; 3],
+    inv: [std::arch::x86_64::__m256; 3],
+    inv_far: [std::arch::x86_64::__m256; 3],
+    near: [usize; 3],
+    t_lo: std::arch::x86_64::__m256,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Ray8 {
     /// # Safety
-    /// The CPU must support AVX2 ([`supported`]).
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn traverse<const SORTED: bool>(
-        &self,
-        ray: &BoxRay,
-        t_hi: f32,
-        stack: &mut [Entry],
-        nodes_visited: &mut u32,
-        mut leaf: impl FnMut(usize, usize) -> Option<f32>,
-        leaf_prefetch: impl Fn(usize, usize),
-    ) {
+    /// AVX2; the caller must be an AVX2 function (this inlines into it).
+    #[inline(always)]
+    pub(super) unsafe fn new(ray: &BoxRay) -> Self {
         use std::arch::x86_64::*;
-        let prefetch = |c: u32| self.prefetch_child(c, &leaf_prefetch);
         let (org, inv) = (ray.org_scalar(), ray.inv_scalar());
-        let org = org.map(|o| _mm256_set1_ps(o));
-        let inv = inv.map(|i| _mm256_set1_ps(i));
-        let inv_far = ray.inv_far_scalar().map(|i| _mm256_set1_ps(i));
         let near = ray.near;
-        let (nx, ny, nz) = (near[0] & 1, 2 + (near[1] & 1), 4 + (near[2] & 1));
-        let t_lo = _mm256_set1_ps(ray.t_lo_scalar());
-        let mut hi = t_hi * WIDEN;
-        let mut hi_w = _mm256_set1_ps(hi);
-        let mut sp = 0usize;
-        let mut cur = self.root;
-        loop {
-            while cur & LEAF_BIT == 0 {
-                *nodes_visited += 1;
-                let node = &self.nodes[cur as usize];
-                let (mask, t_near) = node.slab_test(&org, &inv, &inv_far, [nx, ny, nz], t_lo, hi_w);
-                if mask == 0 {
-                    cur = EMPTY;
-                    break;
-                }
-                // From here the step is the BVH4's, written out again: one shared
-                // `#[inline(always)]` helper for both widths cost 1–3.5 % more
-                // instructions per ray (callgrind, `GRADTRACE_ACCEL_ONCE`).
-                if mask & (mask - 1) == 0 {
-                    cur = node.children[mask.trailing_zeros() as usize];
-                    continue;
-                }
-                let mut t_near_arr = [0f32; 8];
-                _mm256_storeu_ps(t_near_arr.as_mut_ptr(), t_near);
-                let t_near = t_near_arr;
-                let rest = mask & (mask - 1);
-                if rest & (rest - 1) == 0 {
-                    let (i, j) = (
-                        mask.trailing_zeros() as usize,
-                        rest.trailing_zeros() as usize,
-                    );
-                    let (near, far) = if !SORTED || t_near[i] <= t_near[j] {
-                        (i, j)
-                    } else {
-                        (j, i)
-                    };
-                    stack[sp] = Entry::new(node.children[far], t_near[far]);
-                    sp += 1;
-                    prefetch(node.children[far]);
-                    cur = node.children[near];
-                    continue;
-                }
-                let (mut ids, mut ts, mut k) = ([0u32; 8], [0f32; 8], 0usize);
-                let mut m = mask;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize;
-                    ids[k] = node.children[i];
-                    ts[k] = t_near[i];
-                    k += 1;
-                    m &= m - 1;
-                }
-                if SORTED {
-                    // Insertion sort, farthest first, stable.
-                    for i in 1..k {
-                        let (t, id) = (ts[i], ids[i]);
-                        let mut j = i;
-                        while j > 0 && ts[j - 1] < t {
-                            ts[j] = ts[j - 1];
-                            ids[j] = ids[j - 1];
-                            j -= 1;
-                        }
-                        ts[j] = t;
-                        ids[j] = id;
-                    }
-                }
-                for i in 0..k - 1 {
-                    stack[sp] = Entry::new(ids[i], ts[i]);
-                    sp += 1;
-                    prefetch(ids[i]);
-                }
-                cur = ids[k - 1];
-            }
-            if cur != EMPTY {
-                let (first, count) = decode_leaf(cur);
-                match leaf(first, count) {
-                    None => return,
-                    Some(t) => {
-                        hi = hi.min(t * WIDEN);
-                        hi_w = _mm256_set1_ps(hi);
-                    }
-                }
-            }
-            loop {
-                if sp == 0 {
-                    return;
-                }
-                sp -= 1;
-                let e = stack[sp];
-                if e.t <= hi {
-                    cur = e.node;
-                    break;
-                }
-            }
+        Self {
+            org: org.map(|o| _mm256_set1_ps(o)),
+            inv: inv.map(|i| _mm256_set1_ps(i)),
+            inv_far: ray.inv_far_scalar().map(|i| _mm256_set1_ps(i)),
+            near: [near[0] & 1, 2 + (near[1] & 1), 4 + (near[2] & 1)],
+            t_lo: _mm256_set1_ps(ray.t_lo_scalar()),
         }
     }
 }
 
+/// Safety of each method: AVX2, the caller an AVX2 function.
+#[cfg(target_arch = "x86_64")]
+impl NodeTest for Node8 {
+    type Ray = Ray8;
+    type Hi = std::arch::x86_64::__m256;
+    type Near = std::arch::x86_64::__m256;
+    type Ids = [u32; 8];
+    type Ts = [f32; 8];
+
+    #[inline(always)]
+    unsafe fn splat(hi: f32) -> Self::Hi {
+        std::arch::x86_64::_mm256_set1_ps(hi)
+    }
+
+    #[inline(always)]
+    unsafe fn test(&self, ray: &Ray8, hi: Self::Hi) -> (u32, Self::Near) {
+        self.slab_test(&ray.org, &ray.inv, &ray.inv_far, ray.near, ray.t_lo, hi)
+    }
+
+    #[inline(always)]
+    unsafe fn spill(near: Self::Near) -> [f32; 8] {
+        let mut t = [0f32; 8];
+        std::arch::x86_64::_mm256_storeu_ps(t.as_mut_ptr(), near);
+        t
+    }
+}
+
 /// One ray's view for [`Bvh8::child_mask`]: what [`Bvh8::traverse`] splats
-/// from its [`BoxRay`], and its fixed upper bound (made by the ray streams'
-/// set-up, `accel::stream`, with [`BoxRay::new`]'s operations).
+/// from its `BoxRay`, and its fixed upper bound (made by the ray streams'
+/// set-up, `accel::stream`, with `BoxRay::new`'s operations).
 pub(super) struct NodeRay {
     pub(super) org: [f32; 3],
     pub(super) inv: [f32; 3],

@@ -8,7 +8,7 @@
 //! A stream pays a node test per ray and node, and tests each leaf triangle
 //! against eight rays in the lanes (`primitive::avx::intersect_rays8`) instead
 //! of one ray against a half-empty block. Deeper trees fragment a batch's
-//! rays over many nodes, where single rays are as fast: [`Accel::streams`]
+//! rays over many nodes, where single rays are as fast: [`super::Accel::streams`]
 //! says where a stream is used.
 //!
 //! Every ray gets exactly the single-ray query's answer: the node test is the
@@ -18,17 +18,18 @@
 //! is the least (t, input index) over all tested hits, the tie rule that makes
 //! the single-ray answer independent of visit order.
 
-use super::bvh4::EMPTY;
 #[cfg(target_arch = "x86_64")]
-use super::bvh4::{decode_leaf, LEAF_BIT};
-#[cfg(target_arch = "x86_64")]
-use super::bvh4::{WIDEN, WIDEN_INV};
+use super::bvh8::Bvh8;
 use super::bvh8::NodeRay;
+#[cfg(target_arch = "x86_64")]
+use super::leaf::{nearer, LeafCode, Leaves, EMPTY_LANE};
 #[cfg(target_arch = "x86_64")]
 use super::primitive::avx::{intersect_rays8, Hits8, Rays8, F8};
 #[cfg(target_arch = "x86_64")]
-use super::{nearer, LeafCode, EMPTY_LANE};
-use super::{Accel, Hit, Tree, WatertightRay};
+use super::primitive::WatertightRay;
+#[cfg(target_arch = "x86_64")]
+use super::tree::{decode_leaf, LEAF_BIT, WIDEN, WIDEN_INV};
+use super::tree::{Tree, EMPTY};
 use crate::math::{Ray, Vec2};
 
 /// Trees with at most this many inner nodes take stream queries. Measured
@@ -120,239 +121,208 @@ impl RayStream {
         }
     }
 
-    /// Ray `k`'s closest hit after [`Accel::intersect_stream`].
-    pub fn hit(&self, accel: &Accel, k: usize) -> Option<Hit> {
+    /// Ray `k`'s closest hit after a closest-hit query, as (input index,
+    /// t, barycentrics, leaf slot): `RayStream::hit` (with the front end)
+    /// makes the [`super::Hit`].
+    pub(super) fn answer(&self, k: usize) -> Option<(u32, f32, Vec2, u32)> {
         let id = self.id(BEST_ID, k);
         (id != NONE).then(|| {
-            let slot = self.id(BEST_SLOT, k);
-            Hit {
-                t: self.get(BEST_T, k),
-                prim: accel.prim_ref_at(id, slot),
-                bary: Vec2::new(self.get(BEST_B1, k), self.get(BEST_B2, k)),
-                slot,
-            }
+            (
+                id,
+                self.get(BEST_T, k),
+                Vec2::new(self.get(BEST_B1, k), self.get(BEST_B2, k)),
+                self.id(BEST_SLOT, k),
+            )
         })
     }
 
-    /// Whether ray `k` is blocked, after [`Accel::occluded_stream`].
+    /// Whether ray `k` is blocked, after an any-hit query.
     pub fn occluded(&self, k: usize) -> bool {
         self.id(BEST_ID, k) != NONE
     }
 }
 
-impl Accel {
-    /// Whether the stream queries run on this tree: an 8-wide one (AVX2) of
-    /// at most 64 inner nodes (`STREAM_MAX_NODES`: where streams stop paying).
-    pub fn streams(&self) -> bool {
-        cfg!(target_arch = "x86_64")
-            && matches!(&self.bvh, Tree::Eight(t) if t.nodes.len() <= STREAM_MAX_NODES && t.root != EMPTY)
-    }
+/// Whether stream queries pay on `tree`: an 8-wide one (AVX2) of at most
+/// [`STREAM_MAX_NODES`] inner nodes, where streams stop paying.
+pub(super) fn takes(tree: &Tree) -> bool {
+    cfg!(target_arch = "x86_64")
+        && matches!(tree, Tree::Eight(t) if t.nodes.len() <= STREAM_MAX_NODES && t.root != EMPTY)
+}
 
-    /// [`Accel::intersect`] of the `n` rays `ray(0..n)`, answers read with
-    /// [`RayStream::hit`]. Where not [`Accel::streams`], the rays are asked
-    /// one at a time: the answers are the same, only the speed differs.
-    pub fn intersect_stream<'r>(
-        &self,
+impl RayStream {
+    /// Writes the answers of `n` rays asked one at a time (`answer(k)`: as
+    /// [`RayStream::answer`]), where the tree takes no streams.
+    pub(super) fn set_answers(
+        &mut self,
         n: usize,
-        ray: impl Fn(usize) -> &'r Ray,
-        s: &mut RayStream,
+        answer: impl Fn(usize) -> Option<(u32, f32, Vec2, u32)>,
     ) {
-        self.query_stream::<false>(n, &ray, s);
-    }
-
-    /// [`Accel::occluded`] of the `n` rays `ray(0..n)`, answers read with
-    /// [`RayStream::occluded`]; as [`Accel::intersect_stream`], one ray at a
-    /// time where not [`Accel::streams`].
-    pub fn occluded_stream<'r>(&self, n: usize, ray: impl Fn(usize) -> &'r Ray, s: &mut RayStream) {
-        self.query_stream::<true>(n, &ray, s);
-    }
-
-    /// The stream traversal where the tree takes it, single-ray queries
-    /// written into the stream's answer planes elsewhere.
-    fn query_stream<'r, const ANY: bool>(
-        &self,
-        n: usize,
-        ray: &impl Fn(usize) -> &'r Ray,
-        s: &mut RayStream,
-    ) {
-        if self.streams() {
-            // SAFETY: an 8-wide tree is only built where AVX2 was detected.
-            #[cfg(target_arch = "x86_64")]
-            unsafe {
-                self.stream::<ANY>(n, ray, s)
-            };
-            return;
-        }
-        s.reserve(n);
+        self.reserve(n);
         for k in 0..n {
-            let answer = if ANY {
-                self.occluded(ray(k)).then_some((0.0, 0, Vec2::ZERO, 0))
+            let (id, t, bary, slot) = answer(k).unwrap_or((NONE, 0.0, Vec2::ZERO, 0));
+            self.set(BEST_T, k, t);
+            self.set(BEST_ID, k, f32::from_bits(id));
+            self.set(BEST_B1, k, bary.x);
+            self.set(BEST_B2, k, bary.y);
+            self.set(BEST_SLOT, k, f32::from_bits(slot));
+        }
+    }
+}
+
+/// The traversal: each pending node's rays tested against its children
+/// (a list per child entered), each leaf's against its triangles. With
+/// `ANY`, a ray leaves the lists at its first hit.
+///
+/// # Safety
+/// The CPU must support AVX2 (`bvh8::supported`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn trace<'r, const ANY: bool>(
+    tree: &Bvh8,
+    leaves: &Leaves,
+    n: usize,
+    ray: &impl Fn(usize) -> &'r Ray,
+    s: &mut RayStream,
+) {
+    let mut top = s.prepare(n, ray);
+    if top > 0 {
+        s.stack.push((tree.root, 0, top as u32));
+    }
+    while let Some((node, start, end)) = s.stack.pop() {
+        let (start, end) = (start as usize, end as usize);
+        if node & LEAF_BIT != 0 {
+            stream_leaf::<ANY>(leaves, node, start..end, ray, s);
+            continue;
+        }
+        // Each child's list in a region of its own, written without a
+        // branch per ray and child (a scan per child mispredicted half
+        // its tests).
+        let len = end - start;
+        if s.ids.len() < top + 8 * len {
+            s.ids.resize(top + 8 * len, 0);
+        }
+        let mut counts = [0usize; 8];
+        let ids = s.ids.as_mut_ptr();
+        for k in start..end {
+            // SAFETY: `k` < `end` ≤ `top`, and each child's region
+            // `top + c·len ..` holds at most `len` ids; `ids` has
+            // `top + 8·len` cells (resized above), and nothing else
+            // touches `s.ids` in this loop.
+            let r = *ids.add(k);
+            let m = if ANY && s.id(BEST_ID, r as usize) != NONE {
+                0
             } else {
-                self.intersect(ray(k))
-                    .map(|h| (h.t, self.input_of(h.prim), h.bary, h.slot))
+                tree.child_mask(node, &s.node_ray(r as usize))
             };
-            let (t, id, bary, slot) = answer.unwrap_or((0.0, NONE, Vec2::ZERO, 0));
-            s.set(BEST_T, k, t);
-            s.set(BEST_ID, k, f32::from_bits(id));
-            s.set(BEST_B1, k, bary.x);
-            s.set(BEST_B2, k, bary.y);
-            s.set(BEST_SLOT, k, f32::from_bits(slot));
+            for (c, count) in counts.iter_mut().enumerate() {
+                *ids.add(top + c * len + *count) = r;
+                *count += ((m >> c) & 1) as usize;
+            }
         }
+        let children = tree.children_of(node);
+        for (c, &count) in counts.iter().enumerate() {
+            if count > 0 {
+                let first = (top + c * len) as u32;
+                s.stack.push((children[c], first, first + count as u32));
+            }
+        }
+        top += 8 * len;
     }
+}
 
-    /// The traversal: each pending node's rays tested against its children
-    /// (a list per child entered), each leaf's against its triangles. With
-    /// `ANY`, a ray leaves the lists at its first hit.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn stream<'r, const ANY: bool>(
-        &self,
-        n: usize,
-        ray: &impl Fn(usize) -> &'r Ray,
-        s: &mut RayStream,
-    ) {
-        let Tree::Eight(tree) = &self.bvh else {
-            return;
-        };
-        let mut top = s.prepare(n, ray);
-        if top > 0 {
-            s.stack.push((tree.root, 0, top as u32));
+/// The rays `s.ids[list]` against leaf `code`'s triangles, eight rays
+/// at a time, each ray's best hit (or, with `ANY`, its first) in `s`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn stream_leaf<'r, const ANY: bool>(
+    leaves: &Leaves,
+    code: u32,
+    list: std::ops::Range<usize>,
+    ray: &impl Fn(usize) -> &'r Ray,
+    s: &mut RayStream,
+) {
+    let (first, count) = decode_leaf(code);
+    let (count, _) = LeafCode::decode(count);
+    let blocks = &leaves.blocks[first..first + count];
+    let mut k = list.start;
+    while k < list.end {
+        // The next eight rays still looking (unused lanes repeat the first).
+        let mut idx = [0i32; 8];
+        let mut len = 0;
+        while k < list.end && len < 8 {
+            let r = s.ids[k];
+            k += 1;
+            if !ANY || s.id(BEST_ID, r as usize) == NONE {
+                idx[len] = r as i32;
+                len += 1;
+            }
         }
-        while let Some((node, start, end)) = s.stack.pop() {
-            let (start, end) = (start as usize, end as usize);
-            if node & LEAF_BIT != 0 {
-                self.stream_leaf::<ANY>(node, start..end, ray, s);
-                continue;
-            }
-            // Each child's list in a region of its own, written without a
-            // branch per ray and child (a scan per child mispredicted half
-            // its tests).
-            let len = end - start;
-            if s.ids.len() < top + 8 * len {
-                s.ids.resize(top + 8 * len, 0);
-            }
-            let mut counts = [0usize; 8];
-            let ids = s.ids.as_mut_ptr();
-            for k in start..end {
-                // SAFETY: `k` < `end` ≤ `top`, and each child's region
-                // `top + c·len ..` holds at most `len` ids; `ids` has
-                // `top + 8·len` cells (resized above), and nothing else
-                // touches `s.ids` in this loop.
-                let r = *ids.add(k);
-                let m = if ANY && s.id(BEST_ID, r as usize) != NONE {
-                    0
+        if len == 0 {
+            break;
+        }
+        for l in len..8 {
+            idx[l] = idx[0];
+        }
+        let live = (1u32 << len) - 1;
+        let at = Lanes::new(&idx);
+        let lanes = at.rays(s);
+        let mut t_max = at.plane(s, BEST_T);
+        let mut done = 0u32;
+        'blocks: for (b, block) in blocks.iter().enumerate() {
+            for (lane, &id) in block.ids.iter().enumerate() {
+                if id == EMPTY_LANE {
+                    continue;
+                }
+                let (mut hits, mut scalar, h);
+                if id >= leaves.first_sphere {
+                    // A sphere: the scalar test for every ray, as a
+                    // single-ray query's leaf does.
+                    h = Hits8::default();
+                    (hits, scalar) = (0, live & !done);
                 } else {
-                    tree.child_mask(node, &s.node_ray(r as usize))
-                };
-                for (c, count) in counts.iter_mut().enumerate() {
-                    *ids.add(top + c * len + *count) = r;
-                    *count += ((m >> c) & 1) as usize;
+                    let v = block.tris.lane(lane).map(|p| p.to_array());
+                    h = intersect_rays8::<ANY>(&lanes, &v, t_max);
+                    (hits, scalar) = (h.hits & live & !done, h.fallback & live & !done);
                 }
-            }
-            let children = tree.children_of(node);
-            for (c, &count) in counts.iter().enumerate() {
-                if count > 0 {
-                    let first = (top + c * len) as u32;
-                    s.stack.push((children[c], first, first + count as u32));
+                if hits | scalar == 0 {
+                    continue;
                 }
-            }
-            top += 8 * len;
-        }
-    }
-
-    /// The rays `s.ids[list]` against leaf `code`'s triangles, eight rays
-    /// at a time, each ray's best hit (or, with `ANY`, its first) in `s`.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn stream_leaf<'r, const ANY: bool>(
-        &self,
-        code: u32,
-        list: std::ops::Range<usize>,
-        ray: &impl Fn(usize) -> &'r Ray,
-        s: &mut RayStream,
-    ) {
-        let (first, count) = decode_leaf(code);
-        let (count, _) = LeafCode::decode(count);
-        let blocks = &self.blocks[first..first + count];
-        let mut k = list.start;
-        while k < list.end {
-            // The next eight rays still looking (unused lanes repeat the first).
-            let mut idx = [0i32; 8];
-            let mut len = 0;
-            while k < list.end && len < 8 {
-                let r = s.ids[k];
-                k += 1;
-                if !ANY || s.id(BEST_ID, r as usize) == NONE {
-                    idx[len] = r as i32;
-                    len += 1;
-                }
-            }
-            if len == 0 {
-                break;
-            }
-            for l in len..8 {
-                idx[l] = idx[0];
-            }
-            let live = (1u32 << len) - 1;
-            let at = Lanes::new(&idx);
-            let lanes = at.rays(s);
-            let mut t_max = at.plane(s, BEST_T);
-            let mut done = 0u32;
-            'blocks: for (b, block) in blocks.iter().enumerate() {
-                for (lane, &id) in block.ids.iter().enumerate() {
-                    if id == EMPTY_LANE {
-                        continue;
-                    }
-                    let (mut hits, mut scalar, h);
-                    if id >= self.first_sphere {
-                        // A sphere: the scalar test for every ray, as a
-                        // single-ray query's leaf does.
-                        h = Hits8::default();
-                        (hits, scalar) = (0, live & !done);
+                let slot = 4 * (first + b) as u32 + lane as u32;
+                while hits | scalar != 0 {
+                    let l = (hits | scalar).trailing_zeros() as usize;
+                    let r = idx[l] as usize;
+                    let best_t = s.get(BEST_T, r);
+                    let found = if hits & (1 << l) != 0 {
+                        Some((h.t[l], Vec2::new(h.b1[l], h.b2[l])))
                     } else {
-                        let v = block.tris.lane(lane).map(|p| p.to_array());
-                        h = intersect_rays8::<ANY>(&lanes, &v, t_max);
-                        (hits, scalar) = (h.hits & live & !done, h.fallback & live & !done);
-                    }
-                    if hits | scalar == 0 {
-                        continue;
-                    }
-                    let slot = 4 * (first + b) as u32 + lane as u32;
-                    while hits | scalar != 0 {
-                        let l = (hits | scalar).trailing_zeros() as usize;
-                        let r = idx[l] as usize;
-                        let best_t = s.get(BEST_T, r);
-                        let found = if hits & (1 << l) != 0 {
-                            Some((h.t[l], Vec2::new(h.b1[l], h.b2[l])))
-                        } else {
-                            let ray = ray(r);
-                            let wr = WatertightRay::new(ray.origin, ray.dir);
-                            self.prim_of_input(id)
-                                .intersect(ray, &wr, best_t)
-                                .map(|hit| (hit.t, hit.bary))
-                        };
-                        hits &= !(1 << l);
-                        scalar &= !(1 << l);
-                        let Some((t, bary)) = found else { continue };
-                        let best_id = s.id(BEST_ID, r);
-                        if nearer(t, id, (best_id != NONE).then_some((best_t, best_id))) {
-                            s.set(BEST_T, r, t);
-                            s.set(BEST_ID, r, f32::from_bits(id));
-                            s.set(BEST_B1, r, bary.x);
-                            s.set(BEST_B2, r, bary.y);
-                            s.set(BEST_SLOT, r, f32::from_bits(slot));
-                            if ANY {
-                                done |= 1 << l;
-                            }
+                        let ray = ray(r);
+                        let wr = WatertightRay::new(ray.origin, ray.dir);
+                        leaves
+                            .prim_of_input(id)
+                            .intersect(ray, &wr, best_t)
+                            .map(|hit| (hit.t, hit.bary))
+                    };
+                    hits &= !(1 << l);
+                    scalar &= !(1 << l);
+                    let Some((t, bary)) = found else { continue };
+                    let best_id = s.id(BEST_ID, r);
+                    if nearer(t, id, (best_id != NONE).then_some((best_t, best_id))) {
+                        s.set(BEST_T, r, t);
+                        s.set(BEST_ID, r, f32::from_bits(id));
+                        s.set(BEST_B1, r, bary.x);
+                        s.set(BEST_B2, r, bary.y);
+                        s.set(BEST_SLOT, r, f32::from_bits(slot));
+                        if ANY {
+                            done |= 1 << l;
                         }
                     }
-                    if ANY {
-                        if done == live {
-                            break 'blocks;
-                        }
-                    } else {
-                        t_max = at.plane(s, BEST_T);
+                }
+                if ANY {
+                    if done == live {
+                        break 'blocks;
                     }
+                } else {
+                    t_max = at.plane(s, BEST_T);
                 }
             }
         }
@@ -562,6 +532,7 @@ impl Lanes {
 #[cfg(test)]
 mod tests {
     use super::super::tests::{add_quads, globe, lcg};
+    use super::super::{Accel, Hit};
     use super::*;
     use crate::math::Vec3;
     use crate::scene::{Mesh, Sphere};
