@@ -129,16 +129,36 @@ impl Combiner {
         own: Option<usize>,
         self_visibility: Option<&ShF>,
     ) -> (Vec3, usize) {
-        let mut t = diffuse_transfer(n);
+        let bare = diffuse_transfer(n);
+        let mut t = bare;
+        let mut shadows_itself = false;
         if let Some(v) = self_visibility {
             t = sh::product(&t, v);
+            shadows_itself = true;
         }
         if let Some(e) = own.map(|i| &self.entities[i]).filter(|e| e.self_from_field) {
             if let Some(occ) = &e.occlusion {
                 let q = e.to_rest * (p - e.center);
                 t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
+                shadows_itself = true;
             }
         }
+        let self_t = t;
+        // The receiver's own (SH) shadowing is as blurred as the method's: the
+        // share of a sphere light it leaves, by the light's SH field.
+        let own_share = |e: &Placed, q: Vec3| -> f32 {
+            let Some(rad) = e.radiance.as_ref().filter(|_| shadows_itself) else {
+                return 1.0;
+            };
+            let l = rad[1].lookup(q);
+            let (all, kept) = (sh::dot_f32(&bare, &l), sh::dot_f32(&self_t, &l));
+            if all > 1e-12 {
+                (kept / all).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        };
+
         // Near-to-far order of the entities that can matter (bounding sphere not
         // entirely below the receiver's horizon); on the stack up to 32 of them.
         let mut stack: [(f32, u32); 32] = [(0.0, 0); 32];
@@ -177,7 +197,8 @@ impl Combiner {
             let q = e.to_rest * (p - e.center);
             if let Some(le) = e.sphere_light {
                 if !self.behind_a_plane(p, e.center, own) {
-                    out += self.sphere_light(p, n, e, le, &order[..k], own, self_visibility);
+                    let share = own_share(e, q);
+                    out += share * self.sphere_light(p, n, e, le, &order[..k]);
                 }
             }
             let Some(occ) = &e.occlusion else {
@@ -225,12 +246,11 @@ impl Combiner {
 
     /// A sphere light's direct light at a Lambertian receiver per unit albedo,
     /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions. V is the product of the unblurred cone maps of the entities
-    /// `nearer` than the light (the paper's near-to-far rule), times the receiver's
-    /// own visibility SH and, for an entity without a map, its SH visibility,
-    /// both towards the light's centre. Order-4 SH cannot hold a light a few degrees wide: its
+    /// `nearer` than the light (the paper's near-to-far rule), and for an entity
+    /// without a map its SH visibility towards the light's centre. The receiver's
+    /// own shadowing is the caller's (`own_share`). Order-4 SH cannot hold a light a few degrees wide: its
     /// product with an occluder's field leaves about half of the shadow lit and
     /// spreads the rest over tens of degrees (issue 57).
-    #[allow(clippy::too_many_arguments)]
     fn sphere_light(
         &self,
         p: Vec3,
@@ -238,8 +258,6 @@ impl Combiner {
         light: &Placed,
         le: Vec3,
         nearer: &[(f32, u32)],
-        own: Option<usize>,
-        self_visibility: Option<&ShF>,
     ) -> Vec3 {
         let to_l = light.center - p;
         let d = to_l.length();
@@ -264,19 +282,10 @@ impl Combiner {
         if !any {
             return Vec3::ZERO;
         }
-        // Visibility given as SH (self-visibility, fields without a map) is as
-        // blurred as the method's: taken once, towards the light's centre.
+        // An entity without a map (a field rebuilt each frame) is as blurred as
+        // the method's: taken once, towards the light's centre.
         let mut scale = 1.0;
         let y_light = |v: &ShF| sh::dot_f32(v, &sh::eval_f32(frame.n)).clamp(0.0, 1.0);
-        if let Some(v) = self_visibility {
-            scale *= y_light(v);
-        }
-        if let Some(e) = own.map(|i| &self.entities[i]).filter(|e| e.self_from_field) {
-            if let Some(occ) = &e.occlusion {
-                let q = e.to_rest * (p - e.center);
-                scale *= y_light(&visibility_from_occlusion(&occ.lookup(q)));
-            }
-        }
         let light_angle = cos_max.acos();
         for &(_, j) in nearer {
             let e = &self.entities[j as usize];
