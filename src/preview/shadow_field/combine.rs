@@ -3,7 +3,9 @@
 //! cosine / π, times its self-visibility) is multiplied by each occluder's
 //! visibility in turn (triple products), and each light adds its SRF dotted with
 //! the transfer accumulated so far — the OOFs of the entities nearer than it.
-//! The environment's SH, last, sees every occluder.
+//! The environment's SH, last, sees every occluder. A sphere light is the
+//! exception: a few degrees wide, it is not low-frequency, so it is integrated
+//! over its cap against the nearer entities' unblurred cone maps instead.
 //!
 //! Multiplying the transfer rather than the lights' fields is the same integral
 //! ∫ L·V₁⋯V_n·T for band-limited factors; it needs one product per occluder for
