@@ -14,8 +14,9 @@
 //! `constant`, `gaussian_sky` or the bundled `envs/sky.hdr` image.
 //!
 //! [`Options`]:
-//! * `diffuse_only`: lambert materials, no bumps, sphere lights only, no mirror
-//!   (what `preview shadow-field` models); skies stay possible (constant or none).
+//! * `diffuse_only`: lambert materials, no bumps, sphere lights only, no mirror,
+//!   no quad objects (what `preview shadow-field` models: it takes a lone quad for
+//!   a half-space, right for a floor or wall only); skies constant, image or none.
 //! * `asset_dir`: the folder that holds `models/` and `envs/`, as the scene names
 //!   it: `None` writes `models/cow.obj`, right for a scene file in `scenes/` (or
 //!   parsed with a path there); a test writing its file elsewhere passes the
@@ -200,7 +201,7 @@ impl Generator<'_> {
                 v3(r.colour(0.5, 8.0)),
                 v3(r.colour(0.0, 0.2))
             ),
-            3 if !self.opts.diffuse_only => format!(
+            3 => format!(
                 "type = \"image\"\nfile = \"{}\"\nscale = {}",
                 asset(opts, "envs/sky.hdr"),
                 num(r.range(0.2, 2.0))
@@ -284,7 +285,10 @@ impl Generator<'_> {
         } else {
             r.range(0.0, 0.6)
         };
-        let kind = r.below(if self.opts.meshes { 6 } else { 4 });
+        let mut kind = r.below(if self.opts.meshes { 6 } else { 4 });
+        if kind == 2 && self.opts.diffuse_only {
+            kind = 0;
+        }
         match kind {
             0 | 1 => {
                 let radius = r.log_range(0.03, 0.5);

@@ -452,6 +452,7 @@ fn run_frames(
                 occlusion: Some(field),
                 radiance: None,
                 self_occlusion: Vec::new(),
+                visibility: None,
             };
         }
         let frame = shade_frame(&posed, &accel, &frame_fields, &poses, env, settings);

@@ -3,13 +3,13 @@
 //! only the coefficient arrays are stored, each with its length; a file that does
 //! not fit is reported as `None` and recomputed.
 
-use super::field::Field;
+use super::field::{ConeMap, Field};
 use super::precompute::{grid_for, Entity, EntityFields, EntityKind};
 use super::{Fields, Settings};
 use crate::math::sh::{ShF, COEFFS};
 use crate::scene::Scene;
 
-const MAGIC: &[u8; 8] = b"GTSHFLD1";
+const MAGIC: &[u8; 8] = b"GTSHFLD2";
 
 fn put_block(out: &mut Vec<u8>, data: &[ShF]) {
     out.extend_from_slice(&(data.len() as u64).to_le_bytes());
@@ -33,6 +33,11 @@ pub fn to_bytes(fields: &Fields) -> Vec<u8> {
         for s in &f.self_occlusion {
             put_block(&mut out, s);
         }
+        let bits = f.visibility.as_ref().map_or(&[][..], |v| &v.bits[..]);
+        out.extend_from_slice(&(bits.len() as u64).to_le_bytes());
+        for w in bits {
+            out.extend_from_slice(&w.to_le_bytes());
+        }
     }
     out
 }
@@ -47,6 +52,13 @@ impl Reader<'_> {
         let b = self.bytes.get(self.at..self.at + 8)?;
         self.at += 8;
         Some(u64::from_le_bytes(b.try_into().ok()?))
+    }
+
+    fn words(&mut self, want: usize) -> Option<Vec<u64>> {
+        if self.u64()? as usize != want {
+            return None;
+        }
+        (0..want).map(|_| self.u64()).collect()
     }
 
     fn block(&mut self, want: usize) -> Option<Vec<ShF>> {
@@ -115,10 +127,18 @@ pub fn from_bytes(
         for n in verts {
             self_occlusion.push(r.block(n)?);
         }
+        let side = settings.rays;
+        let words = if has_occ {
+            grid.len() * ConeMap::words(side)
+        } else {
+            0
+        };
+        let bits = r.words(words)?;
         out.push(EntityFields {
             occlusion,
             radiance,
             self_occlusion,
+            visibility: has_occ.then_some(ConeMap { grid, side, bits }),
         });
     }
     (r.at == bytes.len()).then(|| Fields {

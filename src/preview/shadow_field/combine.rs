@@ -3,16 +3,18 @@
 //! cosine / π, times its self-visibility) is multiplied by each occluder's
 //! visibility in turn (triple products), and each light adds its SRF dotted with
 //! the transfer accumulated so far — the OOFs of the entities nearer than it.
-//! The environment's SH, last, sees every occluder.
+//! The environment's SH, last, sees every occluder. A sphere light is the
+//! exception: a few degrees wide, it is not low-frequency, so it is integrated
+//! over its cap against the nearer entities' unblurred cone maps instead.
 //!
 //! Multiplying the transfer rather than the lights' fields is the same integral
 //! ∫ L·V₁⋯V_n·T for band-limited factors; it needs one product per occluder for
 //! all lights together.
 
-use super::field::Field;
+use super::field::{cone_cos, ConeMap, Field};
 use super::precompute::EntityKind;
 use crate::math::sh::{self, ShF, COEFFS};
-use crate::math::Vec3;
+use crate::math::{warp, Frame, Vec2, Vec3};
 use glam::Mat3;
 
 /// An entity placed in the current frame.
@@ -28,7 +30,18 @@ pub struct Placed {
     pub radiance: Option<[Field; 3]>,
     /// A deforming entity shades its own surface with its own field.
     pub self_from_field: bool,
+    /// A sphere light's radiance: shaded over its exact cap ([`Combiner::shade`]).
+    pub sphere_light: Option<Vec3>,
+    /// The occlusion unblurred, which a sphere light's directions look up.
+    pub visibility: Option<ConeMap>,
 }
+
+/// Directions per sphere light and receiver, uniform over its cap on a golden-angle
+/// spiral: a grid's rows of directions would enter an occluder's edge together
+/// and step the penumbra.
+pub const LIGHT_DIRS: usize = 32;
+/// 1/φ: the spiral's turn per direction, as a fraction of a full turn.
+const GOLDEN: f32 = 0.618_034;
 
 /// Everything the combination reads for one frame.
 #[derive(Clone, Debug)]
@@ -118,16 +131,36 @@ impl Combiner {
         own: Option<usize>,
         self_visibility: Option<&ShF>,
     ) -> (Vec3, usize) {
-        let mut t = diffuse_transfer(n);
+        let bare = diffuse_transfer(n);
+        let mut t = bare;
+        let mut shadows_itself = false;
         if let Some(v) = self_visibility {
             t = sh::product(&t, v);
+            shadows_itself = true;
         }
         if let Some(e) = own.map(|i| &self.entities[i]).filter(|e| e.self_from_field) {
             if let Some(occ) = &e.occlusion {
                 let q = e.to_rest * (p - e.center);
                 t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
+                shadows_itself = true;
             }
         }
+        let self_t = t;
+        // The receiver's own (SH) shadowing is as blurred as the method's: the
+        // share of a sphere light it leaves, by the light's SH field.
+        let own_share = |e: &Placed, q: Vec3| -> f32 {
+            let Some(rad) = e.radiance.as_ref().filter(|_| shadows_itself) else {
+                return 1.0;
+            };
+            let l = rad[1].lookup(q);
+            let (all, kept) = (sh::dot_f32(&bare, &l), sh::dot_f32(&self_t, &l));
+            if all > 1e-12 {
+                (kept / all).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        };
+
         // Near-to-far order of the entities that can matter (bounding sphere not
         // entirely below the receiver's horizon); on the stack up to 32 of them.
         let mut stack: [(f32, u32); 32] = [(0.0, 0); 32];
@@ -161,15 +194,21 @@ impl Combiner {
         let planes =
             |i: usize| Some(i) != own && matches!(self.entities[i].kind, EntityKind::Plane { .. });
         let mut out = Vec3::ZERO;
-        for &(_, i) in order.iter() {
+        for (k, &(_, i)) in order.iter().enumerate() {
             let e = &self.entities[i as usize];
             let q = e.to_rest * (p - e.center);
+            if let Some(le) = e.sphere_light {
+                if !self.behind_a_plane(p, e.center, own) {
+                    let share = own_share(e, q);
+                    out += share * self.sphere_light(p, n, e, le, &order[..k]);
+                }
+            }
             let Some(occ) = &e.occlusion else {
                 continue;
             };
             // One set of trilinear corners for the occlusion and the radiance.
             let corners = occ.grid.corners(q);
-            if let Some(rad) = &e.radiance {
+            if let Some(rad) = e.radiance.as_ref().filter(|_| e.sphere_light.is_none()) {
                 if !self.behind_a_plane(p, e.center, own) {
                     out += Vec3::new(
                         sh::dot_f32(&t, &rad[0].lookup_at(&corners)),
@@ -205,6 +244,75 @@ impl Combiner {
             sh::dot_f32(&t, &env[2]),
         );
         (out, combined)
+    }
+
+    /// A sphere light's direct light at a Lambertian receiver per unit albedo,
+    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions. V is the product of the unblurred cone maps of the entities
+    /// `nearer` than the light (the paper's near-to-far rule), and for an entity
+    /// without a map its SH visibility towards the light's centre. The receiver's
+    /// own shadowing is the caller's (`own_share`). Order-4 SH cannot hold a light a few degrees wide: its
+    /// product with an occluder's field leaves about half of the shadow lit and
+    /// spreads the rest over tens of degrees (issue 57).
+    fn sphere_light(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        light: &Placed,
+        le: Vec3,
+        nearer: &[(f32, u32)],
+    ) -> Vec3 {
+        let to_l = light.center - p;
+        let d = to_l.length();
+        let cos_max = cone_cos(d, light.radius);
+        if cos_max <= -1.0 || !d.is_finite() {
+            return Vec3::ZERO;
+        }
+        let frame = Frame::from_normal(to_l / d);
+        let mut dirs = [Vec3::ZERO; LIGHT_DIRS];
+        let mut vis = [0.0f32; LIGHT_DIRS];
+        let mut any = false;
+        for k in 0..LIGHT_DIRS {
+            let u = Vec2::new(
+                (k as f32 + 0.5) / LIGHT_DIRS as f32,
+                (k as f32 * GOLDEN).fract(),
+            );
+            let w = frame.to_world(warp::square_to_uniform_cone(u, cos_max));
+            dirs[k] = w;
+            vis[k] = n.dot(w).max(0.0);
+            any |= vis[k] > 0.0;
+        }
+        if !any {
+            return Vec3::ZERO;
+        }
+        // An entity without a map (a field rebuilt each frame) is as blurred as
+        // the method's: taken once, towards the light's centre.
+        let mut scale = 1.0;
+        let y_light = |v: &ShF| sh::dot_f32(v, &sh::eval_f32(frame.n)).clamp(0.0, 1.0);
+        let light_angle = cos_max.acos();
+        for &(_, j) in nearer {
+            let e = &self.entities[j as usize];
+            let to_e = e.center - p;
+            let d_e = to_e.length();
+            // Only an entity whose cone meets the light's can hide any of it.
+            let apart = (to_e.dot(frame.n) / d_e.max(1e-30)).clamp(-1.0, 1.0).acos();
+            if d_e > e.radius && apart > light_angle + (e.radius / d_e).asin() {
+                continue;
+            }
+            let q = e.to_rest * (p - e.center);
+            if let Some(map) = &e.visibility {
+                let at = map.at(q, e.radius);
+                for k in 0..LIGHT_DIRS {
+                    if vis[k] > 0.0 {
+                        vis[k] *= map.visibility(&at, e.to_rest * dirs[k]);
+                    }
+                }
+            } else if let Some(occ) = &e.occlusion {
+                scale *= y_light(&visibility_from_occlusion(&occ.lookup(q)));
+            }
+        }
+        let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
+        let sum: f32 = vis.iter().sum();
+        le * (scale * sum * solid_angle / (LIGHT_DIRS as f32 * std::f32::consts::PI))
     }
 
     /// Whether some plane separates `p` from `light` (the light is then hidden).

@@ -149,3 +149,98 @@ impl Field {
         }
     }
 }
+
+/// The frame a grid sample's (or a query's) cone of directions is laid out in:
+/// z towards the entity's centre, x and y along θ and φ of its offset `dir` (unit)
+/// at azimuth `phi`. Tied to the grid's coordinates, not to the direction alone,
+/// so that the samples at a pole (one point, n_φ azimuths) are interpolated in φ
+/// as everywhere else.
+pub fn cone_frame(dir: Vec3, phi: f32) -> crate::math::Frame {
+    let (sin_p, cos_p) = phi.sin_cos();
+    let sin_t = (dir.x * dir.x + dir.y * dir.y).sqrt();
+    crate::math::Frame {
+        s: Vec3::new(dir.z * cos_p, dir.z * sin_p, -sin_t),
+        t: Vec3::new(-sin_p, cos_p, 0.0),
+        n: -dir,
+    }
+}
+
+/// cos of the half-angle of the cone a bounding sphere of `radius` subtends from
+/// distance `d`; −1 (every direction) from inside it.
+pub fn cone_cos(d: f32, radius: f32) -> f32 {
+    if d > radius * 1.0001 {
+        let sin = radius / d;
+        (1.0 - sin * sin).max(0.0).sqrt()
+    } else {
+        -1.0
+    }
+}
+
+/// The unblurred visibility of an entity: at every grid sample, one bit per ray
+/// (`side²` of them, stratified in (s, φ′) with s = (1 − cos θ′)/(1 − cos α)
+/// uniform over the cone of half-angle α the bounding sphere subtends, θ′ and φ′
+/// in [`cone_frame`]). Order-4 SH blur a small light's shadow to half its depth
+/// and spread it over tens of degrees, so sphere lights look the occluders up
+/// here instead; in cone coordinates neighbouring samples see the entity at the
+/// same place, so the lookup interpolates its shape, not two copies of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConeMap {
+    pub grid: Grid,
+    pub side: usize,
+    /// `words()` u64 per sample, bit a·side + b set where ray (s index a, φ′
+    /// index b) hits the entity.
+    pub bits: Vec<u64>,
+}
+
+impl ConeMap {
+    /// u64 words per sample.
+    pub fn words(side: usize) -> usize {
+        (side * side).div_ceil(64)
+    }
+
+    /// The cone frame and grid corners at rest-frame offset `q` from the centre,
+    /// the entity bounded by `radius`: what every direction's lookup there shares.
+    pub fn at(&self, q: Vec3, radius: f32) -> ConeLookup {
+        let d = q.length().max(1e-30);
+        ConeLookup {
+            frame: cone_frame(q / d, q.y.atan2(q.x)),
+            cos_max: cone_cos(d, radius),
+            corners: self.grid.corners(q).0,
+        }
+    }
+
+    /// Visibility in rest-frame direction `w` (unit) from where `at` was taken:
+    /// the eight grid samples' bits at w's cone coordinates, weighted trilinearly
+    /// (1 outside the cone).
+    pub fn visibility(&self, at: &ConeLookup, w: Vec3) -> f32 {
+        let c = w.dot(at.frame.n);
+        if c < at.cos_max {
+            return 1.0;
+        }
+        let s = (1.0 - c) / (1.0 - at.cos_max);
+        let mut u = w.dot(at.frame.t).atan2(w.dot(at.frame.s)) / std::f32::consts::TAU;
+        if u < 0.0 {
+            u += 1.0;
+        }
+        let n = self.side;
+        let a = ((s * n as f32) as usize).min(n - 1);
+        let b = ((u * n as f32) as usize).min(n - 1);
+        let bit = a * n + b;
+        let words = Self::words(n);
+        let mut hidden = 0.0;
+        for (i, wt) in at.corners {
+            if wt != 0.0 && self.bits[i as usize * words + bit / 64] >> (bit % 64) & 1 == 1 {
+                hidden += wt;
+            }
+        }
+        (1.0 - hidden).clamp(0.0, 1.0)
+    }
+}
+
+/// [`ConeMap::at`]'s result.
+#[derive(Clone, Copy, Debug)]
+pub struct ConeLookup {
+    frame: crate::math::Frame,
+    cos_max: f32,
+    corners: [(u32, f32); 8],
+}

@@ -195,6 +195,8 @@ impl Fields {
                     .as_ref()
                     .map(|r| [turn(&r[0]), turn(&r[1]), turn(&r[2])]),
                 self_from_field: e.deforming,
+                sphere_light: e.sphere_light,
+                visibility: f.visibility.clone(),
             });
             for (k, &m) in e.meshes.iter().enumerate() {
                 if mesh_self.len() <= m {

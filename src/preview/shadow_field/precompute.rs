@@ -8,7 +8,7 @@
 //! away is not missed by a coarse map. What is stored is the *occlusion*
 //! O = 1 − V, which is zero outside that cone and vanishes far away.
 
-use super::field::{Field, Grid};
+use super::field::{cone_cos, cone_frame, ConeMap, Field, Grid};
 use super::Settings;
 use crate::accel::{Accel, PrimRef};
 use crate::math::sh::{self, ShF, COEFFS};
@@ -44,6 +44,9 @@ pub struct Entity {
     /// through its own field (k > 1 inside the bounding sphere) instead of
     /// per-vertex self-occlusion.
     pub deforming: bool,
+    /// The radiance of an entity that is one emitting sphere and nothing else:
+    /// its light is integrated over its exact cap, not through its SH field.
+    pub sphere_light: Option<Vec3>,
 }
 
 /// Groups the scene's meshes and spheres by object id, in id order.
@@ -92,6 +95,10 @@ pub fn entities(scene: &Scene) -> Vec<Entity> {
                 .get(id as usize - 1)
                 .cloned()
                 .unwrap_or_else(|| format!("object{id}"));
+            let sphere_light = match (meshes.as_slice(), spheres.as_slice()) {
+                ([], [s]) if kind == EntityKind::Light => Some(scene.spheres[*s].emission),
+                _ => None,
+            };
             Some(Entity {
                 object_id: id,
                 name,
@@ -101,6 +108,7 @@ pub fn entities(scene: &Scene) -> Vec<Entity> {
                 center,
                 radius,
                 deforming: false,
+                sphere_light,
             })
         })
         .collect()
@@ -198,15 +206,26 @@ impl EntityGeometry {
     pub fn sample(&self, p: Vec3, center: Vec3, radius: f32, n: usize, radiance: bool) -> Sample {
         let to_c = center - p;
         let d = to_c.length();
-        let (frame, cos_max) = if d > radius * 1.0001 {
-            let sin = radius / d;
-            (
-                Frame::from_normal(to_c / d),
-                (1.0 - sin * sin).max(0.0).sqrt(),
-            )
+        let cos_max = cone_cos(d, radius);
+        let frame = if cos_max > -1.0 {
+            Frame::from_normal(to_c / d)
         } else {
-            (Frame::from_normal(Vec3::Z), -1.0)
+            Frame::from_normal(Vec3::Z)
         };
+        self.sample_in(p, &frame, cos_max, n, radiance, None)
+    }
+
+    /// [`sample`](Self::sample) with the cone laid out in `frame` (z the cone's
+    /// axis); `bits`, if given, gets bit a·n + b set where ray (a, b) hits.
+    pub fn sample_in(
+        &self,
+        p: Vec3,
+        frame: &Frame,
+        cos_max: f32,
+        n: usize,
+        radiance: bool,
+        mut bits: Option<&mut [u64]>,
+    ) -> Sample {
         let weight = std::f32::consts::TAU * (1.0 - cos_max) / (n * n) as f32;
         let mut s = Sample::default();
         for a in 0..n {
@@ -216,6 +235,10 @@ impl EntityGeometry {
                 let Some(le) = self.trace(&Ray::new(p, dir)) else {
                     continue;
                 };
+                if let Some(bits) = bits.as_deref_mut() {
+                    let k = a * n + b;
+                    bits[k / 64] |= 1 << (k % 64);
+                }
                 let y = sh::eval_f32(dir);
                 for k in 0..COEFFS {
                     s.occlusion[k] += weight * y[k];
@@ -275,6 +298,9 @@ pub struct EntityFields {
     /// Self-occlusion at every vertex of each of the entity's meshes (occluders
     /// with meshes; empty otherwise).
     pub self_occlusion: Vec<Vec<ShF>>,
+    /// The occlusion unblurred, for sphere lights (rigid entities; `None` for
+    /// planes and for fields rebuilt each frame).
+    pub visibility: Option<ConeMap>,
 }
 
 /// The grid of an entity's fields under `settings`.
@@ -330,25 +356,41 @@ pub fn compute_fields(
             occlusion: None,
             radiance: None,
             self_occlusion: Vec::new(),
+            visibility: None,
         };
     }
     let geo = EntityGeometry::new(scene, e);
     let grid = grid_for(e, settings);
     let is_light = e.kind == EntityKind::Light;
-    let samples: Vec<Sample> = (0..grid.len())
+    let words = ConeMap::words(settings.rays);
+    let samples: Vec<(Sample, Vec<u64>)> = (0..grid.len())
         .into_par_iter()
         .map(|i| {
-            let s = geo.sample(
+            let (t, p) = ((i / grid.n_phi) % grid.n_theta, i % grid.n_phi);
+            let dir = grid.direction(t, p);
+            let phi = std::f32::consts::TAU * p as f32 / grid.n_phi as f32;
+            let mut bits = vec![0u64; words];
+            let s = geo.sample_in(
                 e.center + grid.position(i),
-                e.center,
-                e.radius,
+                &cone_frame(dir, phi),
+                cone_cos(grid.radius(i / (grid.n_phi * grid.n_theta)), e.radius),
                 settings.rays,
                 is_light,
+                Some(&mut bits),
             );
             tick();
-            s
+            (s, bits)
         })
         .collect();
+    let visibility = Some(ConeMap {
+        grid,
+        side: settings.rays,
+        bits: samples
+            .iter()
+            .flat_map(|(_, b)| b.iter().copied())
+            .collect(),
+    });
+    let samples: Vec<Sample> = samples.into_iter().map(|(s, _)| s).collect();
     let occlusion = Field {
         grid,
         data: samples.iter().map(|s| s.occlusion).collect(),
@@ -371,6 +413,7 @@ pub fn compute_fields(
         occlusion: Some(occlusion),
         radiance,
         self_occlusion,
+        visibility,
     }
 }
 
