@@ -1,7 +1,7 @@
 //! scene file + settings → output sets: the one place that joins the stages
 //! (`scene`, `accel`, `render`, `adaptive`, `reconstruct`, `preview`, `output`).
 //! Each command is a short function that calls the stages in order:
-//! [`render::run`] (full or adaptive render), [`compare::compare`], [`info`], and
+//! [`render::run`] (full or adaptive render), [`compare::run`], [`info`], and
 //! the previews in [`preview`].
 
 pub mod adaptive;
