@@ -613,6 +613,40 @@ pub trait Vector3: Copy {
     fn components(self) -> [Self::L; 3];
     /// A vector from its components (`Vec3`'s from their first lanes).
     fn from_components(c: [Self::L; 3]) -> Self;
+    /// `self + o` (named apart from `V3`'s inherent `add`).
+    #[inline(always)]
+    fn sum(self, o: Self) -> Self {
+        self.zip(
+            o,
+            #[inline(always)]
+            |a, b| a + b,
+        )
+    }
+    /// `self - o`.
+    #[inline(always)]
+    fn diff(self, o: Self) -> Self {
+        self.zip(
+            o,
+            #[inline(always)]
+            |a, b| a - b,
+        )
+    }
+    /// Each component times `s`.
+    #[inline(always)]
+    fn scale(self, s: Self::L) -> Self {
+        self.map(
+            #[inline(always)]
+            |c| c * s,
+        )
+    }
+    /// |component| each.
+    #[inline(always)]
+    fn abs_each(self) -> Self {
+        self.map(
+            #[inline(always)]
+            |c| c.abs(),
+        )
+    }
 }
 
 impl<L: Lanes> Vector3 for V3<L> {

@@ -8,6 +8,7 @@
 //! scattering.
 
 use super::{Gathered, LightKind, Rows, LANES};
+use crate::accel::{default_error_of, segment_to, triangle_point_error};
 use crate::brdf::{lambert_f, lambert_pdf8, mirror_reflect};
 use crate::math::lanes::{LaneFrame, Lanes8, V3};
 use crate::math::spawn::offset_ray_origin;
@@ -166,12 +167,10 @@ fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     let (b1, b2) = (L::load(g.bary[0]), L::load(g.bary[1]));
     // `triangle_point_with_normal`: the vertices weighted, and the error bound.
     let b0 = one - b1 - b2;
-    let t0 = V3::load(&g.v[0]).mul(b0);
-    let t1 = V3::load(&g.v[1]).mul(b1);
-    let t2 = V3::load(&g.v[2]).mul(b2);
-    let p = t0.add(t1).add(t2);
-    let gamma7 = L::splat(crate::accel::gamma_bound(7));
-    let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
+    // (The loads spelt out: an array's `map` would be a closure of its own,
+    // out of line and without AVX.)
+    let v = [V3::load(&g.v[0]), V3::load(&g.v[1]), V3::load(&g.v[2])];
+    let (p, p_error) = triangle_point_error(v, b1, b2);
     // A sphere's lanes: `sphere_point`'s, computed while gathering.
     let (p, p_error) = if g.spheres {
         let sphere = L::load(g.sphere).gt(zero);
@@ -296,25 +295,19 @@ fn shadow8<L: Lanes8>(g: &Gathered, h: &Hit8<L>, light: &Light8<L>) -> (V3<L>, V
         V3::select(light.unbounded, light.wi, d),
     );
     // `offset_ray_origin`'s default error bound, for a light's point.
-    let q_error = {
-        let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
-        V3::splat(m * L::splat(crate::accel::DEFAULT_REL_ERROR) + L::splat(1.0e-30))
-    };
-    let shadow_end = offset_ray_origin(q, q_error, V3::load(&g.light_n), d.neg());
-    let span = shadow_end.sub(shadow_o);
-    let len = span.dot(span).sqrt();
-    // Not positive (NaN included) or infinite.
-    let degenerate = len.gt(zero).select(len.is_inf(), zero.eq(zero));
+    let shadow_end = offset_ray_origin(q, default_error_of(q), V3::load(&g.light_n), d.neg());
+    let (dir, t, empty) = segment_to(shadow_o, shadow_end);
+    // `SurfacePoint::segment`'s empty segment.
     let shadow_d = V3::select(
-        degenerate,
+        empty,
         V3 {
             x: zero,
             y: zero,
             z: one,
         },
-        span.div(len),
+        dir,
     );
-    let shadow_t = degenerate.select(zero, len * L::splat(1.0 - crate::accel::SHADOW_EPSILON));
+    let shadow_t = empty.select(zero, t);
     (
         shadow_o,
         V3::select(light.unbounded, light.wi, shadow_d),
