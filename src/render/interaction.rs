@@ -77,13 +77,12 @@ fn triangle_interaction(
         ng_orig
     } else {
         let [i0, i1, i2] = index();
-        let n = b0 * m.normals[i0] + b1 * m.normals[i1] + b2 * m.normals[i2];
-        let n = n.normalize_or_zero();
-        if n == Vec3::ZERO {
-            ng_orig
-        } else {
-            n
-        }
+        interpolated_normal(
+            [m.normals[i0], m.normals[i1], m.normals[i2]],
+            wide::f32x4::splat(b1),
+            wide::f32x4::splat(b2),
+            ng_orig,
+        )
     };
     // (u, v) parameterisation: texture coordinates when present, else barycentric.
     let (uv, dpdu, dpdv) = if m.uvs.is_empty() {
@@ -120,6 +119,27 @@ fn triangle_interaction(
         m.bump,
         m.object_id,
         hit.prim,
+    )
+}
+
+/// A triangle's shading normal: the vertices' normals `n` weighted by the
+/// barycentrics (b0, b1, b2) and normalised (glam's `normalize_or_zero`),
+/// the geometric `ng` where that is zero; on one hit or on the lane kernel's
+/// eight. The select reads `normalize_or_zero`'s own test (1/|s| finite and
+/// positive): where it holds, s/|s| has a component of at least ~1/√3, so
+/// it is zero exactly where that test fails.
+#[inline(always)]
+pub(crate) fn interpolated_normal<V: Vector3>(n: [V; 3], b1: V::L, b2: V::L, ng: V) -> V {
+    let zero = V::L::splat(0.0);
+    let one = V::L::splat(1.0);
+    let b0 = one - b1 - b2;
+    let s = n[0].scale(b0).sum(n[1].scale(b1)).sum(n[2].scale(b2));
+    let rcp = one / s.dot(s).sqrt();
+    let unit = rcp.is_finite().and(rcp.gt(zero));
+    s.scale(rcp).zip(
+        ng,
+        #[inline(always)]
+        |s, g| unit.select(s, g),
     )
 }
 

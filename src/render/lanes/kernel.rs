@@ -13,7 +13,8 @@ use crate::brdf::{lambert_f, lambert_pdf8, mirror_reflect};
 use crate::math::lanes::{LaneFrame, Lanes8, V3};
 use crate::math::spawn::offset_ray_origin;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf_z};
-use crate::render::interaction::face_ray;
+use crate::render::interaction::{face_ray, interpolated_normal};
+use crate::render::lights::area_point_pdf;
 use crate::render::path::power_heuristic;
 
 /// What [`shade8`] writes, per lane. About 1.1 KB: the kernel writes it in
@@ -162,11 +163,9 @@ unsafe fn shade8<L: Lanes8>(g: &Gathered, out: &mut Shaded8) {
 #[inline(always)]
 fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     let zero = L::splat(0.0);
-    let one = L::splat(1.0);
     let dir = V3::<L>::load(&g.dir);
     let (b1, b2) = (L::load(g.bary[0]), L::load(g.bary[1]));
     // `triangle_point_with_normal`: the vertices weighted, and the error bound.
-    let b0 = one - b1 - b2;
     // (The loads spelt out: an array's `map` would be a closure of its own,
     // out of line and without AVX.)
     let v = [V3::load(&g.v[0]), V3::load(&g.v[1]), V3::load(&g.v[2])];
@@ -192,10 +191,8 @@ fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     // interpolated and normalised, the geometric one where that gives zero.
     let n = V3::load(&g.n);
     let ns = if g.smooth {
-        let [n0, n1, n2] = [0, 1, 2].map(|k| V3::<L>::load(&g.vn[k]));
-        let s = n0.mul(b0).add(n1.mul(b1)).add(n2.mul(b2));
-        let s = s.normalize_or_zero();
-        V3::select(s.x.eq(zero).and(s.y.eq(zero)).and(s.z.eq(zero)), n, s)
+        let vn = [V3::load(&g.vn[0]), V3::load(&g.vn[1]), V3::load(&g.vn[2])];
+        interpolated_normal(vn, b1, b2, n)
     } else {
         n
     };
@@ -231,17 +228,11 @@ fn light8<L: Lanes8>(g: &Gathered, h: &Hit8<L>) -> Light8<L> {
     } else {
         q
     };
-    let d = q.sub(h.p);
-    let dist2 = d.dot(d);
-    let area = L::load(g.light_area);
-    let wi = d.div(dist2.sqrt());
-    let ln = V3::<L>::load(&g.light_n);
-    let cos_l = -ln.dot(wi);
-    let light_pdf = dist2 / (area * cos_l) * L::load(g.light_pick);
+    // `sample_area_point`, then `LightSet::sample`'s pick and checks.
+    let (d, wi, pdf, defined) = area_point_pdf(q, V3::load(&g.light_n), L::load(g.light_area), h.p);
+    let light_pdf = pdf * L::load(g.light_pick);
     let sampled = kind_is(LightKind::Area)
-        .and(dist2.gt(zero))
-        .and(area.gt(zero))
-        .and(cos_l.gt(zero))
+        .and(defined)
         .and(light_pdf.gt(zero))
         .and(light_pdf.is_finite());
     if !g.other_lights {
@@ -264,9 +255,7 @@ fn light8<L: Lanes8>(g: &Gathered, h: &Hit8<L>) -> Light8<L> {
         L::load(g.u_light[1]),
     ));
     // `env_pdf`'s cosine density, then the pick.
-    let pdf_frame = wi_frame.dot(h.frame.n).max(zero)
-        * L::splat(std::f32::consts::FRAC_1_PI)
-        * L::load(g.light_pick);
+    let pdf_frame = cosine_hemisphere_pdf_z(wi_frame.dot(h.frame.n)) * L::load(g.light_pick);
     let other = drawn.or(in_frame);
     let wi_other = V3::select(drawn, V3::load(&g.drawn_wi), wi_frame);
     let pdf_other = drawn.select(L::load(g.drawn_pdf), pdf_frame);
