@@ -46,11 +46,12 @@ fn default_error(p: Vec3) -> Vec3 {
 
 /// [`default_error`] on one vector or on the lane kernel's eight (its light
 /// points): the largest |coordinate| in glam's `max_element` order,
-/// (x max z) max y, so that the lanes' bits are the scalar's even for NaN.
+/// (x max z) max (y max z), so that a NaN coordinate gives the bits it gave
+/// (SSE's `max` returns its second operand where either is NaN).
 #[inline(always)]
 pub(crate) fn default_error_of<V: Vector3>(p: V) -> V {
     let [x, y, z] = p.abs_each().components();
-    let e = x.max(z).max(y) * V::L::splat(DEFAULT_REL_ERROR) + V::L::splat(1.0e-30);
+    let e = x.max(z).max(y.max(z)) * V::L::splat(DEFAULT_REL_ERROR) + V::L::splat(1.0e-30);
     p.map(
         #[inline(always)]
         |_| e,
@@ -224,6 +225,66 @@ pub fn sphere_point(center: Vec3, radius: f32, p_hit: Vec3) -> SurfacePoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::lanes::{Lanes8, V3};
+
+    /// Edge points: zeros of both signs, NaN, ∞, tiny, huge, mixed.
+    fn edge_points() -> Vec<Vec3> {
+        let (n, i) = (f32::NAN, f32::INFINITY);
+        vec![
+            Vec3::new(0.0, -0.0, 0.0),
+            Vec3::new(1.0, -3.0, 2.0),
+            Vec3::new(n, 1.0, 2.0),
+            Vec3::new(1.0, n, -5.0),
+            // (x max y) max z would give 1 here, glam gives 7.
+            Vec3::new(7.0, n, 1.0),
+            Vec3::new(7.0, 1.0, n),
+            Vec3::new(-i, 1.0, 1.0),
+            Vec3::new(1e-40, -1e-38, 3e-39),
+            Vec3::new(3e38, -2e38, 1e30),
+            Vec3::new(-100.0, 250.5, -0.001),
+        ]
+    }
+
+    fn same(a: Vec3, b: Vec3) -> bool {
+        (0..3).all(|c| a[c].to_bits() == b[c].to_bits())
+    }
+
+    /// The three folded rules give each lane of eight the one-vector bits
+    /// (NaN coordinates included: the lanes read glam's `max_element` order).
+    #[test]
+    fn folded_rules_give_the_lanes_the_scalar_bits() {
+        let pts = edge_points();
+        for k in 0..pts.len() {
+            let rows: [Vec3; 8] = std::array::from_fn(|l| pts[(k + l) % pts.len()]);
+            let ends: [Vec3; 8] = std::array::from_fn(|l| pts[(k + 3 * l + 1) % pts.len()]);
+            let lanes = V3::<wide::f32x8>::load(&rows);
+            let err = default_error_of(lanes).store();
+            let (dir, t, empty) = segment_to(lanes, V3::load(&ends));
+            let (dir, t, empty) = (dir.store(), t.store(), empty.bitmask());
+            let b: [f32; 8] = std::array::from_fn(|l| 0.1 * l as f32);
+            let (tp, te) = triangle_point_error(
+                [lanes, V3::load(&ends), lanes],
+                wide::f32x8::load(b),
+                wide::f32x8::load(b.map(|x| 0.5 - x)),
+            );
+            let (tp, te) = (tp.store(), te.store());
+            for l in 0..8 {
+                let old = Vec3::splat(rows[l].abs().max_element() * DEFAULT_REL_ERROR + 1.0e-30);
+                assert!(same(err[l], old), "{} {} {}", rows[l], err[l], old);
+                let ray = SurfacePoint::segment(rows[l], ends[l]);
+                assert_eq!(empty >> l & 1 == 1, ray.t_max == 0.0 && ray.dir == Vec3::Z);
+                if empty >> l & 1 == 0 {
+                    assert!(same(dir[l], ray.dir) && t[l].to_bits() == ray.t_max.to_bits());
+                }
+                let sp = triangle_point_with_normal(
+                    [rows[l], ends[l], rows[l]],
+                    Vec2::new(b[l], 0.5 - b[l]),
+                    Vec3::Z,
+                );
+                assert!(same(tp[l], sp.p) && same(te[l], sp.p_error));
+            }
+        }
+    }
 
     #[test]
     fn offset_moves_to_the_requested_side() {

@@ -297,3 +297,46 @@ impl Interaction {
             .spawn_ray_to(&SurfacePoint::with_default_error(target, target_n))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `interpolated_normal` selects on `normalize_or_zero`'s own test: it
+    /// gives the bits of the former `normalize_or_zero`, then `== ZERO`,
+    /// on zero, denormal, tiny, huge (overflowing), infinite and NaN sums.
+    #[test]
+    fn interpolated_normal_is_normalize_or_zero_then_the_zero_test() {
+        let ng = Vec3::new(0.0, 0.6, 0.8);
+        let vs = [
+            Vec3::ZERO,
+            Vec3::new(1e-23, 0.0, 0.0),
+            Vec3::new(1e-20, -1e-21, 0.0),
+            Vec3::new(1e-45, 0.0, -1e-45),
+            Vec3::new(3e38, 3e38, 0.0),
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(f32::NAN, 1.0, 0.0),
+            Vec3::new(0.3, -0.2, 0.9),
+            Vec3::new(-0.0, 0.0, -0.0),
+        ];
+        for (k, &a) in vs.iter().enumerate() {
+            let b = vs[(k + 1) % vs.len()];
+            let c = vs[(k + 4) % vs.len()];
+            for (b1, b2) in [(0.0, 0.0), (0.25, 0.5), (1.0, 0.0), (0.1, 0.7)] {
+                let b0 = 1.0 - b1 - b2;
+                let n = (b0 * a + b1 * b + b2 * c).normalize_or_zero();
+                let old = if n == Vec3::ZERO { ng } else { n };
+                let new = interpolated_normal(
+                    [a, b, c],
+                    wide::f32x4::splat(b1),
+                    wide::f32x4::splat(b2),
+                    ng,
+                );
+                assert!(
+                    (0..3).all(|i| old[i].to_bits() == new[i].to_bits()),
+                    "{a} {b} {c} ({b1}, {b2}): {old} vs {new}"
+                );
+            }
+        }
+    }
+}

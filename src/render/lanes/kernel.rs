@@ -3,8 +3,10 @@
 //! `Material::eval`/`pdf`/`sample`, `power_heuristic` and `accel::offset` in
 //! their order (so a lane's bits are the scalar code's), over any [`Lanes8`].
 //! The shading formulas are the scalar code's own functions, generic over
-//! `math::lanes::Lanes` (`math::warp`, `math::spawn`, `LaneFrame`, `path::power_heuristic`,
-//! `brdf::lambert_f`/`lambert_pdf`); what is here is gathering, masking and
+//! `math::lanes::Lanes` (`math::warp`, `math::spawn`, `LaneFrame`, `accel`'s
+//! triangle point, default error and shadow segment, `lights::area_point_pdf`,
+//! `interaction::interpolated_normal`, `path::power_heuristic`,
+//! `brdf::lambert_f`/`lambert_pdf8`); what is here is gathering, masking and
 //! scattering.
 
 use super::{Gathered, LightKind, Rows, LANES};
