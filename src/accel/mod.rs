@@ -63,10 +63,9 @@ pub use offset::{
     triangle_point_with_normal, SurfacePoint,
 };
 
-pub(crate) use offset::{DEFAULT_REL_ERROR, SHADOW_EPSILON};
-/// pbrt's γ(n), the bound on n rounded f32 operations (the error bounds'
-/// constant, for the lane shading's copy of `triangle_point_with_normal`).
-pub(crate) use primitive::gamma as gamma_bound;
+/// The spawning rules written once over `math::lanes::Vector3`, which the
+/// lane kernel runs on eight hits.
+pub(crate) use offset::{default_error_of, segment_to, triangle_point_error};
 pub use stream::RayStream;
 
 use crate::math::{Ray, Vec2, Vec3};

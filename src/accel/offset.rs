@@ -18,6 +18,7 @@
 //! light sample, offset both ends and stop just short of the target
 //! ([`SurfacePoint::spawn_ray_to`]).
 
+use crate::math::lanes::{Lanes, Vector3};
 use crate::math::{cross, Ray, Vec2, Vec3};
 
 use super::primitive::gamma;
@@ -40,7 +41,21 @@ pub fn offset_ray_origin(p: Vec3, n_geo: Vec3, dir: Vec3) -> Vec3 {
 
 /// [`DEFAULT_REL_ERROR`] of the largest coordinate, on every axis.
 fn default_error(p: Vec3) -> Vec3 {
-    Vec3::splat(p.abs().max_element() * DEFAULT_REL_ERROR + 1.0e-30)
+    default_error_of(p)
+}
+
+/// [`default_error`] on one vector or on the lane kernel's eight (its light
+/// points): the largest |coordinate| in glam's `max_element` order,
+/// (x max z) max (y max z), so that a NaN coordinate gives the bits it gave
+/// (SSE's `max` returns its second operand where either is NaN).
+#[inline(always)]
+pub(crate) fn default_error_of<V: Vector3>(p: V) -> V {
+    let [x, y, z] = p.abs_each().components();
+    let e = x.max(z).max(y.max(z)) * V::L::splat(DEFAULT_REL_ERROR) + V::L::splat(1.0e-30);
+    p.map(
+        #[inline(always)]
+        |_| e,
+    )
 }
 
 /// pbrt-v4's `OffsetRayOrigin` ([`crate::math::spawn::offset_ray_origin`],
@@ -113,9 +128,8 @@ impl SurfacePoint {
     }
 
     fn segment(o: Vec3, end: Vec3) -> Ray {
-        let d = end - o;
-        let len = d.length();
-        if len.is_nan() || len <= 0.0 || len.is_infinite() {
+        let (dir, t_max, empty) = segment_to(o, end);
+        if empty.bitmask() & 1 != 0 {
             // Coincident ends: an empty segment that hits nothing.
             return Ray {
                 origin: o,
@@ -124,8 +138,29 @@ impl SurfacePoint {
                 t_max: 0.0,
             };
         }
-        Ray::segment(o, d / len, len * (1.0 - SHADOW_EPSILON))
+        Ray::segment(o, dir, t_max.to_array()[0])
     }
+}
+
+/// The shadow segment from `o` to `end` ([`SurfacePoint::segment`] and the
+/// lane kernel's): its unit direction, its length less [`SHADOW_EPSILON`],
+/// and a mask where it is empty (a length not positive, NaN or infinite).
+/// Each caller makes its empty segment itself: a branch on one ray, a
+/// select on eight.
+#[inline(always)]
+pub(crate) fn segment_to<V: Vector3>(o: V, end: V) -> (V, V::L, V::L) {
+    let zero = V::L::splat(0.0);
+    let d = end.diff(o);
+    let len = d.dot(d).sqrt();
+    let empty = len.gt(zero).select(len.is_inf(), zero.eq(zero));
+    (
+        d.map(
+            #[inline(always)]
+            |c| c / len,
+        ),
+        len * V::L::splat(1.0 - SHADOW_EPSILON),
+        empty,
+    )
 }
 
 /// pbrt-v4 triangle hit point: `p = b0 p0 + b1 p1 + b2 p2` with error bound
@@ -145,15 +180,24 @@ pub fn triangle_normal(v: [Vec3; 3]) -> Vec3 {
 /// [`triangle_point`] with the triangle's [`triangle_normal`] already known.
 #[inline]
 pub fn triangle_point_with_normal(v: [Vec3; 3], bary: Vec2, n: Vec3) -> SurfacePoint {
-    let b0 = 1.0 - bary.x - bary.y;
-    let (t0, t1, t2) = (v[0] * b0, v[1] * bary.x, v[2] * bary.y);
-    let p = t0 + t1 + t2;
-    let abs_sum = t0.abs() + t1.abs() + t2.abs();
+    let (p, p_error) =
+        triangle_point_error(v, wide::f32x4::splat(bary.x), wide::f32x4::splat(bary.y));
     SurfacePoint {
         p,
-        p_error: gamma(7) * abs_sum,
+        p_error,
         n_geo: n,
     }
+}
+
+/// The point and bound of [`triangle_point_with_normal`] on one hit or on
+/// the lane kernel's eight, from the barycentrics b1, b2 of vertices 1, 2.
+#[inline(always)]
+pub(crate) fn triangle_point_error<V: Vector3>(v: [V; 3], b1: V::L, b2: V::L) -> (V, V) {
+    let b0 = V::L::splat(1.0) - b1 - b2;
+    let (t0, t1, t2) = (v[0].scale(b0), v[1].scale(b1), v[2].scale(b2));
+    let p = t0.sum(t1).sum(t2);
+    let abs_sum = t0.abs_each().sum(t1.abs_each()).sum(t2.abs_each());
+    (p, abs_sum.scale(V::L::splat(gamma(7))))
 }
 
 /// pbrt-v4 sphere hit point: re-project onto the surface, error γ₅·|p − c|
@@ -181,6 +225,66 @@ pub fn sphere_point(center: Vec3, radius: f32, p_hit: Vec3) -> SurfacePoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::lanes::{Lanes8, V3};
+
+    /// Edge points: zeros of both signs, NaN, ∞, tiny, huge, mixed.
+    fn edge_points() -> Vec<Vec3> {
+        let (n, i) = (f32::NAN, f32::INFINITY);
+        vec![
+            Vec3::new(0.0, -0.0, 0.0),
+            Vec3::new(1.0, -3.0, 2.0),
+            Vec3::new(n, 1.0, 2.0),
+            Vec3::new(1.0, n, -5.0),
+            // (x max y) max z would give 1 here, glam gives 7.
+            Vec3::new(7.0, n, 1.0),
+            Vec3::new(7.0, 1.0, n),
+            Vec3::new(-i, 1.0, 1.0),
+            Vec3::new(1e-40, -1e-38, 3e-39),
+            Vec3::new(3e38, -2e38, 1e30),
+            Vec3::new(-100.0, 250.5, -0.001),
+        ]
+    }
+
+    fn same(a: Vec3, b: Vec3) -> bool {
+        (0..3).all(|c| a[c].to_bits() == b[c].to_bits())
+    }
+
+    /// The three folded rules give each lane of eight the one-vector bits
+    /// (NaN coordinates included: the lanes read glam's `max_element` order).
+    #[test]
+    fn folded_rules_give_the_lanes_the_scalar_bits() {
+        let pts = edge_points();
+        for k in 0..pts.len() {
+            let rows: [Vec3; 8] = std::array::from_fn(|l| pts[(k + l) % pts.len()]);
+            let ends: [Vec3; 8] = std::array::from_fn(|l| pts[(k + 3 * l + 1) % pts.len()]);
+            let lanes = V3::<wide::f32x8>::load(&rows);
+            let err = default_error_of(lanes).store();
+            let (dir, t, empty) = segment_to(lanes, V3::load(&ends));
+            let (dir, t, empty) = (dir.store(), t.store(), empty.bitmask());
+            let b: [f32; 8] = std::array::from_fn(|l| 0.1 * l as f32);
+            let (tp, te) = triangle_point_error(
+                [lanes, V3::load(&ends), lanes],
+                wide::f32x8::load(b),
+                wide::f32x8::load(b.map(|x| 0.5 - x)),
+            );
+            let (tp, te) = (tp.store(), te.store());
+            for l in 0..8 {
+                let old = Vec3::splat(rows[l].abs().max_element() * DEFAULT_REL_ERROR + 1.0e-30);
+                assert!(same(err[l], old), "{} {} {}", rows[l], err[l], old);
+                let ray = SurfacePoint::segment(rows[l], ends[l]);
+                assert_eq!(empty >> l & 1 == 1, ray.t_max == 0.0 && ray.dir == Vec3::Z);
+                if empty >> l & 1 == 0 {
+                    assert!(same(dir[l], ray.dir) && t[l].to_bits() == ray.t_max.to_bits());
+                }
+                let sp = triangle_point_with_normal(
+                    [rows[l], ends[l], rows[l]],
+                    Vec2::new(b[l], 0.5 - b[l]),
+                    Vec3::Z,
+                );
+                assert!(same(tp[l], sp.p) && same(te[l], sp.p_error));
+            }
+        }
+    }
 
     #[test]
     fn offset_moves_to_the_requested_side() {

@@ -608,6 +608,45 @@ pub trait Vector3: Copy {
     /// [`V3::map`]).
     fn map(self, f: impl Fn(Self::L) -> Self::L) -> Self;
     fn zip(self, o: Self, f: impl Fn(Self::L, Self::L) -> Self::L) -> Self;
+    /// The components, each as a lane value (`Vec3`'s broadcast to the
+    /// register, as glam's `v * s.x` does).
+    fn components(self) -> [Self::L; 3];
+    /// A vector from its components (`Vec3`'s from their first lanes).
+    fn from_components(c: [Self::L; 3]) -> Self;
+    /// `self + o` (named apart from `V3`'s inherent `add`).
+    #[inline(always)]
+    fn sum(self, o: Self) -> Self {
+        self.zip(
+            o,
+            #[inline(always)]
+            |a, b| a + b,
+        )
+    }
+    /// `self - o`.
+    #[inline(always)]
+    fn diff(self, o: Self) -> Self {
+        self.zip(
+            o,
+            #[inline(always)]
+            |a, b| a - b,
+        )
+    }
+    /// Each component times `s`.
+    #[inline(always)]
+    fn scale(self, s: Self::L) -> Self {
+        self.map(
+            #[inline(always)]
+            |c| c * s,
+        )
+    }
+    /// |component| each.
+    #[inline(always)]
+    fn abs_each(self) -> Self {
+        self.map(
+            #[inline(always)]
+            |c| c.abs(),
+        )
+    }
 }
 
 impl<L: Lanes> Vector3 for V3<L> {
@@ -623,6 +662,14 @@ impl<L: Lanes> Vector3 for V3<L> {
     #[inline(always)]
     fn zip(self, o: Self, f: impl Fn(L, L) -> L) -> Self {
         V3::zip(self, o, f)
+    }
+    #[inline(always)]
+    fn components(self) -> [L; 3] {
+        [self.x, self.y, self.z]
+    }
+    #[inline(always)]
+    fn from_components([x, y, z]: [L; 3]) -> Self {
+        Self { x, y, z }
     }
 }
 
@@ -641,6 +688,61 @@ impl Vector3 for Vec3 {
     fn zip(self, o: Self, f: impl Fn(wide::f32x4, wide::f32x4) -> wide::f32x4) -> Self {
         from_f32x4(f(to_f32x4(self), to_f32x4(o)))
     }
+    #[inline(always)]
+    fn components(self) -> [wide::f32x4; 3] {
+        // Spelt out: an array's `map` is a function of its own, left out of line.
+        [
+            wide::f32x4::splat(self.x),
+            wide::f32x4::splat(self.y),
+            wide::f32x4::splat(self.z),
+        ]
+    }
+    #[inline(always)]
+    fn from_components(c: [wide::f32x4; 3]) -> Self {
+        Vec3::new(first(c[0]), first(c[1]), first(c[2]))
+    }
+}
+
+/// Lane 0 of a register.
+#[inline(always)]
+fn first(v: wide::f32x4) -> f32 {
+    from_f32x4(v).x
+}
+
+/// `v` in the local coordinates of the orthonormal frame (s, t, n): the one
+/// formula of `Frame::to_local` and [`LaneFrame::to_local`].
+#[inline(always)]
+pub fn frame_to_local<V: Vector3>(s: V, t: V, n: V, v: V) -> V {
+    V::from_components([v.dot(s), v.dot(t), v.dot(n)])
+}
+
+/// `v`'s local coordinates back in the world, `s·x + t·y + n·z` (glam's
+/// order): `Frame::to_world` and [`LaneFrame::to_world`].
+#[inline(always)]
+pub fn frame_to_world<V: Vector3>(s: V, t: V, n: V, v: V) -> V {
+    let [x, y, z] = v.components();
+    #[inline(always)]
+    fn add<L: Lanes>(a: L, b: L) -> L {
+        a + b
+    }
+    s.map(
+        #[inline(always)]
+        |c| c * x,
+    )
+    .zip(
+        t.map(
+            #[inline(always)]
+            |c| c * y,
+        ),
+        add::<V::L>,
+    )
+    .zip(
+        n.map(
+            #[inline(always)]
+            |c| c * z,
+        ),
+        add::<V::L>,
+    )
 }
 
 /// The register of a `Vec3` as `wide`'s (no instruction where both are SSE).
@@ -703,15 +805,11 @@ impl<L: Lanes> LaneFrame<L> {
     }
     #[inline(always)]
     pub fn to_local(&self, v: V3<L>) -> V3<L> {
-        V3 {
-            x: v.dot(self.s),
-            y: v.dot(self.t),
-            z: v.dot(self.n),
-        }
+        frame_to_local(self.s, self.t, self.n, v)
     }
     #[inline(always)]
     pub fn to_world(&self, v: V3<L>) -> V3<L> {
-        self.s.mul(v.x).add(self.t.mul(v.y)).add(self.n.mul(v.z))
+        frame_to_world(self.s, self.t, self.n, v)
     }
 }
 

@@ -90,12 +90,14 @@ impl Frame {
         }
     }
 
+    /// [`lanes::frame_to_local`] on one vector (the lane kernel's formula).
     pub fn to_local(&self, v: Vec3) -> Vec3 {
-        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+        lanes::frame_to_local(self.s, self.t, self.n, v)
     }
 
+    /// [`lanes::frame_to_world`] on one vector.
     pub fn to_world(&self, v: Vec3) -> Vec3 {
-        self.s * v.x + self.t * v.y + self.n * v.z
+        lanes::frame_to_world(self.s, self.t, self.n, v)
     }
 }
 

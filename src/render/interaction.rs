@@ -77,13 +77,12 @@ fn triangle_interaction(
         ng_orig
     } else {
         let [i0, i1, i2] = index();
-        let n = b0 * m.normals[i0] + b1 * m.normals[i1] + b2 * m.normals[i2];
-        let n = n.normalize_or_zero();
-        if n == Vec3::ZERO {
-            ng_orig
-        } else {
-            n
-        }
+        interpolated_normal(
+            [m.normals[i0], m.normals[i1], m.normals[i2]],
+            wide::f32x4::splat(b1),
+            wide::f32x4::splat(b2),
+            ng_orig,
+        )
     };
     // (u, v) parameterisation: texture coordinates when present, else barycentric.
     let (uv, dpdu, dpdv) = if m.uvs.is_empty() {
@@ -120,6 +119,27 @@ fn triangle_interaction(
         m.bump,
         m.object_id,
         hit.prim,
+    )
+}
+
+/// A triangle's shading normal: the vertices' normals `n` weighted by the
+/// barycentrics (b0, b1, b2) and normalised (glam's `normalize_or_zero`),
+/// the geometric `ng` where that is zero; on one hit or on the lane kernel's
+/// eight. The select reads `normalize_or_zero`'s own test (1/|s| finite and
+/// positive): where it holds, s/|s| has a component of at least ~1/√3, so
+/// it is zero exactly where that test fails.
+#[inline(always)]
+pub(crate) fn interpolated_normal<V: Vector3>(n: [V; 3], b1: V::L, b2: V::L, ng: V) -> V {
+    let zero = V::L::splat(0.0);
+    let one = V::L::splat(1.0);
+    let b0 = one - b1 - b2;
+    let s = n[0].scale(b0).sum(n[1].scale(b1)).sum(n[2].scale(b2));
+    let rcp = one / s.dot(s).sqrt();
+    let unit = rcp.is_finite().and(rcp.gt(zero));
+    s.scale(rcp).zip(
+        ng,
+        #[inline(always)]
+        |s, g| unit.select(s, g),
     )
 }
 
@@ -275,5 +295,48 @@ impl Interaction {
     pub fn spawn_ray_to(&self, target: Vec3, target_n: Vec3) -> Ray {
         self.surface()
             .spawn_ray_to(&SurfacePoint::with_default_error(target, target_n))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `interpolated_normal` selects on `normalize_or_zero`'s own test: it
+    /// gives the bits of the former `normalize_or_zero`, then `== ZERO`,
+    /// on zero, denormal, tiny, huge (overflowing), infinite and NaN sums.
+    #[test]
+    fn interpolated_normal_is_normalize_or_zero_then_the_zero_test() {
+        let ng = Vec3::new(0.0, 0.6, 0.8);
+        let vs = [
+            Vec3::ZERO,
+            Vec3::new(1e-23, 0.0, 0.0),
+            Vec3::new(1e-20, -1e-21, 0.0),
+            Vec3::new(1e-45, 0.0, -1e-45),
+            Vec3::new(3e38, 3e38, 0.0),
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(f32::NAN, 1.0, 0.0),
+            Vec3::new(0.3, -0.2, 0.9),
+            Vec3::new(-0.0, 0.0, -0.0),
+        ];
+        for (k, &a) in vs.iter().enumerate() {
+            let b = vs[(k + 1) % vs.len()];
+            let c = vs[(k + 4) % vs.len()];
+            for (b1, b2) in [(0.0, 0.0), (0.25, 0.5), (1.0, 0.0), (0.1, 0.7)] {
+                let b0 = 1.0 - b1 - b2;
+                let n = (b0 * a + b1 * b + b2 * c).normalize_or_zero();
+                let old = if n == Vec3::ZERO { ng } else { n };
+                let new = interpolated_normal(
+                    [a, b, c],
+                    wide::f32x4::splat(b1),
+                    wide::f32x4::splat(b2),
+                    ng,
+                );
+                assert!(
+                    (0..3).all(|i| old[i].to_bits() == new[i].to_bits()),
+                    "{a} {b} {c} ({b1}, {b2}): {old} vs {new}"
+                );
+            }
+        }
     }
 }

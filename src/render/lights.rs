@@ -5,6 +5,7 @@
 
 use crate::accel::PrimRef;
 use crate::math::distribution::{Distribution1D, Distribution2D};
+use crate::math::lanes::{Lanes, Vector3};
 use crate::math::{cross, luminance, warp, Frame, Vec2, Vec3};
 use crate::scene::environment::{self, direction_to_latlong, latlong_to_direction};
 use crate::scene::{Environment, Scene};
@@ -490,9 +491,8 @@ impl LightSet {
                 lobe_prob * warp::vmf_pdf(wi.dot(*direction), *sharpness)
                     + (1.0 - lobe_prob) * warp::UNIFORM_SPHERE_PDF
             }
-            (Some(EnvSampler::CosineAboutNormal), _) => {
-                wi.dot(n).max(0.0) * std::f32::consts::FRAC_1_PI
-            }
+            // `square_to_cosine_hemisphere`'s density, the lane kernel's too.
+            (Some(EnvSampler::CosineAboutNormal), _) => warp::cosine_hemisphere_pdf_z(wi.dot(n)),
             (Some(_), _) => warp::UNIFORM_SPHERE_PDF,
             (None, _) => 0.0,
         }
@@ -583,24 +583,36 @@ fn scene_radius(scene: &Scene) -> f32 {
 /// `n`), seen from `p`: its direction and density in solid angle; `None` from
 /// behind.
 fn sample_area_point(q: Vec3, n: Vec3, area: f32, emission: Vec3, p: Vec3) -> Option<LightSample> {
-    let d = q - p;
-    let dist2 = d.length_squared();
-    if dist2 <= 0.0 || area <= 0.0 {
-        return None;
-    }
-    let wi = d / dist2.sqrt();
-    let cos_l = -n.dot(wi);
-    // One-sided emission: the back of an emitter is dark.
-    if cos_l <= 0.0 {
+    let (_, wi, pdf, defined) = area_point_pdf(q, n, wide::f32x4::splat(area), p);
+    if defined.bitmask() & 1 == 0 {
         return None;
     }
     Some(LightSample {
         wi,
         radiance: emission,
-        pdf: dist2 / (area * cos_l),
+        pdf: pdf.to_array()[0],
         point: Some((q, n)),
         cone: None,
     })
+}
+
+/// [`sample_area_point`]'s geometry on one point or on the lane kernel's
+/// eight: `d = q − p`, the unit direction, the solid-angle density, and a
+/// mask where that is defined (q ≠ p, a positive area, `p` in front of the
+/// emitter: one-sided emission, the back of an emitter is dark).
+#[inline(always)]
+pub(crate) fn area_point_pdf<V: Vector3>(q: V, n: V, area: V::L, p: V) -> (V, V, V::L, V::L) {
+    let zero = V::L::splat(0.0);
+    let d = q.diff(p);
+    let dist2 = d.dot(d);
+    let len = dist2.sqrt();
+    let wi = d.map(
+        #[inline(always)]
+        |c| c / len,
+    );
+    let cos_l = -n.dot(wi);
+    let defined = dist2.gt(zero).and(area.gt(zero)).and(cos_l.gt(zero));
+    (d, wi, dist2 / (area * cos_l), defined)
 }
 
 /// Samples the cone of directions a sphere light subtends (uniform in solid angle:

@@ -3,16 +3,20 @@
 //! `Material::eval`/`pdf`/`sample`, `power_heuristic` and `accel::offset` in
 //! their order (so a lane's bits are the scalar code's), over any [`Lanes8`].
 //! The shading formulas are the scalar code's own functions, generic over
-//! `math::lanes::Lanes` (`math::warp`, `math::spawn`, `LaneFrame`, `path::power_heuristic`,
-//! `brdf::lambert_f`/`lambert_pdf`); what is here is gathering, masking and
+//! `math::lanes::Lanes` (`math::warp`, `math::spawn`, `LaneFrame`, `accel`'s
+//! triangle point, default error and shadow segment, `lights::area_point_pdf`,
+//! `interaction::interpolated_normal`, `path::power_heuristic`,
+//! `brdf::lambert_f`/`lambert_pdf8`); what is here is gathering, masking and
 //! scattering.
 
 use super::{Gathered, LightKind, Rows, LANES};
+use crate::accel::{default_error_of, segment_to, triangle_point_error};
 use crate::brdf::{lambert_f, lambert_pdf8, mirror_reflect};
 use crate::math::lanes::{LaneFrame, Lanes8, V3};
 use crate::math::spawn::offset_ray_origin;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf_z};
-use crate::render::interaction::face_ray;
+use crate::render::interaction::{face_ray, interpolated_normal};
+use crate::render::lights::area_point_pdf;
 use crate::render::path::power_heuristic;
 
 /// What [`shade8`] writes, per lane. About 1.1 KB: the kernel writes it in
@@ -161,17 +165,13 @@ unsafe fn shade8<L: Lanes8>(g: &Gathered, out: &mut Shaded8) {
 #[inline(always)]
 fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     let zero = L::splat(0.0);
-    let one = L::splat(1.0);
     let dir = V3::<L>::load(&g.dir);
     let (b1, b2) = (L::load(g.bary[0]), L::load(g.bary[1]));
     // `triangle_point_with_normal`: the vertices weighted, and the error bound.
-    let b0 = one - b1 - b2;
-    let t0 = V3::load(&g.v[0]).mul(b0);
-    let t1 = V3::load(&g.v[1]).mul(b1);
-    let t2 = V3::load(&g.v[2]).mul(b2);
-    let p = t0.add(t1).add(t2);
-    let gamma7 = L::splat(crate::accel::gamma_bound(7));
-    let p_error = t0.abs().add(t1.abs()).add(t2.abs()).mul(gamma7);
+    // (The loads spelt out: an array's `map` would be a closure of its own,
+    // out of line and without AVX.)
+    let v = [V3::load(&g.v[0]), V3::load(&g.v[1]), V3::load(&g.v[2])];
+    let (p, p_error) = triangle_point_error(v, b1, b2);
     // A sphere's lanes: `sphere_point`'s, computed while gathering.
     let (p, p_error) = if g.spheres {
         let sphere = L::load(g.sphere).gt(zero);
@@ -193,10 +193,8 @@ fn hit8<L: Lanes8>(g: &Gathered) -> Hit8<L> {
     // interpolated and normalised, the geometric one where that gives zero.
     let n = V3::load(&g.n);
     let ns = if g.smooth {
-        let [n0, n1, n2] = [0, 1, 2].map(|k| V3::<L>::load(&g.vn[k]));
-        let s = n0.mul(b0).add(n1.mul(b1)).add(n2.mul(b2));
-        let s = s.normalize_or_zero();
-        V3::select(s.x.eq(zero).and(s.y.eq(zero)).and(s.z.eq(zero)), n, s)
+        let vn = [V3::load(&g.vn[0]), V3::load(&g.vn[1]), V3::load(&g.vn[2])];
+        interpolated_normal(vn, b1, b2, n)
     } else {
         n
     };
@@ -232,17 +230,11 @@ fn light8<L: Lanes8>(g: &Gathered, h: &Hit8<L>) -> Light8<L> {
     } else {
         q
     };
-    let d = q.sub(h.p);
-    let dist2 = d.dot(d);
-    let area = L::load(g.light_area);
-    let wi = d.div(dist2.sqrt());
-    let ln = V3::<L>::load(&g.light_n);
-    let cos_l = -ln.dot(wi);
-    let light_pdf = dist2 / (area * cos_l) * L::load(g.light_pick);
+    // `sample_area_point`, then `LightSet::sample`'s pick and checks.
+    let (d, wi, pdf, defined) = area_point_pdf(q, V3::load(&g.light_n), L::load(g.light_area), h.p);
+    let light_pdf = pdf * L::load(g.light_pick);
     let sampled = kind_is(LightKind::Area)
-        .and(dist2.gt(zero))
-        .and(area.gt(zero))
-        .and(cos_l.gt(zero))
+        .and(defined)
         .and(light_pdf.gt(zero))
         .and(light_pdf.is_finite());
     if !g.other_lights {
@@ -265,9 +257,7 @@ fn light8<L: Lanes8>(g: &Gathered, h: &Hit8<L>) -> Light8<L> {
         L::load(g.u_light[1]),
     ));
     // `env_pdf`'s cosine density, then the pick.
-    let pdf_frame = wi_frame.dot(h.frame.n).max(zero)
-        * L::splat(std::f32::consts::FRAC_1_PI)
-        * L::load(g.light_pick);
+    let pdf_frame = cosine_hemisphere_pdf_z(wi_frame.dot(h.frame.n)) * L::load(g.light_pick);
     let other = drawn.or(in_frame);
     let wi_other = V3::select(drawn, V3::load(&g.drawn_wi), wi_frame);
     let pdf_other = drawn.select(L::load(g.drawn_pdf), pdf_frame);
@@ -296,25 +286,19 @@ fn shadow8<L: Lanes8>(g: &Gathered, h: &Hit8<L>, light: &Light8<L>) -> (V3<L>, V
         V3::select(light.unbounded, light.wi, d),
     );
     // `offset_ray_origin`'s default error bound, for a light's point.
-    let q_error = {
-        let m = q.x.abs().max(q.y.abs()).max(q.z.abs());
-        V3::splat(m * L::splat(crate::accel::DEFAULT_REL_ERROR) + L::splat(1.0e-30))
-    };
-    let shadow_end = offset_ray_origin(q, q_error, V3::load(&g.light_n), d.neg());
-    let span = shadow_end.sub(shadow_o);
-    let len = span.dot(span).sqrt();
-    // Not positive (NaN included) or infinite.
-    let degenerate = len.gt(zero).select(len.is_inf(), zero.eq(zero));
+    let shadow_end = offset_ray_origin(q, default_error_of(q), V3::load(&g.light_n), d.neg());
+    let (dir, t, empty) = segment_to(shadow_o, shadow_end);
+    // `SurfacePoint::segment`'s empty segment.
     let shadow_d = V3::select(
-        degenerate,
+        empty,
         V3 {
             x: zero,
             y: zero,
             z: one,
         },
-        span.div(len),
+        dir,
     );
-    let shadow_t = degenerate.select(zero, len * L::splat(1.0 - crate::accel::SHADOW_EPSILON));
+    let shadow_t = empty.select(zero, t);
     (
         shadow_o,
         V3::select(light.unbounded, light.wi, shadow_d),
