@@ -2,6 +2,7 @@
 //! ray interval handling, watertightness on closed meshes, rays inside spheres,
 //! degenerate input, a pathologically deep scene, and robust ray spawning.
 
+use gradtrace::accel::brute_force::BruteForce;
 use gradtrace::accel::{offset_ray_origin, Accel, Hit, PrimRef};
 use gradtrace::math::{Ray, Vec3};
 use gradtrace::scene::{Mesh, Sphere};
@@ -89,49 +90,6 @@ fn bunny() -> Mesh {
         );
     }
     mesh("bunny", positions, triangles)
-}
-
-/// The reference closest and any hit: every primitive tested with
-/// [`Accel::intersect_primitive`] (the traversal's own exact tests), no
-/// tree; a tie goes to the primitive first in input order (triangles of
-/// mesh 0, mesh 1, …, then spheres), as the traversal's do.
-struct BruteForce<'a> {
-    accel: &'a Accel,
-    prims: Vec<PrimRef>,
-}
-
-impl<'a> BruteForce<'a> {
-    fn new(accel: &'a Accel, meshes: &[Mesh], spheres: &[Sphere]) -> Self {
-        let triangles = meshes.iter().enumerate().flat_map(|(m, mesh)| {
-            (0..mesh.triangles.len() as u32).map(move |tri| PrimRef::Triangle {
-                mesh: m as u32,
-                tri,
-            })
-        });
-        let spheres = (0..spheres.len() as u32).map(PrimRef::Sphere);
-        Self {
-            accel,
-            prims: triangles.chain(spheres).collect(),
-        }
-    }
-
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        for &prim in &self.prims {
-            if let Some(h) = self.accel.intersect_primitive(ray, prim) {
-                if best.is_none_or(|b| h.t < b.t) {
-                    best = Some(h);
-                }
-            }
-        }
-        best
-    }
-
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.prims
-            .iter()
-            .any(|&prim| self.accel.intersect_primitive(ray, prim).is_some())
-    }
 }
 
 /// Checks a BVH closest hit against the brute-force one: the same hit bit for bit
@@ -876,7 +834,7 @@ fn check_against_brute_force(
     rays: usize,
     seed: u64,
 ) -> usize {
-    let accel = brute.accel;
+    let accel = brute.accel();
     let mut rng = Rng::new(seed);
     let mut hits = 0;
     for _ in 0..rays {

@@ -41,6 +41,8 @@
 //! streams; `primitive.rs` the ray/primitive tests; `offset.rs` the
 //! ray-spawning rule.
 
+#[doc(hidden)]
+pub mod brute_force;
 mod build;
 mod bvh4;
 mod bvh8;

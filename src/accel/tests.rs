@@ -1,50 +1,8 @@
-//! The accel's unit tests, their scenes (shared with `stream.rs`'s tests)
-//! and the brute-force reference they check the trees against.
+//! The accel's unit tests and their scenes (shared with `stream.rs`'s tests);
+//! the trees are checked against [`BruteForce`].
 
+pub(super) use super::brute_force::BruteForce;
 use super::*;
-
-/// The reference closest and any hit: every primitive tested with
-/// [`Accel::intersect_primitive`] (the traversal's own exact tests), no
-/// tree; ties go to the first in input order, as the traversal's do.
-pub(super) struct BruteForce<'a> {
-    accel: &'a Accel,
-    /// Every primitive in input order.
-    prims: Vec<PrimRef>,
-}
-
-impl<'a> BruteForce<'a> {
-    pub(super) fn new(accel: &'a Accel, meshes: &[Mesh], spheres: &[Sphere]) -> Self {
-        let triangles = meshes.iter().enumerate().flat_map(|(m, mesh)| {
-            (0..mesh.triangles.len() as u32).map(move |tri| PrimRef::Triangle {
-                mesh: m as u32,
-                tri,
-            })
-        });
-        let spheres = (0..spheres.len() as u32).map(PrimRef::Sphere);
-        Self {
-            accel,
-            prims: triangles.chain(spheres).collect(),
-        }
-    }
-
-    pub(super) fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        for &prim in &self.prims {
-            if let Some(h) = self.accel.intersect_primitive(ray, prim) {
-                if best.is_none_or(|b| h.t < b.t) {
-                    best = Some(h);
-                }
-            }
-        }
-        best
-    }
-
-    pub(super) fn occluded(&self, ray: &Ray) -> bool {
-        self.prims
-            .iter()
-            .any(|&prim| self.accel.intersect_primitive(ray, prim).is_some())
-    }
-}
 
 /// Uniform f32s in [0, 1) from a 64-bit LCG: test data reproducible without a
 /// dependency.
