@@ -21,3 +21,9 @@ pub mod render;
 pub mod scene;
 
 pub use error::{Error, Result};
+
+/// Lower-case hex of a digest's bytes: the one spelling of every cache key,
+/// content hash and render id.
+pub(crate) fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}

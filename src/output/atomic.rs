@@ -556,10 +556,7 @@ pub fn render_id(beauty: &[Vec3], width: usize, height: usize, exposure: f32) ->
         }
         h.update(&buf);
     }
-    h.finalize()[..16]
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    crate::hex(&h.finalize()[..16])
 }
 
 /// An EXR and its PNG preview, staged under one render id.
@@ -749,10 +746,7 @@ impl SetIdHasher {
 
     pub fn finish(self) -> String {
         use sha2::Digest;
-        self.0.finalize()[..16]
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect()
+        crate::hex(&self.0.finalize()[..16])
     }
 }
 

@@ -43,11 +43,7 @@ fn key_of(parts: &[&str]) -> String {
         h.update((part.len() as u64).to_le_bytes());
         h.update(part.as_bytes());
     }
-    hex(&h.finalize())
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
+    crate::hex(&h.finalize())
 }
 
 /// A folder of cache entries.
@@ -141,7 +137,7 @@ impl Entry {
             && lines[1] == self.key
             && seconds.is_finite()
             && payload.len() == len
-            && hex(&Sha256::digest(payload)) == lines[4];
+            && crate::hex(&Sha256::digest(payload)) == lines[4];
         if !whole {
             return None;
         }
@@ -159,7 +155,7 @@ impl Entry {
                 "{MAGIC}\n{}\n{seconds}\n{}\n{}\n",
                 self.key,
                 payload.len(),
-                hex(&Sha256::digest(payload))
+                crate::hex(&Sha256::digest(payload))
             )
             .and_then(|_| w.write_all(payload))
             .map_err(|e| e.to_string())

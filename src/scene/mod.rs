@@ -249,7 +249,7 @@ impl Scene {
                 h.update(field);
             }
         }
-        Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+        Ok(crate::hex(&h.finalize()))
     }
 
     pub fn emitter_count(&self) -> usize {
