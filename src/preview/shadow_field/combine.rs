@@ -247,12 +247,13 @@ impl Combiner {
     }
 
     /// A sphere light's direct light at a Lambertian receiver per unit albedo,
-    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions. V is the product of the unblurred cone maps of the entities
-    /// `nearer` than the light (the paper's near-to-far rule), and for an entity
-    /// without a map its SH visibility towards the light's centre. The receiver's
-    /// own shadowing is the caller's (`own_share`). Order-4 SH cannot hold a light a few degrees wide: its
-    /// product with an occluder's field leaves about half of the shadow lit and
-    /// spreads the rest over tens of degrees (issue 57).
+    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions.
+    /// V is the product of the unblurred cone maps of the entities `nearer`
+    /// than the light (the paper's near-to-far rule), and for an entity without
+    /// a map its SH visibility towards the light's centre. The receiver's own
+    /// shadowing is the caller's (`own_share`). Order-4 SH cannot hold a light a
+    /// few degrees wide: its product with an occluder's field leaves about half
+    /// of the shadow lit and spreads the rest over tens of degrees (issue 57).
     fn sphere_light(
         &self,
         p: Vec3,
