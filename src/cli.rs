@@ -321,16 +321,22 @@ pub(crate) struct RenderArgs {
     /// build with `--features oidn` (README.md, "Optional: denoiser").
     #[arg(long, conflicts_with = "strategy")]
     pub(crate) denoise: bool,
-    /// With --gradients: shadow rays per azimuth line for the first hit's direct
-    /// light; the same rays give the radiance and the visibility (soft-shadow)
-    /// gradient [default: 32; 4 with --strategy; at most 1024]. 0: point light
-    /// sampling and no visibility term.
+    /// With --gradients: shadow rays per azimuth line for the first hit's
+    /// visibility (soft-shadow) gradient; the radiance is the plain render's, bit for
+    /// bit [default: 4; at most 1024]. 0: no visibility term.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_VIS_SAMPLES))]
     pub(crate) vis_samples: Option<u32>,
     /// With --gradients: bisection steps refining each visibility jump (extra
     /// shadow rays per jump) [default: 0; at most 24].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_VIS_REFINE))]
     pub(crate) vis_refine: Option<u32>,
+    /// With --gradients: the probability of marching a sample's ring (~70 % of its
+    /// visibility rays) where two probe rays and the radiance's shadow ray agree
+    /// (fully lit or fully blocked as far as they see); the crossings' weights
+    /// account for it, so the gradient stays unbiased. 1 marches every ring
+    /// [default: 0.25].
+    #[arg(long, value_name = "Q", value_parser = vis_gate)]
+    pub(crate) vis_gate: Option<f32>,
     /// With --gradients: treat a near light as distant (no SV term) where
     /// 2|n_x|·d exceeds F, the far-light criterion of the first-order paper, Sec. 5.2.
     #[arg(long, value_name = "F", value_parser = positive)]
@@ -506,6 +512,16 @@ pub(crate) fn compare_budget(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--vis-gate`: a probability in (0, 1] (0 would never march a line, a bias).
+pub(crate) fn vis_gate(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!(
+            "expected a probability in (0, 1], e.g. 0.125, got {s:?}"
+        )),
+    }
+}
+
 /// A closed set of the library's (`Strategy`, `Interpolation`, `Integrator`) as a
 /// clap parser: the choices are the library's names (listed in `--help` and in
 /// the error), `aliases` the spellings of earlier versions.
@@ -601,6 +617,7 @@ impl RenderArgs {
                 gradients: self.gradients,
                 vis_samples: self.vis_samples,
                 vis_refine: self.vis_refine,
+                vis_gate: self.vis_gate,
                 far_light: self.far_light,
                 gradient_spp: self.gradient_spp,
                 crop: sp.crop,

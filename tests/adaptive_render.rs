@@ -363,6 +363,7 @@ fn gradients_on_the_back_of_a_rect_light_are_finite() {
             lines: Some(LineConfig {
                 n_theta: 4,
                 refine: 0,
+                gate: 1.0,
             }),
             far_light: None,
         },

@@ -502,6 +502,7 @@ fn converged_soft_shadow_gradient_matches_image_differences() {
         lines: Some(LineConfig {
             n_theta: 64,
             refine: 4,
+            gate: 1.0,
         }),
         ..traced.tracer(&s, 2, 5)
     };
@@ -730,6 +731,7 @@ fn glossy_indirect_gradient_matches_image_differences() {
     let lines = Some(LineConfig {
         n_theta: 4,
         refine: 0,
+        gate: 1.0,
     });
     let tracer = |max_depth: u32| PathTracer {
         lines,

@@ -600,6 +600,7 @@ fn gradients_are_finite_on_hard_configurations() {
             lines: Some(LineConfig {
                 n_theta: 16,
                 refine,
+                gate: 0.25,
             }),
             far_light: Some(4.0),
             ..traced.tracer(&s, 4, 3)

@@ -74,6 +74,8 @@ pub enum SummaryKind {
         rays: u64,
         /// The denoiser's wall time, with `--denoise`.
         denoise_s: Option<f64>,
+        /// With `--gradients`: their share of the tracing time (`RenderStats`).
+        gradient_share: Option<f64>,
     },
     NoiseAdaptive {
         mean_spp: f64,
@@ -101,8 +103,12 @@ impl fmt::Display for RenderSummary {
                 seconds,
                 rays,
                 denoise_s,
+                gradient_share,
             } => {
                 write!(f, "{spp} spp, {seconds:.3} s, {}", rate(*rays, *seconds))?;
+                if let Some(g) = gradient_share {
+                    write!(f, " (gradients {:.0} % of the time)", g * 100.0)?;
+                }
                 if let Some(d) = denoise_s {
                     write!(f, ", denoised in {d:.3} s")?;
                 }
@@ -276,6 +282,7 @@ fn run_full(
             seconds: out.stats.wall_time.as_secs_f64(),
             rays: out.stats.rays,
             denoise_s,
+            gradient_share: out.stats.gradient_share,
         },
     })
 }

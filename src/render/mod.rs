@@ -26,6 +26,16 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+/// Shadow rays per visibility line. Polygon crossings are solved exactly on the
+/// blocker's edges, so more rays mostly find thinner blockers: on spheres_table
+/// 4 rays per line reach a visibility-gradient error 1.1× that of 32 at 0.2× the
+/// line cost (issue 53; benches/README.md, gradients).
+pub const DEFAULT_VIS_SAMPLES: u32 = 4;
+
+/// Probability of marching the ring where the penumbra probes agree
+/// (`visibility::Gate`): the ring is ~70 % of the line-and-ring rays.
+pub const DEFAULT_VIS_GATE: f32 = 0.25;
+
 /// Options for one render; `None` fields fall back to the scene's `[render]` table.
 /// The thread count is the caller's rayon pool (the CLI's `--threads`); it never
 /// changes the image.
@@ -41,12 +51,15 @@ pub struct RenderOptions {
     pub aovs: bool,
     /// Compute the analytic image gradient planes (`grad.*` layers).
     pub gradients: bool,
-    /// With gradients: shadow rays per φ-line for the first hit's direct light
-    /// (visibility gradients need a line; default 32). 0: point sampling and no
-    /// visibility term, the cheapest gradients.
+    /// With gradients: shadow rays per φ-line for the first hit's visibility
+    /// gradient (default [`DEFAULT_VIS_SAMPLES`]). 0: no visibility term, the
+    /// cheapest gradients.
     pub vis_samples: Option<u32>,
     /// With gradients: bisection steps that refine each visibility jump (default 0).
     pub vis_refine: Option<u32>,
+    /// With gradients: the probability of marching a sample's ring where its
+    /// penumbra probes agree (`visibility::Gate`; default [`DEFAULT_VIS_GATE`]).
+    pub vis_gate: Option<f32>,
     /// With gradients: treat near lights as distant where 2|n_x|·d exceeds this
     /// factor (the far-light criterion of Sec. 5.2), dropping their SV term.
     pub far_light: Option<f32>,
@@ -92,7 +105,7 @@ impl RenderOptions {
             setup.camera.height,
             self.aovs,
             self.gradients,
-            setup.lines.map(|l| (l.n_theta, l.refine)),
+            setup.lines.map(|l| (l.n_theta, l.refine, l.gate)),
             self.far_light,
         ))
     }
@@ -197,6 +210,9 @@ pub struct RenderStats {
     pub wall_time: Duration,
     /// Rays traced (camera, bounce and shadow rays together).
     pub rays: u64,
+    /// With gradients: the share of the tracing time they took, measured on one
+    /// sample in 64 traced with and without them.
+    pub gradient_share: Option<f64>,
 }
 
 /// Progress callback: called with (pixels done, pixels total) from worker threads
@@ -297,8 +313,9 @@ impl Setup {
                 && opts.vis_samples != Some(0)
                 && gradients::visibility::scene_can_cast_shadows(scene))
             .then(|| path::LineConfig {
-                n_theta: opts.vis_samples.unwrap_or(32),
+                n_theta: opts.vis_samples.unwrap_or(DEFAULT_VIS_SAMPLES),
                 refine: opts.vis_refine.unwrap_or(0),
+                gate: opts.vis_gate.unwrap_or(DEFAULT_VIS_GATE),
             }),
             far_light: opts.far_light,
         })
@@ -719,15 +736,22 @@ impl Film {
                         let i = (y - t.y0) * tw + x - t.x0;
                         let acc = &mut t.pixels[i];
                         for s in plan(pixel) {
-                            let r = camera_sample(
-                                &ctx.tracer,
-                                ctx.camera,
-                                pixel as u32,
-                                s,
-                                ctx.seed,
-                                ctx.gradients,
-                                Vec2::ZERO,
-                            );
+                            let sample = |gradients| {
+                                camera_sample(
+                                    &ctx.tracer,
+                                    ctx.camera,
+                                    pixel as u32,
+                                    s,
+                                    ctx.seed,
+                                    gradients,
+                                    Vec2::ZERO,
+                                )
+                            };
+                            let r = if ctx.gradients && is_timed(pixel as u32, s) {
+                                acc.time_gradient(pixel as u32, s, sample)
+                            } else {
+                                sample(ctx.gradients)
+                            };
                             acc.add(&r, s, s == ctx.first);
                             if let (Some(g), Some(sum)) = (&r.gradient, t.gradients.get_mut(i)) {
                                 sum.add(g);
@@ -798,15 +822,20 @@ impl Film {
         let (cx0, cy0) = out.origin;
         let mut rays = 0;
         let mut spp = 0;
+        let mut timing = [0.0; 2];
         self.for_each(|pixel, acc, gradient| {
             let (x, y) = (pixel % self.full_width, pixel / self.full_width);
             let i = (y - cy0) * cw + x - cx0;
             rays += acc.rays;
+            timing[0] += acc.timing[0];
+            timing[1] += acc.timing[1];
             spp = spp.max(acc.count);
             acc.store(&mut out, i, gradient);
         });
         out.spp = spp;
         out.stats.rays = rays;
+        out.stats.gradient_share =
+            (timing[0] > 0.0).then(|| (1.0 - timing[1] / timing[0]).max(0.0));
         out
     }
 }
@@ -891,6 +920,15 @@ pub(crate) struct PixelAccumulator {
     object_id: u32,
     hits: u32,
     rays: u64,
+    /// Seconds of the [`is_timed`] samples with and without their gradient.
+    timing: [f64; 2],
+}
+
+/// The samples whose gradient cost is measured (one in 64, spread by a hash): each
+/// is traced once more without gradients and both are timed, so that the summary
+/// can say what share of the render the gradients took (~1.5 % extra work).
+fn is_timed(pixel: u32, sample: u32) -> bool {
+    crate::math::sampler::hash2(pixel, sample ^ 0x6772_6164) % 64 == 0
 }
 
 /// Splits the sample indices into two halves whose means are two independent
@@ -933,6 +971,34 @@ impl PixelAccumulator {
             }
         }
         self.rays += r.rays as u64;
+    }
+
+    /// Traces `sample(true)`, the sample with gradients, and times it against the
+    /// same sample without them. Which goes first alternates (the second finds the
+    /// caches warm), and a pair that took over a millisecond (the thread was
+    /// preempted) is left out.
+    fn time_gradient(
+        &mut self,
+        pixel: u32,
+        index: u32,
+        sample: impl Fn(bool) -> SampleResult,
+    ) -> SampleResult {
+        let timed = |gradients| {
+            let start = Instant::now();
+            let r = std::hint::black_box(sample(gradients));
+            (r, start.elapsed().as_secs_f64())
+        };
+        let ((r, with), (_, without)) = if crate::math::sampler::hash2(index, pixel) & 1 == 0 {
+            (timed(true), timed(false))
+        } else {
+            let plain = timed(false);
+            (timed(true), plain)
+        };
+        if with.max(without) < 1e-3 {
+            self.timing[0] += with;
+            self.timing[1] += without;
+        }
+        r
     }
 
     /// The pixel mean I and the class-A estimate A (the class-A sum over the

@@ -5,7 +5,7 @@
 use super::gradients::geometry::{hit_duals, HitDuals};
 use super::gradients::shading::{self, LightPoint};
 use super::gradients::sphere_light::{self, ConeLaw};
-use super::gradients::visibility::{trace_line_and_ring, Domain, LinePoint};
+use super::gradients::visibility::{trace_gated, Domain, Gate};
 use super::gradients::{GradientSample, SV};
 use super::interaction::{interaction, Interaction};
 use super::lights::{LightSet, LineLight};
@@ -92,13 +92,21 @@ pub struct PathTracer<'a> {
     pub far_light: Option<f32>,
 }
 
-/// Line sampling of the first hit's direct light: `n_theta` shadow rays along one
-/// azimuth per camera sample, bisection `refine` steps per visibility jump.
+/// The visibility gradient at the first hit: one φ-line of `n_theta` shadow rays
+/// and its ring per camera sample, bisection `refine` steps per visibility jump,
+/// marched with probability `gate` where the penumbra probes all agree
+/// ([`Gate`]; 1 marches every sample).
 #[derive(Clone, Copy, Debug)]
 pub struct LineConfig {
     pub n_theta: u32,
     pub refine: u32,
+    pub gate: f32,
 }
+
+/// The first hit's gate and line numbers: a hashed dimension set of their own, far
+/// past the path's, so that `--gradients` leaves every number the radiance reads
+/// (and with it the radiance) as a plain render has them.
+const GATE_DIM: u32 = 1 << 16;
 
 /// What one camera sample returns: radiance plus first-hit data for the AOVs.
 #[derive(Clone, Copy, Debug, Default)]
@@ -167,9 +175,6 @@ pub(super) struct PathState {
     /// The previous vertex's shading normal: the environment's light-sampling
     /// density depends on it (`LightSet::pdf_env`).
     pub prev_n: Vec3,
-    /// The previous vertex sampled its direct light by lines: emitters that
-    /// lines cover are not counted again when the path hits them.
-    pub prev_line: bool,
 }
 
 impl PathState {
@@ -182,7 +187,6 @@ impl PathState {
             prev_pdf: f32::INFINITY,
             prev_p: origin,
             prev_n: Vec3::ZERO,
-            prev_line: false,
         }
     }
 }
@@ -278,21 +282,10 @@ impl PathTracer<'_> {
             // (bunny render −3 %, cornell within the noise; same bits).
             let bsdf_sample = material.sample(wo, u.lobe, u.dir);
             let capture = first_hit_capture(&mut visible, depth);
-            // In line mode every line-coverable light is accounted for by the lines
-            // in expectation over the pick, whichever light this sample picked, so the
-            // continuation must not count them again even when the pick fell on a
-            // (point-sampled) mesh emitter.
-            st.prev_line = capture.is_some() && self.lines.is_some() && !material.is_delta();
-            let (ld, rays) = self.sample_ld(
-                &si,
-                wo,
-                material,
-                st.beta,
-                u.pick,
-                u.light,
-                st.prev_line,
-                capture,
-            );
+            let gate_u =
+                (capture.is_some() && self.lines.is_some()).then(|| sampler.block8(GATE_DIM));
+            let (ld, rays) =
+                self.sample_ld(&si, wo, material, st.beta, u.pick, u.light, capture, gate_u);
             st.radiance += ld;
             out.rays += rays;
             let capture = first_hit_capture(&mut visible, depth);
@@ -353,33 +346,25 @@ impl PathTracer<'_> {
             return Vec3::ZERO;
         };
         // The light-sampling density only where MIS weighs this ray: not after
-        // lines (weight 0), not after a camera ray or a delta lobe (weight 1).
-        let mis = !st.prev_line && !st.prev_pdf.is_infinite();
+        // a camera ray or a delta lobe (weight 1).
+        let mis = !st.prev_pdf.is_infinite();
         let (le, pdf_env) = self
             .lights
             .escaped(self.scene, env, ray.dir, st.prev_n, mis);
-        let w = if st.prev_line {
-            0.0
-        } else if st.prev_pdf.is_infinite() {
-            1.0
-        } else {
+        let w = if mis {
             power_heuristic(st.prev_pdf, pdf_env)
+        } else {
+            1.0
         };
         st.beta * le * w
     }
 
-    /// Emission of the surface the path hit, MIS-weighted against light sampling
-    /// (zero where the previous vertex's lines already counted this emitter).
+    /// Emission of the surface the path hit, MIS-weighted against light sampling.
     fn emitted(&self, si: &Interaction, st: &PathState) -> Vec3 {
         if si.emission == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        let w = if st.prev_line && self.lights.is_line_light(self.scene, si.prim) {
-            0.0
-        } else {
-            self.emitter_weight(si, st.prev_pdf, st.prev_p)
-        };
-        st.beta * si.emission * w
+        st.beta * si.emission * self.emitter_weight(si, st.prev_pdf, st.prev_p)
     }
 
     /// The MIS weight of an emitter the path hit at `si`, against the light
@@ -395,10 +380,10 @@ impl PathTracer<'_> {
         power_heuristic(prev_pdf, light_pdf)
     }
 
-    /// Direct light at a vertex from one light sample (pbrt's `SampleLd`), and the
-    /// shadow rays it traced. At the first hit in line mode (`line`) the picked light
-    /// is marched by a φ-line when it can be; otherwise one point sample, MIS-weighted.
-    /// With `capture` (first hit, gradients) the sample's gradient lanes are added.
+    /// Direct light at a vertex from one light sample (pbrt's `SampleLd`),
+    /// MIS-weighted, and the shadow rays it traced. With `capture` (first hit,
+    /// gradients) the sample's gradient lanes are added, and with `gate_u` the
+    /// picked light's visibility gradient ([`Self::visibility_gradient`]).
     #[allow(clippy::too_many_arguments)]
     fn sample_ld(
         &self,
@@ -408,30 +393,60 @@ impl PathTracer<'_> {
         beta: Vec3,
         u_pick: f32,
         u_light: Vec2,
-        line: bool,
-        capture: Option<&mut GradientCapture>,
+        mut capture: Option<&mut GradientCapture>,
+        gate_u: Option<[f32; 8]>,
     ) -> (Vec3, u32) {
-        let scene = self.scene;
-        let mut capture = capture;
-        if let (true, Some(cfg), Some(c)) = (line, self.lines, capture.as_deref_mut()) {
-            if let Some((ll, pmf)) = self.lights.pick_line(u_pick) {
-                return self.line_direct(si, wo, material, ll, pmf, u_light, cfg, c);
+        let (ld, rays, seen) = self.point_ld(
+            si,
+            wo,
+            material,
+            beta,
+            u_pick,
+            u_light,
+            capture.as_deref_mut(),
+        );
+        let (Some(cfg), Some(c), Some(u)) = (self.lines, capture, gate_u) else {
+            return (ld, rays);
+        };
+        match self.lights.pick_line(u_pick) {
+            Some((ll, pmf)) if !material.is_delta() => {
+                let vis_rays = self.visibility_gradient(si, wo, material, ll, pmf, seen, u, cfg, c);
+                (ld, rays + vis_rays)
             }
+            _ => (ld, rays),
         }
+    }
+
+    /// [`Self::sample_ld`]'s light sample, and whether its shadow ray found the
+    /// light visible (`None` where it cast none).
+    #[allow(clippy::too_many_arguments)]
+    fn point_ld(
+        &self,
+        si: &Interaction,
+        wo: Vec3,
+        material: &Material,
+        beta: Vec3,
+        u_pick: f32,
+        u_light: Vec2,
+        capture: Option<&mut GradientCapture>,
+    ) -> (Vec3, u32, Option<bool>) {
         if material.is_delta() {
-            return (Vec3::ZERO, 0);
+            return (Vec3::ZERO, 0, None);
         }
-        let Some(ls) = self.lights.sample(scene, si.p, &si.frame, u_pick, u_light) else {
-            return (Vec3::ZERO, 0);
+        let Some(ls) = self
+            .lights
+            .sample(self.scene, si.p, &si.frame, u_pick, u_light)
+        else {
+            return (Vec3::ZERO, 0, None);
         };
         let wi_local = si.frame.to_local(ls.wi);
         let f = material.eval(wo, wi_local);
         // Both sides must agree: the shading and the geometric normal.
         if !(wi_local.z > 0.0 && ls.wi.dot(si.ng) > 0.0 && f != Vec3::ZERO) {
-            return (Vec3::ZERO, 0);
+            return (Vec3::ZERO, 0, None);
         }
         if !self.unoccluded(si, ls.wi, ls.point) {
-            return (Vec3::ZERO, 1);
+            return (Vec3::ZERO, 1, Some(false));
         }
         let bsdf_pdf = material.pdf(wo, wi_local);
         let w = power_heuristic(ls.pdf, bsdf_pdf);
@@ -460,7 +475,11 @@ impl PathTracer<'_> {
                 c.g.add_lanes(&lanes, 1.0);
             }
         }
-        (beta * f * wi_local.z * ls.radiance * (w / ls.pdf), 1)
+        (
+            beta * f * wi_local.z * ls.radiance * (w / ls.pdf),
+            1,
+            Some(true),
+        )
     }
 
     /// The BSDF sample `bs` of `material` continues the path (throughput, MIS
@@ -517,93 +536,61 @@ impl PathTracer<'_> {
         *beta != Vec3::ZERO
     }
 
-    /// Direct light at the first hit from one light, by one φ-line of shadow rays
-    /// (radiance, gradient lanes and the visibility term from the same rays).
+    /// The visibility (soft-shadow) gradient of the first hit's picked light: one
+    /// φ-line and ring behind the penumbra gate, whose probes start from the
+    /// radiance's own shadow ray (`seen`). The radiance is the light sample's; the
+    /// line adds only the `vis` term. Returns the shadow rays it traced.
     #[allow(clippy::too_many_arguments)]
-    fn line_direct(
+    fn visibility_gradient(
         &self,
         si: &Interaction,
         wo: Vec3,
         material: &Material,
         light: LineLight,
         pmf: f32,
-        u: Vec2,
+        seen: Option<bool>,
+        u: [f32; 8],
         cfg: LineConfig,
         c: &mut GradientCapture,
-    ) -> (Vec3, u32) {
+    ) -> u32 {
         let scene = self.scene;
-        let p = si.p;
         let Some((domain, le)) = line_domain(scene, light, si) else {
-            return (Vec3::ZERO, 0);
+            return 0;
         };
-        let (hd, g) = (&c.hd, &mut c.g);
         let env = scene.environment.as_ref();
-        let radiance_from = |w: Vec3| match light {
-            LineLight::Environment => env.map_or(Vec3::ZERO, |e| e.eval(w)),
-            _ => le,
-        };
         let transport = |w: Vec3| {
             let wl = si.frame.to_local(w);
             if wl.z <= 0.0 {
                 return Vec3::ZERO;
             }
-            material.eval(wo, wl) * wl.z * radiance_from(w) / pmf
-        };
-        let mut radiance = Vec3::ZERO;
-        let mut on_point = |pt: &LinePoint| {
-            if !pt.visible {
-                return;
-            }
-            let wl = si.frame.to_local(pt.wi);
-            if wl.z <= 0.0 || pt.wi.dot(si.ng) <= 0.0 {
-                return;
-            }
-            let le = radiance_from(pt.wi);
-            radiance += material.eval(wo, wl) * wl.z * le / (pt.pdf * pmf);
-            let far = self.far_light.map(|k| (hd.cv, k));
-            let c = if let Domain::Cone {
-                sphere: Some((centre, radius)),
-                ..
-            } = domain
-            {
-                let w = 1.0 / pt.pdf;
-                sphere_light::direct_sample(
-                    material,
-                    hd,
-                    centre,
-                    radius,
-                    pt.wi,
-                    le,
-                    w,
-                    ConeLaw::Line,
-                    far,
-                )
-            } else {
-                match light_point(p, pt.light_point, pt.wi, le, pt.pdf, far) {
-                    Some(lp) => shading::direct_sample(material, hd, &lp),
-                    None => return,
-                }
+            let le = match light {
+                LineLight::Environment => env.map_or(Vec3::ZERO, |e| e.eval(w)),
+                _ => le,
             };
-            g.add_lanes(&c, 1.0 / pmf);
+            material.eval(wo, wl) * wl.z * le / pmf
         };
-        let dx = [hd.x.lane(SV), hd.x.lane(SV + 1)];
-        let est = trace_line_and_ring(
+        let gate = Gate {
+            q_agree: cfg.gate,
+            seen,
+            u: [u[0], u[1], u[2], u[3], u[4]],
+        };
+        let est = trace_gated(
             scene,
             self.accel,
             si.surface(),
             &domain,
-            u.x * std::f32::consts::TAU,
-            u.y,
+            u[5] * std::f32::consts::TAU,
+            u[6],
             cfg.n_theta,
             cfg.refine,
-            dx,
+            [c.hd.x.lane(SV), c.hd.x.lane(SV + 1)],
             &transport,
-            &mut on_point,
+            gate,
         );
         for k in 0..2 {
-            g.vis[k] += est.vis[k];
+            c.g.vis[k] += est.vis[k];
         }
-        (finite_or_zero(radiance), est.rays)
+        est.rays
     }
 
     fn unoccluded(&self, si: &Interaction, wi: Vec3, point: Option<(Vec3, Vec3)>) -> bool {

@@ -139,7 +139,7 @@ pub fn trace_line_and_ring(
     if ring_max.is_nan() || ring_max <= 0.0 {
         return m.line(phi, theta_jitter, n_theta, Families::Line, on_point);
     }
-    let both = Families::Both(ring_max);
+    let both = Families::Both(ring_max, 1.0);
     let mut est = m.line(phi, theta_jitter, n_theta, both, on_point);
     let theta_r = ring_max * (theta_jitter + 0.5).fract();
     let ring = m.ring(theta_r, phi, ring_rays(n_theta, theta_r, ring_max), both);
@@ -151,13 +151,89 @@ pub fn trace_line_and_ring(
     est
 }
 
+/// The penumbra gate (issue 53): whether a shading point's ring is marched. The
+/// ring is ~2.5 `n_theta` of the ~3.5 `n_theta` shadow rays of a line and ring, and
+/// only needed where a silhouette crosses the lines at a grazing angle; a point
+/// fully lit or fully blocked needs neither. Two probe rays (plus the radiance's
+/// own shadow ray, `seen`) tell a point in penumbra from one that probably is not:
+/// where they disagree the ring is marched, where they agree with probability
+/// `q_agree`. The coin and the probes are independent of the line, so the balance
+/// heuristic stays exact with the ring's crossing density scaled by its
+/// probability q: every crossing is weighted by 1 / (p_line + q p_ring), unbiased
+/// for any q > 0; a penumbra the probes miss costs variance, not bias.
+#[derive(Clone, Copy, Debug)]
+pub struct Gate {
+    /// Probability of marching the ring when every probe agrees, in (0, 1].
+    pub q_agree: f32,
+    /// Visibility of the light seen by the radiance's own shadow ray, if it cast one.
+    pub seen: Option<bool>,
+    /// Uniform numbers: the coin, then two (azimuth, polar) pairs for the probes.
+    pub u: [f32; 5],
+}
+
+/// One φ-line and its ring as [`trace_line_and_ring`] (no points reported: the
+/// radiance comes from the caller's own light sample), the ring behind the
+/// penumbra [`Gate`].
+#[allow(clippy::too_many_arguments)]
+pub fn trace_gated(
+    scene: &Scene,
+    accel: &Accel,
+    at: SurfacePoint,
+    domain: &Domain,
+    phi: f32,
+    theta_jitter: f32,
+    n_theta: u32,
+    refine_steps: u32,
+    dx: [Vec3; 2],
+    transport: &dyn Fn(Vec3) -> Vec3,
+    gate: Gate,
+) -> LineEstimate {
+    let m = Marcher::new(scene, accel, at, domain, refine_steps, dx, transport);
+    let ring_max = m.ring_extent();
+    if ring_max.is_nan() || ring_max <= 0.0 {
+        return m.line(phi, theta_jitter, n_theta, Families::Line, &mut |_| {});
+    }
+    let [coin, probes @ ..] = gate.u;
+    let (mut probe_rays, mut q) = (0, 1.0);
+    if gate.q_agree < 1.0 {
+        let mut seen = gate.seen;
+        let mut disagree = false;
+        for pair in probes.chunks_exact(2) {
+            let e = m.azimuth(pair[0] * TAU);
+            let theta = m.theta_max(e) * pair[1];
+            if theta.is_nan() {
+                continue;
+            }
+            let (visible, _) = m.probe(m.dir(&Curve::Line { e }, theta));
+            probe_rays += 1;
+            disagree |= seen.is_some_and(|s| s != visible);
+            seen = Some(visible);
+        }
+        q = if disagree { 1.0 } else { gate.q_agree };
+    }
+    let both = Families::Both(ring_max, q);
+    let mut est = m.line(phi, theta_jitter, n_theta, both, &mut |_| {});
+    est.rays += probe_rays;
+    if coin < q {
+        let theta_r = ring_max * (theta_jitter + 0.5).fract();
+        let ring = m.ring(theta_r, phi, ring_rays(n_theta, theta_r, ring_max), both);
+        for k in 0..2 {
+            est.vis[k] += ring.vis[k];
+        }
+        est.rays += ring.rays;
+        est.jumps += ring.jumps;
+    }
+    est
+}
+
 /// Which families of curves sample the boundary, for the crossing densities: lines
 /// alone (Eq. 48), rings alone (Θ: the range of θ_r), or both (balance heuristic).
 #[derive(Clone, Copy, Debug)]
 enum Families {
     Line,
     Ring(f32),
-    Both(f32),
+    /// Θ, and the probability that the ring was marched (the penumbra gate).
+    Both(f32, f32),
 }
 
 impl Families {
@@ -172,7 +248,7 @@ impl Families {
             Families::Line => Some(p_line),
             Families::Ring(_) if m_phi < 1e-4 => None,
             Families::Ring(big) => Some(m_phi / big),
-            Families::Both(big) => Some(p_line + m_phi / big),
+            Families::Both(big, q) => Some(p_line + q * m_phi / big),
         }
     }
 }
