@@ -401,7 +401,7 @@ fn run_frames(
     let settings = &opts.settings;
     let mut base = fields.clone();
     for e in &mut base.entities {
-        e.deforming = anim.track(e.object_id).is_some_and(|t| t.deform.is_some());
+        e.deforming = anim.track(e.object_id).is_some_and(|t| t.deforms());
     }
     // k_j = R / r_j does not depend on R: one table for every deforming entity.
     let unit = sf::field::Grid {
