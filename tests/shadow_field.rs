@@ -428,6 +428,7 @@ fn bundled_scenes_at_full_settings() {
     for (scene, frames, spp) in [
         ("shadowfield_bunny", None, 512),
         ("shadowfield_deform", Some(8), 256),
+        ("shadowfield_deform_seq", Some(8), 256),
     ] {
         let mut opts = ShadowFieldOptions::new(root.join(format!("scenes/{scene}.toml")));
         opts.out_dir = root.join("out/shadow_field").join(scene);
