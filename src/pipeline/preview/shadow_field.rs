@@ -383,7 +383,8 @@ fn create_dir(dir: &Path) -> Result<()> {
 }
 
 /// `--frames N`: rigid entities reuse their fields (rotated in SH), deforming ones
-/// are rebuilt each frame from their base-sphere visibility.
+/// (`Track::deforms`: a procedural deformation or an OBJ sequence) are rebuilt each
+/// frame from their base-sphere visibility of the posed scene's geometry.
 fn run_frames(
     scene: &Scene,
     opts: &ShadowFieldOptions,
