@@ -760,6 +760,48 @@ mod tests {
     }
 
     #[test]
+    fn a_pattern_has_one_run_of_hashes_padded_like_blenders() {
+        let slot = placeholder("models/cloth_###.obj").unwrap();
+        assert_eq!(slot, (13, 3));
+        assert_eq!(
+            frame_name("models/cloth_###.obj", slot, 7),
+            "models/cloth_007.obj"
+        );
+        assert_eq!(
+            frame_name("models/cloth_###.obj", slot, 1234),
+            "models/cloth_1234.obj"
+        );
+        assert_eq!(
+            frame_name("#.obj", placeholder("#.obj").unwrap(), 5),
+            "5.obj"
+        );
+        assert!(placeholder("cloth.obj")
+            .unwrap_err()
+            .contains("placeholder"));
+        assert!(placeholder("c_##_#.obj").unwrap_err().contains("got 2"));
+    }
+
+    #[test]
+    fn sequence_frames_spread_over_the_animation() {
+        let seq = |files: usize| ObjSequence {
+            pattern: String::new(),
+            first: 0,
+            frames: vec![Vec::new(); files],
+        };
+        // As many frames as files: frame k is file k, exactly.
+        for k in 0..48 {
+            assert_eq!(seq(48).at(k, 48), (k as usize, k as usize, 0.0));
+        }
+        // Twice as many frames (less one): every other frame halfway.
+        assert_eq!(seq(4).at(3, 7), (1, 2, 0.5));
+        assert_eq!(seq(4).at(6, 7), (3, 3, 0.0));
+        // Fewer frames than files skip files; one file or one frame holds file 0.
+        assert_eq!(seq(5).at(1, 3), (2, 2, 0.0));
+        assert_eq!(seq(1).at(3, 8), (0, 0, 0.0));
+        assert_eq!(seq(6).at(0, 1), (0, 0, 0.0));
+    }
+
+    #[test]
     fn slerp_turns_at_a_constant_rate_along_the_shorter_arc() {
         let (a, b) = (rot([0.0, 1.0, 0.0], 10.0), rot([0.0, 1.0, 0.0], 130.0));
         for s in [0.0, 0.25, 0.5, 0.9, 1.0] {
