@@ -502,3 +502,183 @@ fn pair_files_carry_one_render_id_and_the_same_pixels_as_before() {
         }
     ));
 }
+
+/// Issue 57 item 7: every bad `obj_sequence` is one line naming the scene key and
+/// line, and the frame file and number with what was expected and found.
+#[test]
+fn obj_sequence_errors_name_the_key_the_frame_file_and_the_mismatch() {
+    let dir = scratch("objseq");
+    std::fs::write(dir.join("sq.obj"), SQUARE_OBJ).unwrap();
+    let moved = |dy: f32| {
+        SQUARE_OBJ
+            .lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let v: Vec<f32> = rest.split(' ').map(|x| x.parse().unwrap()).collect();
+                    format!("v {} {} {}\n", v[0], v[1] + dy, v[2])
+                }
+                None => format!("{l}\n"),
+            })
+            .collect::<String>()
+    };
+    for k in 0..3 {
+        std::fs::write(dir.join(format!("sq_{k}.obj")), moved(0.1 * k as f32)).unwrap();
+    }
+    // Frame 1 of each broken set differs from the rest mesh in one way.
+    let broken = [
+        // (tobj keeps only the vertices faces use: the extra one is used.)
+        (
+            "extra_vertex",
+            format!("{}v 9 9 9\nf 1/1 3/3 5/4\n", moved(0.1)),
+        ),
+        ("extra_face", format!("{}f 1/1 2/2 4/4\n", moved(0.1))),
+        (
+            "other_faces",
+            moved(0.1).replace("f 1/1 3/3 4/4", "f 2/2 4/4 3/3"),
+        ),
+        ("nan", moved(0.1).replace("v 1 1.1 0", "v 1 nan 0")),
+        (
+            "two_objects",
+            format!("{}o more\nv 5 5 5\nv 6 5 5\nv 5 6 5\nf 5 6 7\n", moved(0.1)),
+        ),
+    ];
+    for (name, text) in &broken {
+        std::fs::write(dir.join(format!("{name}_0.obj")), moved(0.0)).unwrap();
+        std::fs::write(dir.join(format!("{name}_1.obj")), text).unwrap();
+    }
+    let scene = |extra: &str| {
+        format!(
+            "{CAM}{WHITE}[[shapes]]\nname = \"plate\"\ntype = \"mesh\"\nfile = \"sq.obj\"\n\
+             material = \"w\"\n[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\n\
+             center = [0, 3, 0]\nradius = 0.5\nmaterial = \"w\"\n\
+             [animation]\n[[animation.objects]]\n{extra}"
+        )
+    };
+    let seq = |shape: &str, pattern: &str, range: &str| {
+        scene(&format!(
+            "shape = \"{shape}\"\nobj_sequence = \"{pattern}\"\nframes = {range}\n"
+        ))
+    };
+    // The sequence's line in `scene`: CAM 5 + WHITE 3 + shapes 11 + block 2, then
+    // `shape`, so `obj_sequence` is line 23 and `frames` line 24.
+    let key = "bad.toml: animation.objects[0].obj_sequence (line 23";
+    let frames_key = "bad.toml: animation.objects[0].frames (line 24";
+    let sq = dir.join("sq.obj").display().to_string();
+    let cases: Vec<(String, Vec<String>)> = vec![
+        (
+            seq("plate", "sq_#.obj", "[0, 3]"),
+            vec![
+                key.into(),
+                "frame 3 of [0, 3]".into(),
+                "file not found".into(),
+                "sq_3.obj".into(),
+            ],
+        ),
+        (
+            seq("plate", "extra_vertex_#.obj", "[0, 1]"),
+            vec![
+                key.into(),
+                "extra_vertex_1.obj (frame 1) has 5 vertices in object `sq` where".into(),
+                format!("{sq} has 4"),
+            ],
+        ),
+        (
+            seq("plate", "extra_face_#.obj", "[0, 1]"),
+            vec![
+                key.into(),
+                "extra_face_1.obj (frame 1) has 3 triangles in object `sq` where".into(),
+                format!("{sq} has 2"),
+            ],
+        ),
+        (
+            seq("plate", "other_faces_#.obj", "[0, 1]"),
+            vec![
+                key.into(),
+                "other_faces_1.obj (frame 1) has other triangle indices in object `sq`".into(),
+                format!("expected the topology of the shape's mesh {sq}"),
+            ],
+        ),
+        (
+            seq("plate", "nan_#.obj", "[0, 1]"),
+            vec![
+                key.into(),
+                "nan_1.obj (frame 1): vertex 3 of object `sq`".into(),
+                "expected finite coordinates".into(),
+            ],
+        ),
+        (
+            seq("plate", "two_objects_#.obj", "[0, 1]"),
+            vec![
+                key.into(),
+                "two_objects_1.obj (frame 1) has 2 OBJ objects where".into(),
+                format!("{sq} has 1"),
+            ],
+        ),
+        (
+            seq("plate", "sq_.obj", "[0, 2]"),
+            vec![
+                key.into(),
+                "expected a frame-number placeholder in \"sq_.obj\": a run of `#`".into(),
+            ],
+        ),
+        (
+            seq("plate", "sq_#_#.obj", "[0, 2]"),
+            vec![key.into(), "expected one run of `#`".into(), "got 2".into()],
+        ),
+        (
+            seq("plate", "sq_#.obj", "[2, 1]"),
+            vec![
+                frames_key.into(),
+                "empty frame range [2, 1]: expected [first, last] with first ≤ last".into(),
+            ],
+        ),
+        (
+            seq("ball", "sq_#.obj", "[0, 2]"),
+            vec![
+                key.into(),
+                "shape `ball` is of type = \"sphere\"; an `obj_sequence` deforms a shape of \
+                 type = \"mesh\""
+                    .into(),
+            ],
+        ),
+        (
+            seq("cloth", "sq_#.obj", "[0, 2]"),
+            vec![
+                "animation.objects[0].shape (line 22".into(),
+                "undefined shape `cloth`; defined shapes: `plate`, `ball`".into(),
+            ],
+        ),
+        (
+            scene(
+                "shape = \"plate\"\ndeform = { type = \"bend\", amount = [0, 1] }\n\
+                 obj_sequence = \"sq_#.obj\"\nframes = [0, 2]\n",
+            ),
+            vec![
+                "animation.objects[0].obj_sequence (line 24".into(),
+                "give either `deform` or `obj_sequence`, not both".into(),
+            ],
+        ),
+        (
+            scene("shape = \"plate\"\nobj_sequence = \"sq_#.obj\"\n"),
+            vec![key.into(), "needs `frames = [first, last]`".into()],
+        ),
+        (
+            scene("shape = \"plate\"\nframes = [0, 2]\n"),
+            vec![
+                "animation.objects[0].frames (line 23".into(),
+                "an `obj_sequence`, which is missing".into(),
+            ],
+        ),
+    ];
+    for (text, wanted) in &cases {
+        let msg = err_in(&dir, text);
+        let wanted: Vec<&str> = wanted.iter().map(String::as_str).collect();
+        assert_has(&msg, &wanted);
+    }
+    // The good sequence loads, its files counted as assets (cache keys see them).
+    let ok =
+        scene::load_from_str(&seq("plate", "sq_#.obj", "[0, 2]"), &dir.join("ok.toml")).unwrap();
+    let anim = ok.animation.as_ref().unwrap();
+    assert_eq!(anim.frames, 3, "the sequence's length is the default count");
+    assert!(ok.assets.iter().any(|a| a.ends_with("sq_2.obj")));
+}

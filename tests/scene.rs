@@ -1030,3 +1030,40 @@ fn bundled_animation_reads_exactly() {
     let r = glam::Quat::from_axis_angle(glam::Vec3::Z, 120f32.to_radians());
     assert_eq!(ball.keys[1].rotate, r, "bit for bit");
 }
+
+/// The bundled OBJ sequence: eight files of the cloth's topology, the frame
+/// count taken from them, and frame k of 8 exactly file k's vertices (no rigid
+/// keys: the placement about the rest box rounds by an ulp at most, 1e-6 here).
+#[test]
+fn bundled_obj_sequence_reads_every_file() {
+    let s = bundled("shadowfield_deform_seq.toml");
+    let a = s.animation.as_ref().unwrap();
+    assert_eq!(a.frames, 8, "the sequence's length");
+    let seq = a.tracks[0].sequence.as_ref().unwrap();
+    assert_eq!(a.tracks[0].object_id, id_of(&s, "cloth"));
+    assert_eq!((seq.first, seq.frames.len()), (0, 8));
+    let cloth = s
+        .meshes
+        .iter()
+        .position(|m| m.name.starts_with("cloth"))
+        .unwrap();
+    assert_eq!(s.meshes[cloth].positions.len(), 169);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("shadowfield_deform_seq.toml")).unwrap();
+    let still = text.split("[animation]").next().unwrap().to_string();
+    for k in [0u32, 3, 7] {
+        let file = format!("models/cloth_{k:03}.obj");
+        let one = still.replace("models/cloth_000.obj", &file);
+        let want = scene::load_from_str(&one, &dir.join("one.toml")).unwrap();
+        let posed = a.scene_at(&s, k, 8);
+        let (got, want) = (&posed.meshes[cloth], &want.meshes[cloth]);
+        let d = got
+            .positions
+            .iter()
+            .zip(&want.positions)
+            .map(|(p, q)| (*p - *q).abs().max_element())
+            .fold(0.0f32, f32::max);
+        assert!(d <= 1e-6, "frame {k}: {d}");
+        assert_eq!(got.normals.len(), want.normals.len(), "smooth normals");
+    }
+}

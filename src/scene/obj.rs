@@ -33,6 +33,48 @@ pub(super) struct ObjMesh {
     /// Index into the returned material list.
     pub material: Option<usize>,
     pub degenerate: usize,
+    /// As tobj read it, before the degenerate filter: what each frame of an
+    /// `obj_sequence` must repeat.
+    pub topology: Topology,
+}
+
+/// One OBJ object's vertex and triangle counts and a hash of its triangle
+/// indices, as tobj read them (before the degenerate filter, which depends on
+/// the positions and so may differ from frame to frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Topology {
+    pub vertices: usize,
+    pub triangles: usize,
+    pub index_hash: u64,
+}
+
+impl Topology {
+    fn of(m: &tobj::Mesh) -> Self {
+        // FNV-1a over the index bytes: deterministic, and a mismatch only has to be
+        // detected, not located.
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for &i in &m.indices {
+            for b in i.to_le_bytes() {
+                h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+        Self {
+            vertices: m.positions.len() / 3,
+            triangles: m.indices.len() / 3,
+            index_hash: h,
+        }
+    }
+}
+
+/// One object of a frame of an OBJ sequence: only what moves (its materials
+/// and texture coordinates are the rest mesh's).
+#[derive(Clone, Debug)]
+pub(super) struct FrameObject {
+    pub topology: Topology,
+    /// World space (the shape's transform applied), as [`load`] maps them.
+    pub positions: Vec<Vec3>,
+    /// World-space vertex normals; empty when the file has none.
+    pub normals: Vec<Vec3>,
 }
 
 fn asset_err(path: &Path, message: impl Into<String>) -> crate::Error {
@@ -191,6 +233,56 @@ fn read_obj(path: &Path) -> crate::Result<(Vec<tobj::Model>, Vec<tobj::Material>
     Ok((models, materials))
 }
 
+/// The vertex positions of a tobj mesh mapped through `xf`.
+fn world_positions(m: &tobj::Mesh, xf: &Xform) -> Vec<Vec3> {
+    m.positions
+        .chunks_exact(3)
+        .map(|p| xf.point(Vec3::new(p[0], p[1], p[2])))
+        .collect()
+}
+
+/// The file's vertex normals in world space, or none when it has not one per vertex.
+fn file_normals(
+    m: &tobj::Mesh,
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    xf: &Xform,
+) -> Vec<Vec3> {
+    if m.normals.len() != 3 * positions.len() {
+        return Vec::new();
+    }
+    let raw: Vec<Vec3> = m
+        .normals
+        .chunks_exact(3)
+        .map(|n| Vec3::new(n[0], n[1], n[2]))
+        .collect();
+    world_normals(&raw, positions, triangles, xf)
+}
+
+/// One frame of an OBJ sequence: each object's topology, world-space positions
+/// and normals, read by the same tobj call as [`load`] (its MTL libraries
+/// included, though only the rest mesh's materials are used).
+pub(super) fn load_frame(path: &Path, xf: &Xform) -> crate::Result<Vec<FrameObject>> {
+    let (models, _materials) = read_obj(path)?;
+    Ok(models
+        .into_iter()
+        .map(|model| {
+            let m = &model.mesh;
+            let positions = world_positions(m, xf);
+            // Filtered as in `load`, so that a frame equal to the rest mesh gets
+            // its very normals (the fallback for a bad one sums these triangles).
+            let raw = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]);
+            let (triangles, _) = filter_triangles(&positions, raw, xf.mirrors());
+            let normals = file_normals(m, &positions, &triangles, xf);
+            FrameObject {
+                topology: Topology::of(m),
+                positions,
+                normals,
+            }
+        })
+        .collect())
+}
+
 /// Loads `path`, maps it through `xf` and drops degenerate triangles.
 pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<ObjMaterial>)> {
     let (models, materials) = read_obj(path)?;
@@ -202,11 +294,7 @@ pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<
     let mut meshes = Vec::with_capacity(models.len());
     for model in models {
         let m = &model.mesh;
-        let positions: Vec<Vec3> = m
-            .positions
-            .chunks_exact(3)
-            .map(|p| xf.point(Vec3::new(p[0], p[1], p[2])))
-            .collect();
+        let positions = world_positions(m, xf);
         let triangles = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]);
         let (triangles, degenerate) = filter_triangles(&positions, triangles, xf.mirrors());
         let uvs: Vec<Vec2> = if m.texcoords.len() == 2 * positions.len() {
@@ -217,16 +305,7 @@ pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<
         } else {
             Vec::new()
         };
-        let normals = if m.normals.len() == 3 * positions.len() {
-            let raw: Vec<Vec3> = m
-                .normals
-                .chunks_exact(3)
-                .map(|n| Vec3::new(n[0], n[1], n[2]))
-                .collect();
-            world_normals(&raw, &positions, &triangles, xf)
-        } else {
-            Vec::new()
-        };
+        let normals = file_normals(m, &positions, &triangles, xf);
         if let Some(id) = m.material_id {
             if id >= materials.len() {
                 return Err(asset_err(
@@ -247,6 +326,7 @@ pub(super) fn load(path: &Path, xf: &Xform) -> crate::Result<(Vec<ObjMesh>, Vec<
             triangles,
             material: m.material_id,
             degenerate,
+            topology: Topology::of(m),
         });
     }
     Ok((meshes, materials))

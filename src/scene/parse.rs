@@ -10,6 +10,7 @@
 //! `Error::Scene` whose location names the key path and its line/column (see
 //! `locate`).
 
+use super::animation::{ObjObject, ObjSource, ShapeSource};
 use super::geometry::{self, Xform};
 use super::locate::{Ctx, KeyPath};
 use super::params::{self, list, Params};
@@ -375,6 +376,8 @@ struct Builder<'a> {
     meshes: Vec<Mesh>,
     spheres: Vec<Sphere>,
     object_names: Vec<String>,
+    /// Beside `object_names`: what `[animation]` needs of each shape.
+    sources: Vec<ShapeSource>,
     degenerate: usize,
 }
 
@@ -390,6 +393,7 @@ impl<'a> Builder<'a> {
             meshes: Vec::new(),
             spheres: Vec::new(),
             object_names: Vec::new(),
+            sources: Vec::new(),
             degenerate: 0,
         }
     }
@@ -440,7 +444,7 @@ impl<'a> Builder<'a> {
         };
         let animation = animation
             .as_ref()
-            .map(|a| super::animation::read(a, &self.object_names))
+            .map(|a| super::animation::read(a, &self.object_names, &self.sources))
             .transpose()?;
         Ok(Scene {
             path: ctx.file.to_path_buf(),
@@ -578,6 +582,7 @@ impl<'a> Builder<'a> {
             .map(str::to_owned)
             .unwrap_or_else(|| format!("{prefix}{object_id}"));
         let need_material = || p.need("material", material);
+        let mut obj_source = None;
         match k.geometry {
             Geometry::Sphere => {
                 let center = Vec3::from(p.need("center", k.center)?);
@@ -661,10 +666,20 @@ impl<'a> Builder<'a> {
                 let xf = k.transform.unwrap_or_else(Xform::identity);
                 let surface = (material, emission, k.bump);
                 let smooth = k.smooth_normals.unwrap_or(false);
-                self.push_obj(p, &file, &xf, &name, smooth, surface, object_id)?;
+                let objects = self.push_obj(p, &file, &xf, &name, smooth, surface, object_id)?;
+                obj_source = Some(ObjSource {
+                    file,
+                    xf,
+                    smooth,
+                    objects,
+                });
             }
         }
         self.object_names.push(name);
+        self.sources.push(ShapeSource {
+            kind: if fam.light { "light" } else { p.kind_name() },
+            obj: obj_source,
+        });
         Ok(())
     }
 
@@ -715,7 +730,8 @@ impl<'a> Builder<'a> {
     }
 
     /// The meshes of one OBJ file. `surface` = the shape's (material, emission,
-    /// bump), each overriding the MTL's when given.
+    /// bump), each overriding the MTL's when given. Returns each OBJ object's
+    /// name, topology and scene mesh (none when no triangle of it was kept).
     #[allow(clippy::too_many_arguments)]
     fn push_obj(
         &mut self,
@@ -726,18 +742,29 @@ impl<'a> Builder<'a> {
         smooth: bool,
         (material, emission, bump): (Option<u32>, Option<Vec3>, Option<u32>),
         object_id: u32,
-    ) -> crate::Result<()> {
+    ) -> crate::Result<Vec<ObjObject>> {
         let at = p.path("file");
         let (meshes, mtl) = obj::load(file, xf).map_err(|e| self.ctx.in_scene(&at, e))?;
         check_obj_range(p, file, &meshes)?;
         // MTL materials join the scene's list as "<shape>/<mtl name>", only when used.
         let mut mtl_ids: Vec<Option<u32>> = vec![None; mtl.len()];
         let mut any_kept = false;
+        let mut objects = Vec::with_capacity(meshes.len());
         for (k, m) in meshes.into_iter().enumerate() {
             self.degenerate += m.degenerate;
             if m.triangles.is_empty() {
+                objects.push(ObjObject {
+                    name: m.name,
+                    topology: m.topology,
+                    mesh: None,
+                });
                 continue;
             }
+            objects.push(ObjObject {
+                name: m.name.clone(),
+                topology: m.topology,
+                mesh: Some(self.meshes.len()),
+            });
             any_kept = true;
             let mesh_material = match (material, m.material) {
                 (Some(id), _) => id,
@@ -805,7 +832,7 @@ impl<'a> Builder<'a> {
                 format!("{} contains no (non-degenerate) triangles", file.display()),
             ));
         }
-        Ok(())
+        Ok(objects)
     }
 }
 

@@ -383,7 +383,8 @@ fn create_dir(dir: &Path) -> Result<()> {
 }
 
 /// `--frames N`: rigid entities reuse their fields (rotated in SH), deforming ones
-/// are rebuilt each frame from their base-sphere visibility.
+/// (`Track::deforms`: a procedural deformation or an OBJ sequence) are rebuilt each
+/// frame from their base-sphere visibility of the posed scene's geometry.
 fn run_frames(
     scene: &Scene,
     opts: &ShadowFieldOptions,
@@ -401,7 +402,7 @@ fn run_frames(
     let settings = &opts.settings;
     let mut base = fields.clone();
     for e in &mut base.entities {
-        e.deforming = anim.track(e.object_id).is_some_and(|t| t.deform.is_some());
+        e.deforming = anim.track(e.object_id).is_some_and(|t| t.deforms());
     }
     // k_j = R / r_j does not depend on R: one table for every deforming entity.
     let unit = sf::field::Grid {

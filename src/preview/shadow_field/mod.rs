@@ -4,7 +4,8 @@
 //! at mesh vertices; rays traced with our BVH, in parallel) → [`Fields`] →
 //! [`Fields::combiner`] for a frame's poses → [`shade_image`] (first hit per pixel
 //! sample) or [`shade_vertices`]. Rigid fields are rotated in SH; deforming entities
-//! are rebuilt each frame from their base-sphere visibility ([`deform`]).
+//! (a procedural `deform` or an `obj_sequence`: both are just a frame's posed
+//! geometry here) are rebuilt each frame from their base-sphere visibility ([`deform`]).
 
 // Index loops mirror the coefficient subscripts of the formulas.
 #![allow(clippy::needless_range_loop)]
