@@ -5,9 +5,10 @@
 //! Per the first-order paper's Sec. 8–9: each strategy of `adaptive` at each budget
 //! (equal sample counts, reconstructed by gradient-aware C1 interpolation); a full
 //! render at the same samples per evaluated point; the baselines — every pixel
-//! rendered with as many samples as the `gradient` strategy's wall time buys — at
-//! equal time; and Sec. 8's 1%-of-pixels experiment, gradient against linear
-//! interpolation, also scored on the largest surface away from silhouettes.
+//! rendered with as many samples as the `gradient` strategy's wall or CPU time
+//! buys (`--equal`) — at equal cost; Sec. 8's 1%-of-pixels experiment, gradient
+//! against linear interpolation, also scored on the largest surface away from
+//! silhouettes; and the previews that suit the scene (`previews`).
 
 use super::adaptive::{render_adaptive, AdaptiveRender};
 use super::output_set::image_of_render;
