@@ -205,3 +205,40 @@ fn a_diffuse_scene_gets_a_shadow_field_row() {
     assert!(none.iter().all(|r| r.kind != "preview"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A glossy mesh under an environment alone gets a `glossy` row (and, glossy, no
+/// shadow-field row): finite RMSE against compare's reference, its precompute
+/// apart. The transfer of tests/glossy.rs's small end-to-end run (≤ 3000
+/// vertices, angular level 3).
+#[test]
+fn a_glossy_scene_gets_a_glossy_row() {
+    let dir = temp_dir("glossy-row");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/glossy/cube_floor.toml");
+    let scene = gradtrace::scene::load(&path).unwrap();
+    let accel = Accel::build(&scene.meshes, &scene.spheres);
+    let mut opts = CompareOptions::new(dir.clone());
+    opts.strategies = vec![Strategy::Gradient];
+    opts.budgets = vec![0.25];
+    opts.spp = Some(2);
+    opts.reference_spp = Some(8);
+    opts.resolution = Some((32, 24));
+    opts.glossy = gradtrace::preview::glossy::Settings {
+        samples: 32,
+        diffuse_samples: 128,
+        max_angular_level: 3,
+        initial_edge_fraction: 0.25,
+        batch: 20,
+        max_vertices: 3000,
+        ..Default::default()
+    };
+    let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
+    let row = rows
+        .iter()
+        .find(|r| r.name == "glossy")
+        .expect("a glossy row");
+    assert_eq!(row.kind, "preview");
+    assert!(row.rmse.is_finite() && row.rmse > 0.0, "{row:?}");
+    assert!(row.precompute_s.unwrap() > 0.0 && row.wall_s > 0.0 && row.cpu_s > 0.0);
+    assert!(rows.iter().all(|r| r.name != "shadow-field"));
+    std::fs::remove_dir_all(&dir).ok();
+}
