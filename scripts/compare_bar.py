@@ -3,11 +3,12 @@
 budget, with seeds, against the baselines at equal time; then one Markdown table of
 the gradient strategy's mean RMSE against each baseline's.
 
-    python3 scripts/compare_bar.py [--scale 0.5] [--seeds 4] [--out out/bar] [--table-only]
+    python3 scripts/compare_bar.py [--scale 0.5] [--seeds 4] [--equal wall|cpu] [--out out/bar] [--table-only]
 
 Build first (`cargo build --release`, with `--features oidn` after
 `eval "$(scripts/setup_oidn.sh)"` for the denoised baselines). `--scale` shrinks
-every scene's own resolution (the bar's figures in benches/README.md say which).
+every scene's own resolution (the bar's figures in benches/README.md say which);
+`--equal cpu` matches the baselines on process CPU seconds (a shared machine).
 """
 import argparse
 import json
@@ -18,7 +19,7 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-BASELINES = ["uniform-all-pixels", "cycles-adaptive", "oidn-uniform", "gradient+oidn"]
+BASELINES = ["uniform-all-pixels", "cycles-adaptive", "oidn-uniform", "cycles-adaptive+oidn", "gradient+oidn"]
 
 
 def resolution(scene):
@@ -33,7 +34,7 @@ def run(scene, args, out):
            "--spp", str(args.spp), "--reference-spp", str(args.reference_spp),
            "--budgets", str(args.budget), "--strategies", "gradient",
            "--seeds", str(args.seeds), "--width", str(w), "--height", str(h),
-           "--out", str(out)]
+           "--equal", args.equal, "--out", str(out)]
     t = time.time()
     log = subprocess.run(cmd, capture_output=True, text=True)
     (out.parent / f"{scene.stem}.log").write_text(log.stdout + log.stderr)
@@ -66,7 +67,8 @@ def table(out_root, scenes):
                    if f.is_file() and not f.name.startswith("reference-"))
         log = (out_root / f"{scene.stem}.log").read_text() if (out_root / f"{scene.stem}.log").exists() else ""
         m = re.findall(r"outside rendering .*?: ([\d.]+%)", log)
-        lines.append(f"| {scene.stem} | {j['width']}×{j['height']} | {fmt(g)} ({g['wall_s']:.2f} s) | "
+        cost = f"{g['cpu_s']:.2f} CPU s" if j.get("equal_cost") == "cpu" else f"{g['wall_s']:.2f} s"
+        lines.append(f"| {scene.stem} | {j['width']}×{j['height']} | {fmt(g)} ({cost}) | "
                      + " | ".join(cells)
                      + f" | {best['name']} | {g['rmse'] / other['rmse']:.2f}× | {size / 1024:.0f} KB | {m[-1] if m else '?'} |")
     return "\n".join(lines)
@@ -79,6 +81,7 @@ def main():
     p.add_argument("--spp", type=int, default=256)
     p.add_argument("--reference-spp", type=int, default=1024)
     p.add_argument("--budget", type=float, default=0.17)
+    p.add_argument("--equal", choices=["wall", "cpu"], default="wall")
     p.add_argument("--out", type=pathlib.Path, default=ROOT / "out/bar")
     p.add_argument("--table-only", action="store_true")
     p.add_argument("scenes", nargs="*", help="scene files (default: every scenes/*.toml)")

@@ -4,6 +4,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use gradtrace::adaptive::{Settings, Strategy};
+use gradtrace::output::report::EqualCost;
 use gradtrace::pipeline::compare::{self, CompareOptions};
 use gradtrace::pipeline::diff::{DiffMetric, DiffOptions};
 use gradtrace::pipeline::preview::glossy::GlossyOptions;
@@ -279,6 +280,14 @@ pub(crate) struct CompareArgs {
     /// Show the images of every budget in the report (default: the headline budget's).
     #[arg(long)]
     pub(crate) all_images: bool,
+    /// What the baselines are matched on: `wall` (wall-clock time, what a user
+    /// waits on an idle machine) or `cpu` (process CPU time, user + system, which
+    /// other jobs on a shared machine barely change) [default: wall].
+    #[arg(long, value_parser = equal_cost(), value_name = "wall|cpu")]
+    pub(crate) equal: Option<EqualCost>,
+    /// Leave out the preview rows (shadow-field, glossy), added where the scene suits them.
+    #[arg(long)]
+    pub(crate) no_previews: bool,
     /// Output folder [default: out/ and the scene's path, e.g. out/validation-cornell].
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
@@ -554,6 +563,10 @@ pub(crate) fn integrator() -> impl TypedValueParser<Value = Integrator> {
     choices(&Integrator::ALL, Integrator::name, |_| &[])
 }
 
+pub(crate) fn equal_cost() -> impl TypedValueParser<Value = EqualCost> {
+    choices(&[EqualCost::Wall, EqualCost::Cpu], EqualCost::name, |_| &[])
+}
+
 pub(crate) fn diff_metric() -> impl TypedValueParser<Value = DiffMetric> {
     choices(&DiffMetric::ALL, DiffMetric::name, |_| &[])
 }
@@ -669,6 +682,8 @@ impl CompareArgs {
         opts.seeds = self.seeds;
         opts.keep_exr = self.keep_exr;
         opts.all_images = self.all_images;
+        opts.equal = self.equal.unwrap_or_default();
+        opts.previews = !self.no_previews;
         opts.command = std::env::args().collect::<Vec<_>>().join(" ");
         opts
     }

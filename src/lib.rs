@@ -8,6 +8,7 @@
 pub mod accel;
 pub mod adaptive;
 pub mod brdf;
+pub mod cpu_time;
 pub mod denoise;
 pub mod error;
 pub mod flatland;

@@ -187,3 +187,26 @@ fn the_time_limit_holds_from_the_first_round() {
     let out = render_noise_adaptive(&scene, &accel, &options(1, 16), &s, &|_, _| {}).unwrap();
     assert!(spp_map(&out).iter().all(|&c| c == 2.0));
 }
+
+/// `compare --equal cpu`'s limit: the process CPU time stops the sampler as the
+/// wall-time limit does (from the first round on), so a million spp end in
+/// seconds, not hours. (Other tests' threads share the process clock, so only
+/// the stop is asserted, not how close to the limit it came.)
+#[test]
+fn the_cpu_time_limit_stops_the_sampler() {
+    let (scene, accel, _) = scene("cpu-limit");
+    let mut s = NoiseAdaptive::new(0.0, 1_000_000);
+    s.cpu_time_limit = Some(Duration::from_secs_f64(0.3));
+    let cpu0 = gradtrace::cpu_time::process_s().unwrap();
+    let start = Instant::now();
+    let out = render_noise_adaptive(&scene, &accel, &options(1, 16), &s, &|_, _| {}).unwrap();
+    let (secs, cpu) = (
+        start.elapsed().as_secs_f64(),
+        gradtrace::cpu_time::process_s().unwrap() - cpu0,
+    );
+    println!("cpu limit 0.3 s: {secs:.2} s wall, {cpu:.2} s CPU");
+    assert!(secs < 20.0, "{secs} s");
+    assert!(cpu >= 0.3, "stopped before its limit: {cpu} s CPU");
+    let spp = spp_map(&out);
+    assert!(spp.iter().all(|&c| (1.0..1_000_000.0).contains(&c)));
+}

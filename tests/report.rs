@@ -10,8 +10,8 @@ use gradtrace::output::metrics::{
     flip, flip_exposure, relmse, relmse_trimmed, rmse, tone_map_srgb8, RELMSE_EPS, TRIM_FRACTION,
 };
 use gradtrace::output::report::{
-    compute_rows, markdown_table, mean_ci95, write_report, ReferenceInfo, ReportInput, ReportRow,
-    Run, RunKind, ASSET_DIR,
+    compute_rows, markdown_table, mean_ci95, write_report, EqualCost, ReferenceInfo, ReportInput,
+    ReportRow, Run, RunKind, ASSET_DIR,
 };
 use std::path::{Path, PathBuf};
 
@@ -266,6 +266,7 @@ fn sample_input() -> ReportInput {
         seed,
         samples,
         wall_time_s: time,
+        cpu_time_s: time * 1.5,
         overhead_s: time * 0.1,
         target_s: None,
         image: add_noise(&reference, noise, samples as u64 + 97 * seed as u64),
@@ -347,6 +348,7 @@ fn sample_input() -> ReportInput {
         command: "gradtrace compare test.toml".into(),
         version: "0.1.0 (test)".into(),
         threads: 2,
+        equal_cost: EqualCost::Wall,
         width: W,
         height: H,
         reference: reference.clone(),
@@ -784,6 +786,7 @@ fn setting_of(kind: RunKind) -> String {
             format!("{}%", p.trim_end_matches('0').trim_end_matches('.'))
         }
         RunKind::Baseline { spp, .. } | RunKind::Full { spp } => format!("{spp} spp"),
+        RunKind::Preview { .. } => "per frame".into(),
     }
 }
 
@@ -805,12 +808,12 @@ fn image_cards_show_the_tables_mean_time() {
         let setting = setting.trim_end_matches(')');
         let p = &card[card.find("<p>").unwrap() + 3..];
         let time = &p[..p.find(" s;").unwrap()];
-        // The time table's rows of this method and setting (9 cells; name, kind,
+        // The time table's rows of this method and setting (10 cells; name, kind,
         // setting, …, wall time in the sixth).
         let cells: Vec<&String> = tables
             .iter()
             .flatten()
-            .filter(|r| r.len() == 9 && r[0] == name && r[2] == setting)
+            .filter(|r| r.len() == 10 && r[0] == name && r[2] == setting)
             .map(|r| &r[5])
             .collect();
         assert!(!cells.is_empty(), "no table row for {title}");
@@ -1047,4 +1050,40 @@ fn assets_of(dir: &Path) -> PathBuf {
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     dir.join(ASSET_DIR)
         .join(json["render_id"].as_str().unwrap())
+}
+
+/// `equal_cost` decides what `time_vs_target` measures: the sample runs' CPU time
+/// is 1.5 × their wall time, so cycles-adaptive at 25 %, 20 % over its target in
+/// wall seconds, is 1.5 × 1.2 − 1 = 80 % over it in CPU seconds; the mode is in
+/// `report.json`, every row carries both costs, the headline names the measure.
+#[test]
+fn equal_cost_decides_what_time_vs_target_measures() {
+    let mut input = sample_input();
+    let target = |rows: &[ReportRow]| {
+        rows.iter()
+            .find(|r| r.name == "cycles-adaptive" && r.equal_time_budget == Some(0.25))
+            .unwrap()
+            .time_vs_target
+            .unwrap()
+    };
+    assert!((target(&compute_rows(&input).unwrap()) - 0.2).abs() < 1e-9);
+    input.equal_cost = EqualCost::Cpu;
+    let rows = compute_rows(&input).unwrap();
+    assert!((target(&rows) - 0.8).abs() < 1e-9, "{}", target(&rows));
+    for r in &rows {
+        assert!((r.cpu_s - 1.5 * r.wall_s).abs() < 1e-9, "{r:?}");
+    }
+    let dir = temp_dir("equal-cpu");
+    write_report(&dir, &input).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["equal_cost"], "cpu");
+    assert!(json["runs"][0]["cpu_s"].as_f64().unwrap() > 0.0);
+    assert!(json["headline"]
+        .as_str()
+        .unwrap()
+        .starts_with("At equal CPU time on"));
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(md.contains("| wall time (s) | CPU time (s) |"), "{md}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

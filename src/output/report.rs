@@ -62,6 +62,45 @@ pub enum RunKind {
     /// An interpolation experiment at `budget` samples per pixel, `spp` per point
     /// (Sec. 8: gradient vs linear interpolation of soft shadows).
     Interpolation { budget: f64, spp: u32 },
+    /// An approximate preview (`shadow-field`, `glossy`): its cost is one frame,
+    /// its `precompute_s` (as first computed, also when cached) stands apart.
+    Preview { precompute_s: f64, cached: bool },
+}
+
+/// What an equal-cost run is matched on: the wall time (what a user waits on an
+/// idle machine) or the process CPU time, user + system, which other jobs on a
+/// shared machine leave nearly untouched (`compare --equal`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EqualCost {
+    #[default]
+    Wall,
+    Cpu,
+}
+
+impl EqualCost {
+    /// As `report.json` and `--equal` spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            EqualCost::Wall => "wall",
+            EqualCost::Cpu => "cpu",
+        }
+    }
+
+    /// A run's cost in this measure.
+    pub fn of(self, wall_s: f64, cpu_s: f64) -> f64 {
+        match self {
+            EqualCost::Wall => wall_s,
+            EqualCost::Cpu => cpu_s,
+        }
+    }
+
+    /// "wall time" or "CPU time", for sentences and axis labels.
+    pub fn label(self) -> &'static str {
+        match self {
+            EqualCost::Wall => "wall time",
+            EqualCost::Cpu => "CPU time",
+        }
+    }
 }
 
 impl RunKind {
@@ -72,6 +111,7 @@ impl RunKind {
             RunKind::Baseline { .. } => "baseline",
             RunKind::Full { .. } => "full",
             RunKind::Interpolation { .. } => "interpolation",
+            RunKind::Preview { .. } => "preview",
         }
     }
 
@@ -93,14 +133,23 @@ impl RunKind {
         }
     }
 
-    /// Camera samples per evaluated point (adaptive, interpolation) or per pixel.
-    /// Samples per pixel (or per evaluated point).
+    /// Camera samples per evaluated point (adaptive, interpolation) or per pixel;
+    /// 0 for a preview, which takes no path-traced samples.
     pub fn spp(self) -> u32 {
         match self {
             RunKind::Adaptive { spp, .. }
             | RunKind::Baseline { spp, .. }
             | RunKind::Full { spp }
             | RunKind::Interpolation { spp, .. } => spp,
+            RunKind::Preview { .. } => 0,
+        }
+    }
+
+    /// A preview's precompute seconds (`null` for the others).
+    fn precompute_s(self) -> Option<f64> {
+        match self {
+            RunKind::Preview { precompute_s, .. } => Some(precompute_s),
+            _ => None,
         }
     }
 
@@ -111,9 +160,13 @@ impl RunKind {
                 percent(budget)
             }
             RunKind::Baseline { spp, .. } | RunKind::Full { spp } => format!("{spp} spp"),
+            RunKind::Preview { .. } => PER_FRAME.into(),
         }
     }
 }
+
+/// A preview row's setting: its time is one frame's.
+const PER_FRAME: &str = "per frame";
 
 /// One image produced by one method at one setting with one seed.
 #[derive(Clone, Debug)]
@@ -129,11 +182,15 @@ pub struct Run {
     pub samples: usize,
     /// Total wall time of the run in seconds, overhead included.
     pub wall_time_s: f64,
+    /// The process CPU time (user + system, every thread) the run took, over the
+    /// same span as `wall_time_s`.
+    pub cpu_time_s: f64,
     /// The part of `wall_time_s` spent outside the renderer (quadtree and
     /// reconstruction, or the denoiser).
     pub overhead_s: f64,
     /// For a run meant to take the time of another (the baselines, `gradient+oidn`):
-    /// that run's wall time at the same seed, which its own is measured against.
+    /// that run's cost at the same seed (in [`ReportInput::equal_cost`]'s measure),
+    /// which its own is measured against.
     pub target_s: Option<f64>,
     /// Linear RGB, row-major, top row first, `width × height` pixels.
     pub image: Vec<Vec3>,
@@ -165,6 +222,8 @@ pub struct ReportInput {
     /// Crate version and git commit.
     pub version: String,
     pub threads: usize,
+    /// What the baselines' time was matched on (and `target_s` is measured in).
+    pub equal_cost: EqualCost,
     pub width: usize,
     pub height: usize,
     /// The high-quality reference, linear RGB.
@@ -202,10 +261,18 @@ pub struct ReportRow {
     /// for adaptive and interpolation runs, samples / pixels for the others.
     pub spp_per_pixel: f64,
     pub samples: usize,
+    /// Wall seconds (a preview: one frame), mean over the seeds.
     pub wall_s: f64,
+    /// Process CPU seconds over the same span, mean over the seeds.
+    pub cpu_s: f64,
+    /// A preview's precompute (as first computed, also when cached); null otherwise.
+    pub precompute_s: Option<f64>,
+    /// Whether that precompute came from the cache; null for the others.
+    pub precompute_cached: Option<bool>,
     pub overhead_s: f64,
     /// For runs meant to take another's time (baselines, `gradient+oidn`): the
-    /// seeds' largest relative deviation from that time, signed (0.12 = 12 % longer).
+    /// seeds' largest relative deviation from that cost (wall or CPU, as the report's
+    /// `equal_cost`), signed (0.12 = 12 % longer).
     pub time_vs_target: Option<f64>,
     /// Whether `time_vs_target` lies within ±[`EQUAL_TIME_TOLERANCE`]; rows where it
     /// does not are marked in the tables. Null where there is no target.
@@ -465,6 +532,7 @@ fn scale_group(kind: RunKind) -> (String, Option<f64>) {
         RunKind::Interpolation { budget, .. } => {
             (format!("interpolation, {}", percent(budget)), Some(budget))
         }
+        RunKind::Preview { .. } => ("previews".into(), None),
     }
 }
 
@@ -538,7 +606,8 @@ fn validate(input: &ReportInput, path: &Path) -> Result<()> {
                 i / w
             ));
         }
-        for t in [run.wall_time_s, run.overhead_s] {
+        let precompute = run.kind.precompute_s().unwrap_or(0.0);
+        for t in [run.wall_time_s, run.cpu_time_s, run.overhead_s, precompute] {
             if !(t.is_finite() && t >= 0.0) {
                 return err(format!("{what}: invalid time {t}"));
             }
@@ -626,7 +695,7 @@ fn summarise(input: &ReportInput, measured: &[Measured]) -> Vec<ReportRow> {
                     let r = &input.runs[i];
                     r.target_s
                         .filter(|t| *t > 0.0)
-                        .map(|t| r.wall_time_s / t - 1.0)
+                        .map(|t| input.equal_cost.of(r.wall_time_s, r.cpu_time_s) / t - 1.0)
                 })
                 .max_by(|a, b| a.abs().total_cmp(&b.abs()));
             ReportRow {
@@ -639,6 +708,12 @@ fn summarise(input: &ReportInput, measured: &[Measured]) -> Vec<ReportRow> {
                 spp_per_pixel,
                 samples: samples.round() as usize,
                 wall_s: mean(&|i| input.runs[i].wall_time_s),
+                cpu_s: mean(&|i| input.runs[i].cpu_time_s),
+                precompute_s: run.kind.precompute_s(),
+                precompute_cached: match run.kind {
+                    RunKind::Preview { cached, .. } => Some(cached),
+                    _ => None,
+                },
                 overhead_s: mean(&|i| input.runs[i].overhead_s),
                 time_vs_target,
                 equal_time: time_vs_target.map(|d| d.abs() <= EQUAL_TIME_TOLERANCE),
@@ -683,18 +758,23 @@ fn headline(input: &ReportInput, rows: &[ReportRow]) -> Option<String> {
         .into_iter()
         .find(|(b, _)| *b == head)?;
     let best = members[0];
+    let cost = |r: &ReportRow| input.equal_cost.of(r.wall_s, r.cpu_s);
+    let unit = match input.equal_cost {
+        EqualCost::Wall => "s",
+        EqualCost::Cpu => "CPU s",
+    };
     let time = members
         .iter()
         .find(|r| r.name == "gradient")
-        .map_or(best.wall_s, |r| r.wall_s);
+        .map_or(cost(best), |r| cost(r));
     let others = members[1..]
         .iter()
         .map(|r| {
             format!(
-                "{} {} ({:.2} s)",
+                "{} {} ({:.2} {unit})",
                 r.name,
                 value_ci(r.rmse, r.rmse_ci95),
-                r.wall_s
+                cost(r)
             )
         })
         .collect::<Vec<_>>()
@@ -742,13 +822,17 @@ fn headline(input: &ReportInput, rows: &[ReportRow]) -> Option<String> {
         ));
     }
     Some(format!(
-        "At equal time on {} (budget {}, about {time:.2} s per image, {seeds} seed{}), {} has the lowest RMSE: {} ({:.2} s); then {others}.{dissent}",
+        "At equal {} on {} (budget {}, about {time:.2} {unit} per image, {seeds} seed{}), {} has the lowest RMSE: {} ({:.2} {unit}); then {others}.{dissent}",
+        match input.equal_cost {
+            EqualCost::Wall => "time",
+            EqualCost::Cpu => "CPU time",
+        },
         input.scene,
         percent(b),
         if seeds == 1 { "" } else { "s" },
         best.name,
         value_ci(best.rmse, best.rmse_ci95),
-        best.wall_s,
+        cost(best),
     ))
 }
 
@@ -779,8 +863,9 @@ fn png_bytes(rgb8: &[u8], w: usize, h: usize) -> std::result::Result<Vec<u8>, St
     Ok(out)
 }
 
-/// Wall time against RMSE (with the seeds' 95 % intervals) and against FLIP, one
-/// line per method (plot file name, SVG).
+/// Cost (wall or CPU time, as the report's `equal_cost`; a preview's per frame)
+/// against RMSE (with the seeds' 95 % intervals) and against FLIP, one line per
+/// method (plot file name, SVG).
 fn speed_plots(
     input: &ReportInput,
     rows: &[ReportRow],
@@ -791,6 +876,7 @@ fn speed_plots(
             names.push(&r.name);
         }
     }
+    let cost = |r: &ReportRow| input.equal_cost.of(r.wall_s, r.cpu_s);
     let series = |metric: fn(&ReportRow) -> (f64, Option<f64>)| -> Vec<Series> {
         names
             .iter()
@@ -803,7 +889,7 @@ fn speed_plots(
                     name: (*n).to_string(),
                     points: members
                         .iter()
-                        .map(|r| (r.wall_s, metric(r).0, setting(r)))
+                        .map(|r| (cost(r), metric(r).0, setting(r)))
                         .collect(),
                     bars: members
                         .iter()
@@ -816,13 +902,15 @@ fn speed_plots(
             })
             .collect()
     };
-    let title = |m: &str| format!("{}: wall time vs {m}", input.scene);
+    let label = input.equal_cost.label();
+    let title = |m: &str| format!("{}: {label} vs {m}", input.scene);
+    let axis = format!("{label} (s)");
     Ok(vec![
         (
             "speed_rmse.svg".into(),
             loglog_svg(
                 &title("RMSE"),
-                "wall time (s)",
+                &axis,
                 "RMSE (95% interval over seeds)",
                 &series(|r| (f64::from(r.rmse), r.rmse_ci95.map(f64::from))),
             )?,
@@ -831,7 +919,7 @@ fn speed_plots(
             "speed_flip.svg".into(),
             loglog_svg(
                 &title("FLIP"),
-                "wall time (s)",
+                &axis,
                 "mean FLIP (95% interval over seeds)",
                 &series(|r| (f64::from(r.flip), r.flip_ci95.map(f64::from))),
             )?,
@@ -846,6 +934,7 @@ fn json(input: &ReportInput, rows: &[ReportRow], scales: &[ErrorScale]) -> serde
         "command": input.command,
         "version": input.version,
         "threads": input.threads,
+        "equal_cost": input.equal_cost.name(),
         "width": input.width,
         "height": input.height,
         "reference": input.reference_info,
@@ -879,7 +968,7 @@ fn documentation(fields: &[(&str, &str)]) -> serde_json::Value {
 
 /// `report.json`'s own documentation of its top-level keys (its `fields`), so that
 /// a reader of the file alone knows what each number means.
-const JSON_FIELDS: [(&str, &str); 18] = [
+const JSON_FIELDS: [(&str, &str); 19] = [
     ("scene", "name of the compared scene"),
     ("render_id", "the id every file of this report carries (its assets: their folder report-assets/<id>/); written last, so a file without it belongs to another run"),
     ("files", "every file of this report, relative to its folder (assets, --keep-exr EXRs, report.md, report.html)"),
@@ -887,6 +976,7 @@ const JSON_FIELDS: [(&str, &str); 18] = [
     ("command", "the command line that wrote this report"),
     ("version", "gradtrace's version and git commit"),
     ("threads", "worker threads every run used"),
+    ("equal_cost", "what the baselines' cost was matched on (compare --equal): wall (wall-clock seconds) or cpu (process CPU seconds, user + system); time_vs_target is in this measure"),
     ("width", "image width in pixels, of the reference and of every run"),
     ("height", "image height in pixels, of the reference and of every run"),
     ("reference", "{spp, time_s (its render time, also when reused), cache_key, reused (from the cache)}"),
@@ -901,18 +991,21 @@ const JSON_FIELDS: [(&str, &str); 18] = [
 ];
 
 /// `report.json`'s documentation of a row's keys (its `run_fields`).
-const RUN_FIELDS: [(&str, &str); 18] = [
+const RUN_FIELDS: [(&str, &str); 21] = [
     ("name", "method: a strategy, a baseline, full, or a Sec. 8 interpolation run"),
-    ("kind", "adaptive, baseline, full or interpolation"),
+    ("kind", "adaptive, baseline, full, interpolation or preview (shadow-field, glossy: an approximate method, scored against the same reference)"),
     ("budget", "samples per pixel of an adaptive or interpolation run as given (0.17 = 17% of the pixels); null otherwise"),
     ("equal_time_budget", "for adaptive runs and baselines: the budget whose gradient run's time the baselines match"),
     ("seeds", "repetitions with independent random numbers; the figures are their mean"),
     ("spp", "camera samples per evaluated point (adaptive, interpolation) or per pixel (baselines: the mean; full)"),
     ("spp_per_pixel", "camera samples per image pixel the run spent (adaptive: samples x spp / pixels)"),
     ("samples", "points evaluated (adaptive, interpolation) or camera samples (full renders, baselines), mean over the seeds"),
-    ("wall_s", "wall time in seconds, overhead included, mean over the seeds"),
+    ("wall_s", "wall time in seconds, overhead included, mean over the seeds; a preview: one frame, its precompute apart"),
+    ("cpu_s", "process CPU seconds (user + system, every thread) over the same span as wall_s, mean over the seeds"),
+    ("precompute_s", "a preview's precompute in wall seconds (as first computed, also when read from the cache); null for the others"),
+    ("precompute_cached", "whether a preview's precompute was read from the cache (<out>/cache/); null for the others"),
     ("overhead_s", "the part of wall_s outside the renderer: quadtree and reconstruction, or the denoiser"),
-    ("time_vs_target", "runs meant to take the gradient run's time: the seeds' largest relative deviation from it, signed; null otherwise"),
+    ("time_vs_target", "runs meant to take the gradient run's time: the seeds' largest relative deviation from it (in the equal_cost measure), signed; null otherwise"),
     ("equal_time", "whether |time_vs_target| <= metrics.equal_time_tolerance (false rows are marked in the report); null without a target"),
     ("rmse", "root mean squared error against the reference, mean over the seeds"),
     ("rmse_ci95", "half-width of its 95% Student-t interval over the seeds; null with one seed"),
@@ -923,13 +1016,14 @@ const RUN_FIELDS: [(&str, &str); 18] = [
 ];
 
 /// The first table of a section: what each run cost, and its RMSE.
-const TIME_COLUMNS: [&str; 9] = [
+const TIME_COLUMNS: [&str; 10] = [
     "method",
     "kind",
     "budget / spp",
     "seeds",
     "samples",
     "wall time (s)",
+    "CPU time (s)",
     "overhead (s)",
     "time vs target",
     "RMSE (± 95%)",
@@ -945,10 +1039,23 @@ const METRIC_COLUMNS: [&str; 5] = [
     "FLIP (± 95%)",
 ];
 
-/// A row's setting: "17%" or "16 spp".
+/// The previews' table: a frame's cost, the precompute apart, and the RMSE
+/// against the same reference as every other row.
+const PREVIEW_COLUMNS: [&str; 7] = [
+    "method",
+    "kind",
+    "precompute (s)",
+    "frame wall time (s)",
+    "frame CPU time (s)",
+    "RMSE",
+    "FLIP",
+];
+
+/// A row's setting: "17%", "16 spp" or "per frame".
 fn setting(r: &ReportRow) -> String {
     match r.budget {
         Some(b) => percent(b),
+        None if r.kind == "preview" => PER_FRAME.into(),
         None => format!("{} spp", r.spp),
     }
 }
@@ -991,10 +1098,45 @@ fn time_cells(r: &ReportRow) -> Vec<String> {
         r.seeds.to_string(),
         r.samples.to_string(),
         seconds(r.wall_s),
+        seconds(r.cpu_s),
         seconds(r.overhead_s),
         time_vs_target_cell(r),
         cell_ci(r.rmse, r.rmse_ci95, 3),
     ]
+}
+
+/// A preview row's cells, in [`PREVIEW_COLUMNS`] order.
+fn preview_cells(r: &ReportRow) -> Vec<String> {
+    let precompute = r.precompute_s.map_or("–".into(), |p| {
+        let cached = if r.precompute_cached == Some(true) {
+            " (cached)"
+        } else {
+            ""
+        };
+        format!("{}{cached}", seconds(p))
+    });
+    vec![
+        r.name.clone(),
+        r.kind.clone(),
+        precompute,
+        seconds(r.wall_s),
+        seconds(r.cpu_s),
+        format!("{:.3e}", r.rmse),
+        format!("{:.3e}", r.flip),
+    ]
+}
+
+/// A section's tables: (columns, cells) for each.
+type Columns = (&'static [&'static str], fn(&ReportRow) -> Vec<String>);
+
+/// The previews get one table of their own columns; every other section the
+/// time table and the metric table.
+fn section_columns(members: &[&ReportRow]) -> Vec<Columns> {
+    if !members.is_empty() && members.iter().all(|r| r.kind == "preview") {
+        vec![(&PREVIEW_COLUMNS, preview_cells)]
+    } else {
+        vec![(&TIME_COLUMNS, time_cells), (&METRIC_COLUMNS, metric_cells)]
+    }
 }
 
 /// A row's cells, in [`METRIC_COLUMNS`] order.
@@ -1013,12 +1155,20 @@ fn table_notes(members: &[&ReportRow]) -> Vec<String> {
     let mut notes = Vec::new();
     if members.iter().any(|r| r.time_vs_target.is_some()) {
         notes.push(format!(
-            "time vs target: the wall time against the gradient run's at the same seed, the seed furthest off; \
+            "time vs target: the cost (wall or CPU time, the report's equal cost) against the gradient run's at the same seed, the seed furthest off; \
              {OFF_TIME_MARK} beyond ±{}%: not an equal-time result.",
             100.0 * EQUAL_TIME_TOLERANCE
         ));
     }
-    if members.iter().any(|r| r.seeds == 1) {
+    if members.iter().any(|r| r.kind == "preview") {
+        notes.push(
+            "Previews: approximations (shadow-field: direct light on diffuse surfaces; glossy: \
+             environment light with one bounce), scored against the same reference as every row; \
+             their cost is one frame, the precompute apart (cached under <out>/cache/)."
+                .into(),
+        );
+    }
+    if members.iter().any(|r| r.seeds == 1 && r.kind != "preview") {
         notes.push("(1 seed): a single run, so no interval (a hollow point in the plots).".into());
     }
     notes
@@ -1051,7 +1201,7 @@ fn tables(rows: &[ReportRow]) -> Vec<(String, Vec<&ReportRow>)> {
         });
         out.push((
             format!(
-                "Budget {}: strategies at equal samples; baselines at the gradient run's wall time",
+                "Budget {}: strategies at equal samples; baselines at the gradient run's time (the equal cost: wall or CPU)",
                 percent(b)
             ),
             members,
@@ -1062,6 +1212,13 @@ fn tables(rows: &[ReportRow]) -> Vec<(String, Vec<&ReportRow>)> {
         out.push((
             "Gradient vs linear interpolation (Sec. 8, 1% of the pixels)".into(),
             interp,
+        ));
+    }
+    let previews: Vec<&ReportRow> = rows.iter().filter(|r| r.kind == "preview").collect();
+    if !previews.is_empty() {
+        out.push((
+            "Previews (one frame; the precompute apart)".into(),
+            previews,
         ));
     }
     out
@@ -1091,8 +1248,10 @@ pub fn markdown_table(rows: &[ReportRow]) -> String {
     };
     for (title, members) in tables(rows) {
         let _ = writeln!(s, "**{title}**\n");
-        table(&mut s, &TIME_COLUMNS, &time_cells, &members, 2);
-        table(&mut s, &METRIC_COLUMNS, &metric_cells, &members, 1);
+        for (columns, cells) in section_columns(&members) {
+            let text = if columns[1] == "kind" { 2 } else { 1 };
+            table(&mut s, columns, &cells, &members, text);
+        }
         for n in table_notes(&members) {
             let _ = writeln!(s, "{n}\n");
         }
@@ -1157,7 +1316,7 @@ fn scale_caption(scale: &ErrorScale) -> String {
 fn meta_line(input: &ReportInput) -> String {
     let r = &input.reference_info;
     format!(
-        "{}×{} pixels; reference {} spp, rendered in {:.1} s ({}; key {}); {} threads; exposure {:+} stops; \
+        "{}×{} pixels; reference {} spp, rendered in {:.1} s ({}; key {}); {} threads; equal cost: {}; exposure {:+} stops; \
          relMSE ε = {}; trimmed relMSE leaves out the {}% of pixels with the highest error; \
          FLIP: LDR-FLIP at {:.1} pixels/degree on the displayed 8-bit sRGB; {}.",
         input.width,
@@ -1167,6 +1326,7 @@ fn meta_line(input: &ReportInput) -> String {
         if r.reused { "reused from the cache" } else { "rendered for this report" },
         &r.cache_key[..r.cache_key.len().min(16)],
         input.threads,
+        input.equal_cost.label(),
         input.exposure,
         RELMSE_EPS,
         TRIM_FRACTION * 100.0,
@@ -1243,8 +1403,9 @@ fn html(
     let _ = writeln!(s, "<p>{}</p>", esc(&meta_line(input)));
     for (title, members) in tables(rows) {
         let _ = writeln!(s, "<h2>{}</h2>", esc(&title));
-        html_table(&mut s, &TIME_COLUMNS, &time_cells, &members);
-        html_table(&mut s, &METRIC_COLUMNS, &metric_cells, &members);
+        for (columns, cells) in section_columns(&members) {
+            html_table(&mut s, columns, &cells, &members);
+        }
         for n in table_notes(&members) {
             let _ = writeln!(s, "<p class=\"tnote\">{}</p>", esc(&n));
         }

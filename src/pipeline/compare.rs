@@ -5,9 +5,10 @@
 //! Per the first-order paper's Sec. 8–9: each strategy of `adaptive` at each budget
 //! (equal sample counts, reconstructed by gradient-aware C1 interpolation); a full
 //! render at the same samples per evaluated point; the baselines — every pixel
-//! rendered with as many samples as the `gradient` strategy's wall time buys — at
-//! equal time; and Sec. 8's 1%-of-pixels experiment, gradient against linear
-//! interpolation, also scored on the largest surface away from silhouettes.
+//! rendered with as many samples as the `gradient` strategy's wall or CPU time
+//! buys (`--equal`) — at equal cost; Sec. 8's 1%-of-pixels experiment, gradient
+//! against linear interpolation, also scored on the largest surface away from
+//! silhouettes; and the previews that suit the scene (`previews`).
 
 use super::adaptive::{render_adaptive, AdaptiveRender};
 use super::output_set::image_of_render;
@@ -15,13 +16,15 @@ use crate::accel::Accel;
 use crate::adaptive::{Settings, Strategy};
 use crate::math::sampler::hash2;
 use crate::math::Vec3;
-use crate::output::report::{self, ReferenceInfo, ReportInput, ReportRow, Run, RunKind};
+use crate::output::report::{self, EqualCost, ReferenceInfo, ReportInput, ReportRow, Run, RunKind};
 use crate::reconstruct::Interpolation;
 use crate::render::{render, RenderOptions, RenderOutput};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+mod previews;
 
 /// What `compare` runs.
 #[derive(Clone, Debug)]
@@ -53,6 +56,15 @@ pub struct CompareOptions {
     pub out_dir: PathBuf,
     /// The command line, recorded in `report.json`.
     pub command: String,
+    /// What the baselines are matched on (`--equal`): wall time or process CPU time.
+    pub equal: EqualCost,
+    /// The previews (shadow-field, glossy) as rows where the scene suits them
+    /// (`--no-previews`: false).
+    pub previews: bool,
+    /// The shadow-field preview's precompute settings (tests make them cheap).
+    pub shadow_field: crate::preview::shadow_field::Settings,
+    /// The glossy preview's precompute settings.
+    pub glossy: crate::preview::glossy::Settings,
 }
 
 impl CompareOptions {
@@ -72,6 +84,10 @@ impl CompareOptions {
             all_images: false,
             out_dir,
             command: String::new(),
+            equal: EqualCost::Wall,
+            previews: true,
+            shadow_field: Default::default(),
+            glossy: Default::default(),
         }
     }
 
@@ -103,6 +119,12 @@ impl CompareOptions {
         }
         if self.seeds == 0 {
             return bad("--seeds", "must be at least 1".into());
+        }
+        if self.equal == EqualCost::Cpu && crate::cpu_time::process_s().is_none() {
+            return bad(
+                "--equal",
+                "cpu: this system does not report the process's CPU time; use --equal wall".into(),
+            );
         }
         if self.out_dir.exists() && !self.out_dir.is_dir() {
             return bad(
@@ -174,12 +196,18 @@ pub fn run(
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
     let oidn = crate::denoise::available();
-    let baselines = 2 + usize::from(oidn);
+    let baselines = 2 + 2 * usize::from(oidn);
     let gradient_oidn = usize::from(oidn && opts.strategies.contains(&Strategy::Gradient));
     let per_budget = opts.strategies.len() + gradient_oidn + baselines;
     let per_seed = 1 + per_budget * opts.budgets.len();
-    // The reference, every seed's runs, the interpolation grid and the report.
-    let steps = 1 + per_seed * opts.seeds as usize + 2;
+    let previews = if opts.previews {
+        previews::suited(&scene).len()
+    } else {
+        0
+    };
+    // The reference, every seed's runs, the interpolation grid, the previews and
+    // the report.
+    let steps = 1 + per_seed * opts.seeds as usize + 2 + previews;
     let phase = super::progress::Phase::new(mode, "compare", steps as u64, "runs");
     // One step per finished run; warnings are messages, not steps.
     let progress = |msg: &str| {
@@ -255,15 +283,23 @@ pub fn compare(
     rendering_s += grid.iter().map(|r| r.wall_time_s).sum::<f64>();
     progress("Sec. 8 interpolation grid");
     runs.extend(grid);
+    let mut preview_notes = Vec::new();
+    if opts.previews {
+        let p = previews::runs(&plan, progress)?;
+        rendering_s += p.seconds;
+        runs.extend(p.runs);
+        preview_notes = p.notes;
+    }
 
     let outside_s = (start.elapsed().as_secs_f64() - rendering_s).max(0.0);
-    let notes = notes(
+    let mut notes = notes(
         &plan,
         &info,
         sec8_note,
         outside_s,
         start.elapsed().as_secs_f64(),
     );
+    notes.extend(preview_notes);
     let (w, h) = plan.size;
     let input = ReportInput {
         scene: scene.name(),
@@ -271,6 +307,7 @@ pub fn compare(
         command: opts.command.clone(),
         version: super::VERSION.into(),
         threads: rayon::current_num_threads(),
+        equal_cost: opts.equal,
         width: w as usize,
         height: h as usize,
         reference,
@@ -312,34 +349,36 @@ fn repetition_seed(base: u32, k: u32) -> u32 {
 const GRADIENT_OIDN: &str = "gradient+oidn";
 
 /// One repetition: the full render, every strategy × budget, and for every budget
-/// the baselines at the `gradient` run's wall time. Also returns the seconds spent
-/// rendering (and denoising), each counted once.
+/// the baselines at the `gradient` run's cost (wall or CPU time, `--equal`). Also
+/// returns the wall seconds spent rendering (and denoising), each counted once.
 fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, f64)> {
     let seed = repetition_seed(plan.base.seed.unwrap_or(plan.scene.settings.seed), k);
     let base = RenderOptions {
         seed: Some(seed),
         ..plan.base.clone()
     };
-    let (full, full_time) = timed_render(plan, &base)?;
+    let mode = plan.opts.equal;
+    let (full, full_cost) = timed_render(plan, &base)?;
     progress(&format!(
-        "seed {k}: full render, {} spp, {full_time:.2} s",
-        plan.spp
+        "seed {k}: full render, {} spp, {:.2} s",
+        plan.spp, full_cost.wall_s
     ));
     let mut runs = vec![full_run(
         "full",
         RunKind::Full { spp: plan.spp },
         k,
         full,
-        full_time,
+        full_cost,
     )];
     // Rendering and denoising that no run's wall time holds (the G-buffers and
     // denoisers of the derived gradient+oidn runs, discarded equal-time attempts).
     let mut extra_s = 0.0;
     for &budget in &plan.opts.budgets {
-        let mut gradient_time = None;
-        let mut denoiser_time = None;
+        let mut gradient_cost = None;
+        let mut denoiser_cost = None;
         for &strategy in &plan.opts.strategies {
             let settings = Settings::new(strategy, budget as f32);
+            let clock = Clock::start();
             let out = render_adaptive(
                 plan.scene,
                 plan.accel,
@@ -348,6 +387,10 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
                 Interpolation::Gradient,
                 &|_, _| {},
             )?;
+            let cost = Cost {
+                wall_s: out.stats.wall_s,
+                cpu_s: clock.cost().cpu_s,
+            };
             progress(&format!(
                 "seed {k}: {} at {:.0}%, {} samples, {:.2} s",
                 strategy.name(),
@@ -356,15 +399,18 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
                 out.stats.wall_s
             ));
             if strategy == Strategy::Gradient {
-                gradient_time = Some(out.stats.wall_s);
+                gradient_cost = Some(cost);
                 if crate::denoise::available() {
-                    let (run, gbuffer_s, denoiser_s) = denoised_run(plan, &base, &out, budget, k)?;
+                    let (run, gbuffer, denoiser) =
+                        denoised_run(plan, &base, &out, cost, budget, k)?;
                     progress(&format!(
-                        "seed {k}: {GRADIENT_OIDN} at {:.0}%, G-buffer {gbuffer_s:.2} s + denoise {denoiser_s:.2} s",
-                        budget * 100.0
+                        "seed {k}: {GRADIENT_OIDN} at {:.0}%, G-buffer {:.2} s + denoise {:.2} s",
+                        budget * 100.0,
+                        gbuffer.wall_s,
+                        denoiser.wall_s
                     ));
-                    extra_s += gbuffer_s + denoiser_s;
-                    denoiser_time = Some(denoiser_s);
+                    extra_s += gbuffer.wall_s + denoiser.wall_s;
+                    denoiser_cost = Some(denoiser);
                     runs.push(run);
                 }
             }
@@ -376,32 +422,37 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
                 },
                 k,
                 out,
+                cost.cpu_s,
             ));
         }
-        // The baselines need the gradient run's time; without `gradient` among the
-        // strategies, the first strategy's time stands in.
-        let target =
-            gradient_time.unwrap_or_else(|| runs.last().map_or(full_time, |r| r.wall_time_s));
-        let guess = ((plan.spp as f64 * target / full_time).round() as u32).max(1);
+        // The baselines need the gradient run's cost; without `gradient` among the
+        // strategies, the first strategy's cost stands in.
+        let target = gradient_cost
+            .unwrap_or_else(|| runs.last().map_or(full_cost, Cost::of_run))
+            .of(mode);
+        let guess =
+            ((plan.spp as f64 * target / full_cost.of(mode).max(1e-9)).round() as u32).max(1);
         let uniform = equal_time_render(plan, &base, guess, target)?;
-        let (out, secs, spp_eq) = (uniform.out, uniform.secs, uniform.spp);
+        let (out, cost, spp_eq) = (uniform.out, uniform.cost, uniform.spp);
         extra_s += uniform.discarded_s;
         progress(&format!(
-            "seed {k}: uniform-all-pixels at the time of {:.0}%: {spp_eq} spp, {secs:.2} s",
-            budget * 100.0
+            "seed {k}: uniform-all-pixels at the {} of {:.0}%: {spp_eq} spp, {:.2} s",
+            mode.label(),
+            budget * 100.0,
+            cost.of(mode)
         ));
         let kind = RunKind::Baseline {
             budget,
             spp: spp_eq,
         };
-        let mut run = full_run("uniform-all-pixels", kind, k, out, secs);
+        let mut run = full_run("uniform-all-pixels", kind, k, out, cost);
         run.target_s = Some(target);
         runs.push(run);
         let equal = EqualTime {
             budget,
             spp: spp_eq,
             target,
-            denoiser_s: denoiser_time,
+            denoiser_s: denoiser_cost.map(|c| c.of(mode)),
         };
         let (baselines, discarded_s) = other_baselines(plan, &base, &equal, k, progress)?;
         runs.extend(baselines.into_iter().map(|r| Run {
@@ -419,23 +470,24 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
     Ok((runs, rendering_s))
 }
 
-/// `out` (the gradient strategy's reconstruction) denoised with OIDN, guided by a
-/// one-ray-per-pixel G-buffer; its wall time is the adaptive render's plus both.
-/// Returns the run, the G-buffer's and the denoiser's seconds.
+/// `out` (the gradient strategy's reconstruction, which cost `cost`) denoised with
+/// OIDN, guided by a one-ray-per-pixel G-buffer; its cost is the adaptive render's
+/// plus both. Returns the run, the G-buffer's and the denoiser's cost.
 fn denoised_run(
     plan: &Plan,
     base: &RenderOptions,
     out: &AdaptiveRender,
+    cost: Cost,
     budget: f64,
     k: u32,
-) -> Result<(Run, f64, f64)> {
-    let t = Instant::now();
+) -> Result<(Run, Cost, Cost)> {
+    let clock = Clock::start();
     let gbuffer = super::render::gbuffer(plan.scene, plan.accel, base)?;
-    let gbuffer_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
+    let gbuffer_cost = clock.cost();
+    let clock = Clock::start();
     let clean = super::render::denoise_with(&out.reconstruction.image, &gbuffer)?;
-    let denoiser_s = t.elapsed().as_secs_f64();
-    let extra = gbuffer_s + denoiser_s;
+    let denoiser_cost = clock.cost();
+    let extra = gbuffer_cost + denoiser_cost;
     let run = Run {
         name: GRADIENT_OIDN.into(),
         kind: RunKind::Adaptive {
@@ -444,19 +496,21 @@ fn denoised_run(
         },
         seed: k,
         samples: out.samples.samples.len(),
-        wall_time_s: out.stats.wall_s + extra,
-        overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s + extra,
+        wall_time_s: out.stats.wall_s + extra.wall_s,
+        cpu_time_s: cost.cpu_s + extra.cpu_s,
+        overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s + extra.wall_s,
         // An equal-time contender: measured against the run it denoises.
-        target_s: Some(out.stats.wall_s),
+        target_s: Some(cost.of(plan.opts.equal)),
         image: clean,
         sample_positions: out.samples.samples.iter().map(|s| s.pos).collect(),
     };
-    Ok((run, gbuffer_s, denoiser_s))
+    Ok((run, gbuffer_cost, denoiser_cost))
 }
 
-/// What the baselines at one budget are given: the gradient run's wall time
-/// (`target`), the spp a full render fits in it, and the denoiser's time on this
-/// image when it ran (the denoised baseline renders less to leave room for it).
+/// What the baselines at one budget are given: the gradient run's cost
+/// (`target`, wall or CPU seconds as `--equal`), the spp a full render fits in it,
+/// and the denoiser's cost on this image when it ran (the denoised baselines
+/// render less to leave room for it).
 struct EqualTime {
     budget: f64,
     spp: u32,
@@ -464,9 +518,47 @@ struct EqualTime {
     denoiser_s: Option<f64>,
 }
 
-/// The baselines besides uniform, at the `target` wall time of the gradient run
-/// at `budget`: the Cycles-style per-pixel adaptive sampler and, where the build
-/// has OIDN, the denoised uniform render and the gradient run denoised.
+/// Blender's per-pixel noise-threshold sampler (`render::noise_adaptive`).
+const CYCLES: &str = "cycles-adaptive";
+
+/// Blender's recommended pairing: [`CYCLES`] at equal cost, then OIDN with the
+/// albedo and normal guides, the denoise counted in the cost.
+const CYCLES_OIDN: &str = "cycles-adaptive+oidn";
+
+/// The Cycles-style sampler's settings: Blender's default threshold, the minimum
+/// and the step sized for the spp the time affords (a pixel may take 8 times
+/// that), stopped at `limit` seconds of wall or CPU time (`--equal`).
+fn cycles_settings(
+    mode: EqualCost,
+    spp_eq: u32,
+    limit: f64,
+) -> crate::render::noise_adaptive::NoiseAdaptive {
+    let mut cycles = crate::render::noise_adaptive::NoiseAdaptive::with_budget(
+        0.01,
+        (8 * spp_eq).max(16),
+        spp_eq,
+    );
+    let limit = Some(std::time::Duration::from_secs_f64(limit.max(0.0)));
+    match mode {
+        EqualCost::Wall => cycles.time_limit = limit,
+        EqualCost::Cpu => cycles.cpu_time_limit = limit,
+    }
+    cycles
+}
+
+/// A noise-adaptive render's run: its mean spp as the kind's, its samples summed.
+fn cycles_run(name: &str, budget: f64, k: u32, out: RenderOutput, cost: Cost) -> Run {
+    let counts = out.spp_map.as_deref().unwrap_or(&[]);
+    let total: f64 = counts.iter().map(|&c| f64::from(c)).sum();
+    let mean = (total / counts.len().max(1) as f64).round() as u32;
+    let mut run = full_run(name, RunKind::Baseline { budget, spp: mean }, k, out, cost);
+    run.samples = total as usize;
+    run
+}
+
+/// The baselines besides uniform, at the `target` cost of the gradient run at
+/// `budget`: the Cycles-style per-pixel adaptive sampler and, where the build has
+/// OIDN, the denoised uniform render and the denoised Cycles-style render.
 fn other_baselines(
     plan: &Plan,
     base: &RenderOptions,
@@ -480,28 +572,20 @@ fn other_baselines(
         target,
         denoiser_s,
     } = equal;
-    use crate::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
+    use crate::render::noise_adaptive::render_noise_adaptive;
+    let mode = plan.opts.equal;
     let mut runs = Vec::new();
-    // Blender's default threshold, the minimum and the step sized for the spp
-    // the time affords (a pixel may take 8 times that), the time limit held.
-    let mut cycles = NoiseAdaptive::with_budget(0.01, (8 * spp_eq).max(16), spp_eq);
-    cycles.time_limit = Some(std::time::Duration::from_secs_f64(target));
-    let t = Instant::now();
+    let cycles = cycles_settings(mode, spp_eq, target);
+    let clock = Clock::start();
     let out = render_noise_adaptive(plan.scene, plan.accel, base, &cycles, &|_, _| {})?;
-    let secs = t.elapsed().as_secs_f64();
-    let counts = out.spp_map.as_deref().unwrap_or(&[]);
-    let total: f64 = counts.iter().map(|&c| f64::from(c)).sum();
-    let mean = (total / counts.len().max(1) as f64).round() as u32;
+    let run = cycles_run(CYCLES, budget, k, out, clock.cost());
     progress(&format!(
-        "seed {k}: cycles-adaptive at the time of {:.0}%: mean {mean} spp, {secs:.2} s",
-        budget * 100.0
+        "seed {k}: {CYCLES} at the {} of {:.0}%: mean {} spp, {:.2} s",
+        mode.label(),
+        budget * 100.0,
+        run.kind.spp(),
+        mode.of(run.wall_time_s, run.cpu_time_s)
     ));
-    let kind = RunKind::Baseline {
-        budget,
-        spp: mean as u32,
-    };
-    let mut run = full_run("cycles-adaptive", kind, k, out, secs);
-    run.samples = total as usize;
     runs.push(run);
     if !crate::denoise::available() {
         return Ok((runs, 0.0));
@@ -515,12 +599,13 @@ fn other_baselines(
     };
     let rendered = equal_time_render(plan, &with_aovs, guess, target - denoiser_s)?;
     let (out, spp_oidn) = (rendered.out, rendered.spp);
-    let t_denoise = Instant::now();
+    let clock = Clock::start();
     let clean = super::render::denoise_with(&out.beauty, &out)?;
-    let denoised_in = t_denoise.elapsed().as_secs_f64();
-    let secs = rendered.secs + denoised_in;
+    let denoised = clock.cost();
+    let cost = rendered.cost + denoised;
     progress(&format!(
-        "seed {k}: oidn-uniform, {spp_oidn} spp + denoise, {secs:.2} s"
+        "seed {k}: oidn-uniform, {spp_oidn} spp + denoise, {:.2} s",
+        cost.of(mode)
     ));
     let mut run = full_run(
         "oidn-uniform",
@@ -530,12 +615,51 @@ fn other_baselines(
         },
         k,
         out,
-        secs,
+        cost,
     );
-    run.overhead_s = denoised_in;
+    run.overhead_s = denoised.wall_s;
     run.image = clean;
     runs.push(run);
+    runs.push(cycles_oidn_run(
+        plan, &with_aovs, equal, denoiser_s, k, progress,
+    )?);
     Ok((runs, rendered.discarded_s))
+}
+
+/// [`CYCLES_OIDN`]: the noise-adaptive render (with its albedo and normal AOVs)
+/// stopped at what the denoiser leaves of the target, then denoised.
+fn cycles_oidn_run(
+    plan: &Plan,
+    with_aovs: &RenderOptions,
+    equal: &EqualTime,
+    denoiser_s: f64,
+    k: u32,
+    progress: &dyn Fn(&str),
+) -> Result<Run> {
+    use crate::render::noise_adaptive::render_noise_adaptive;
+    let mode = plan.opts.equal;
+    let cycles = cycles_settings(mode, equal.spp, equal.target - denoiser_s);
+    let clock = Clock::start();
+    let out = render_noise_adaptive(plan.scene, plan.accel, with_aovs, &cycles, &|_, _| {})?;
+    // The guides come with the render's first hits; a pass of their own only
+    // where a render kept none.
+    let clean = if out.albedo.is_some() && out.normal.is_some() {
+        super::render::denoise_with(&out.beauty, &out)?
+    } else {
+        let gbuffer = super::render::gbuffer(plan.scene, plan.accel, with_aovs)?;
+        super::render::denoise_with(&out.beauty, &gbuffer)?
+    };
+    let cost = clock.cost();
+    let render_wall = out.stats.wall_time.as_secs_f64();
+    let mut run = cycles_run(CYCLES_OIDN, equal.budget, k, out, cost);
+    run.overhead_s = (cost.wall_s - render_wall).max(0.0);
+    run.image = clean;
+    progress(&format!(
+        "seed {k}: {CYCLES_OIDN}, mean {} spp + denoise, {:.2} s",
+        run.kind.spp(),
+        cost.of(mode)
+    ));
+    Ok(run)
 }
 
 /// Two strategies that placed exactly the same samples at one budget and seed
@@ -578,6 +702,7 @@ fn interpolation_runs(plan: &Plan, reference: &[Vec3]) -> Result<(Vec<Run>, Opti
     let mut runs = Vec::new();
     for interp in [Interpolation::Linear, Interpolation::Gradient] {
         let settings = Settings::new(Strategy::Uniform, 0.01);
+        let clock = Clock::start();
         let out = render_adaptive(
             plan.scene,
             plan.accel,
@@ -595,6 +720,7 @@ fn interpolation_runs(plan: &Plan, reference: &[Vec3]) -> Result<(Vec<Run>, Opti
             },
             0,
             out,
+            clock.cost().cpu_s,
         ));
     }
     // Pixels within one grid spacing of another surface are left out: there the
@@ -653,8 +779,12 @@ fn notes(
             if plan.opts.seeds == 1 { "" } else { "s" }
         )),
         sec8,
+        Some(match plan.opts.equal {
+            EqualCost::Wall => "Equal cost: wall time (--equal wall); every run's CPU time (user + system, all threads) is recorded beside it.".to_string(),
+            EqualCost::Cpu => "Equal cost: process CPU time, user + system over all threads (--equal cpu), which other jobs on the machine inflate far less than the wall time; every run's wall time is recorded beside it.".to_string(),
+        }),
         (!crate::denoise::available()).then(|| format!(
-            "oidn-uniform (the denoised baseline) is not in this report: {}",
+            "oidn-uniform, {GRADIENT_OIDN} and {CYCLES_OIDN} (the denoised baselines) are not in this report: {}",
             crate::denoise::unavailable_reason()
         )),
         Some(format!(
@@ -707,27 +837,85 @@ fn largest_surface(plan: &Plan) -> Result<Option<(u32, Vec<bool>)>> {
     Ok(Some((id, ids.iter().map(|&v| v as u32 == id).collect())))
 }
 
-/// Every pixel rendered with `opts`, and the wall time it took.
+/// A run's cost in both measures: wall seconds and process CPU seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Cost {
+    wall_s: f64,
+    cpu_s: f64,
+}
+
+impl Cost {
+    fn of(self, mode: EqualCost) -> f64 {
+        mode.of(self.wall_s, self.cpu_s)
+    }
+
+    fn of_run(run: &Run) -> Self {
+        Self {
+            wall_s: run.wall_time_s,
+            cpu_s: run.cpu_time_s,
+        }
+    }
+}
+
+impl std::ops::Add for Cost {
+    type Output = Cost;
+    fn add(self, o: Cost) -> Cost {
+        Cost {
+            wall_s: self.wall_s + o.wall_s,
+            cpu_s: self.cpu_s + o.cpu_s,
+        }
+    }
+}
+
+/// Measures a span in both: the process's CPU clock advances only by what this
+/// process runs (compare runs one thing at a time, so that is the run's).
+struct Clock {
+    wall: Instant,
+    cpu: Option<f64>,
+}
+
+impl Clock {
+    fn start() -> Self {
+        Self {
+            cpu: crate::cpu_time::process_s(),
+            wall: Instant::now(),
+        }
+    }
+
+    /// The cost so far; where the OS reports no CPU time (`--equal cpu` is then
+    /// refused) the CPU seconds are the wall seconds.
+    fn cost(&self) -> Cost {
+        let wall_s = self.wall.elapsed().as_secs_f64();
+        let cpu_s = self
+            .cpu
+            .zip(crate::cpu_time::process_s())
+            .map_or(wall_s, |(a, b)| (b - a).max(0.0));
+        Cost { wall_s, cpu_s }
+    }
+}
+
 /// What [`equal_time_render`] kept.
 struct EqualTimeRender {
     out: RenderOutput,
-    /// The kept render's wall time.
-    secs: f64,
+    /// The kept render's cost.
+    cost: Cost,
     spp: u32,
     /// The discarded first attempt's wall time (0 when it was kept): rendering too.
     discarded_s: f64,
 }
 
-/// A full render at the `target` wall time: `guess` spp (scaled from the full
-/// render's time), and once more at the spp its own time implies when it missed the
-/// target by more than 10% (the machine's load can change between the two renders,
-/// and an equal-time comparison must not hand a baseline half the time).
+/// A full render at the `target` cost (wall or CPU seconds, `--equal`): `guess`
+/// spp (scaled from the full render's cost), and once more at the spp its own cost
+/// implies when it missed the target by more than 10% (the machine's load can
+/// change between the two renders, and an equal-time comparison must not hand a
+/// baseline half the time).
 fn equal_time_render(
     plan: &Plan,
     base: &RenderOptions,
     guess: u32,
     target: f64,
 ) -> Result<EqualTimeRender> {
+    let mode = plan.opts.equal;
     let at = |spp: u32| {
         timed_render(
             plan,
@@ -737,12 +925,13 @@ fn equal_time_render(
             },
         )
     };
-    let (out, secs) = at(guess)?;
+    let (out, cost) = at(guess)?;
+    let secs = cost.of(mode);
     let spp = ((f64::from(guess) * target / secs.max(1e-9)).round() as u32).max(1);
     if (secs / target - 1.0).abs() <= 0.10 || spp == guess {
         return Ok(EqualTimeRender {
             out,
-            secs,
+            cost,
             spp: guess,
             discarded_s: 0.0,
         });
@@ -750,20 +939,21 @@ fn equal_time_render(
     let (out, kept) = at(spp)?;
     Ok(EqualTimeRender {
         out,
-        secs: kept,
+        cost: kept,
         spp,
-        discarded_s: secs,
+        discarded_s: cost.wall_s,
     })
 }
 
-fn timed_render(plan: &Plan, opts: &RenderOptions) -> Result<(RenderOutput, f64)> {
-    let t = Instant::now();
+/// Every pixel rendered with `opts`, and what it cost.
+fn timed_render(plan: &Plan, opts: &RenderOptions) -> Result<(RenderOutput, Cost)> {
+    let clock = Clock::start();
     let out = render(plan.scene, plan.accel, opts, &|_, _| {})?;
-    Ok((out, t.elapsed().as_secs_f64()))
+    Ok((out, clock.cost()))
 }
 
 /// A report run of a render of every pixel.
-fn full_run(name: &str, kind: RunKind, seed: u32, out: RenderOutput, secs: f64) -> Run {
+fn full_run(name: &str, kind: RunKind, seed: u32, out: RenderOutput, cost: Cost) -> Run {
     let spp = match kind {
         RunKind::Full { spp } | RunKind::Baseline { spp, .. } => spp,
         _ => out.spp,
@@ -773,7 +963,8 @@ fn full_run(name: &str, kind: RunKind, seed: u32, out: RenderOutput, secs: f64) 
         kind,
         seed,
         samples: out.width * out.height * spp as usize,
-        wall_time_s: secs,
+        wall_time_s: cost.wall_s,
+        cpu_time_s: cost.cpu_s,
         overhead_s: 0.0,
         target_s: None,
         image: out.beauty,
@@ -781,14 +972,16 @@ fn full_run(name: &str, kind: RunKind, seed: u32, out: RenderOutput, secs: f64) 
     }
 }
 
-/// A report run of an adaptive render (its overhead: quadtree + reconstruction).
-fn adaptive_run(name: &str, kind: RunKind, seed: u32, out: AdaptiveRender) -> Run {
+/// A report run of an adaptive render (its overhead: quadtree + reconstruction);
+/// `cpu_s`: the CPU time measured around it.
+fn adaptive_run(name: &str, kind: RunKind, seed: u32, out: AdaptiveRender, cpu_s: f64) -> Run {
     Run {
         name: name.into(),
         kind,
         seed,
         samples: out.samples.samples.len(),
         wall_time_s: out.stats.wall_s,
+        cpu_time_s: cpu_s,
         overhead_s: out.stats.quadtree_s + out.stats.reconstruct_s,
         target_s: None,
         image: out.reconstruction.image,
@@ -818,6 +1011,7 @@ fn keep_exrs(
             }
             RunKind::Baseline { budget, spp } => format!("t{budget}-{spp}spp"),
             RunKind::Full { spp } => format!("{spp}spp"),
+            RunKind::Preview { .. } => "frame".into(),
         };
         let name: String = format!("{}-{setting}-seed{}", r.name, r.seed)
             .chars()
@@ -892,7 +1086,8 @@ fn cached_reference(plan: &Plan, scene_hash: &str) -> Result<(Vec<Vec3>, Referen
         };
         return Ok((pixels, info));
     }
-    let (out, secs) = timed_render(plan, &opts)?;
+    let (out, cost) = timed_render(plan, &opts)?;
+    let secs = cost.wall_s;
     let header = super::render::provenance(plan.scene, &opts, &plan.opts.command, &out)?;
     entry.write_exr(&image_of_render(&out), &header, &out.beauty, secs)?;
     let info = ReferenceInfo {

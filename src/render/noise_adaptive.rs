@@ -45,6 +45,9 @@ pub struct NoiseAdaptive {
     /// one sample per pixel, always completes). The image then depends on the
     /// machine's speed, no longer on the seed alone.
     pub time_limit: Option<Duration>,
+    /// The same limit on this process's CPU time (`crate::cpu_time`), for
+    /// `compare --equal cpu`: a loaded machine does not shorten the run's work.
+    pub cpu_time_limit: Option<Duration>,
     /// Stop before a round would take the whole image past this many samples: the
     /// time limit's deterministic stand-in (equal-sample comparisons, tests).
     pub sample_limit: Option<u64>,
@@ -82,6 +85,7 @@ impl NoiseAdaptive {
             max_spp,
             check_every,
             time_limit: None,
+            cpu_time_limit: None,
             sample_limit: None,
         }
     }
@@ -179,7 +183,9 @@ pub fn render_noise_adaptive(
         .div_ceil(step)
         .saturating_mul(step)
         .min(max);
-    let limited = settings.time_limit.is_some() || settings.sample_limit.is_some();
+    let limited = settings.time_limit.is_some()
+        || settings.cpu_time_limit.is_some()
+        || settings.sample_limit.is_some();
     let mut next: Vec<u32> = vec![if limited { 1 } else { first }; w * h];
     let threshold = settings.threshold as f64 * THRESHOLD_SCALE;
     let mut floor = if limited && threshold > 0.0 {
@@ -189,7 +195,15 @@ pub fn render_noise_adaptive(
     };
     let traced = AtomicUsize::new(0);
     let budget = w * h * max as usize;
-    let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() > t);
+    let cpu_start = crate::cpu_time::process_s();
+    let out_of_time = || {
+        settings.time_limit.is_some_and(|t| start.elapsed() > t)
+            || settings.cpu_time_limit.is_some_and(|t| {
+                cpu_start
+                    .zip(crate::cpu_time::process_s())
+                    .is_some_and(|(a, b)| b - a > t.as_secs_f64())
+            })
+    };
     loop {
         let plan = |p: usize| {
             if active[p] {

@@ -134,7 +134,11 @@ pub fn transfer_entry(scene: &Scene, out_dir: &Path, settings: &Settings) -> cra
 }
 
 /// The transfer from the cache, or precomputed (and cached) with a progress bar.
-fn transfer(scene: &Scene, accel: &Accel, opts: &GlossyOptions) -> crate::Result<Transfer> {
+pub(crate) fn transfer(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &GlossyOptions,
+) -> crate::Result<Transfer> {
     let entry = transfer_entry(scene, &opts.out_dir, &opts.settings)?;
     if let Some(hit) = entry.read_bytes() {
         if let Some(t) = Transfer::decode(&hit.value, entry.key(), scene, &opts.settings) {
@@ -207,18 +211,7 @@ fn reference(
 
 /// Process CPU time in seconds (all threads), where the OS reports it.
 pub fn process_cpu_s() -> Option<f64> {
-    #[cfg(target_os = "linux")]
-    {
-        let mut t = libc::timespec {
-            tv_sec: 0,
-            tv_nsec: 0,
-        };
-        // SAFETY: clock_gettime writes one timespec through a valid pointer.
-        let ok = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) } == 0;
-        ok.then_some(t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9)
-    }
-    #[cfg(not(target_os = "linux"))]
-    None
+    crate::cpu_time::process_s()
 }
 
 /// How long one frame takes: the wall time is the fastest (and the median) of `FRAMES` warm frames

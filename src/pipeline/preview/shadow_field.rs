@@ -172,12 +172,12 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
 }
 
 /// One shaded frame and its timing.
-struct Frame {
-    shaded: sf::Shaded,
-    render_s: f64,
+pub(crate) struct Frame {
+    pub(crate) shaded: sf::Shaded,
+    pub(crate) render_s: f64,
 }
 
-fn shade_frame(
+pub(crate) fn shade_frame(
     scene: &Scene,
     accel: &Accel,
     fields: &Fields,
@@ -307,7 +307,10 @@ fn summarise(
 }
 
 /// Loads the fields from the cache or precomputes (and stores) them.
-fn cached_fields(scene: &Scene, opts: &ShadowFieldOptions) -> Result<(Fields, f64, bool)> {
+pub(crate) fn cached_fields(
+    scene: &Scene,
+    opts: &ShadowFieldOptions,
+) -> Result<(Fields, f64, bool)> {
     use crate::pipeline::cache::{Cache, Epoch};
     let settings = &opts.settings;
     let entry = Cache::under(&opts.out_dir).entry(

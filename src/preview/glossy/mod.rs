@@ -166,6 +166,24 @@ fn check_scene(scene: &Scene) -> crate::Result<()> {
     Ok(())
 }
 
+/// Whether the preview holds `scene` and has a glossy surface to show (what
+/// `compare` asks before adding it as a row): [`precompute`]'s own checks of the
+/// lighting and the shapes, every material a smooth lobe, one of them glossy.
+pub fn check_suits(scene: &Scene) -> crate::Result<()> {
+    check_scene(scene)?;
+    let mut glossy = false;
+    for (m, name) in scene.materials.iter().zip(&scene.material_names) {
+        let parts = m
+            .preview_parts()
+            .map_err(|e| error(scene, format!("material `{name}`: {e}")))?;
+        glossy |= parts.glossy.is_some();
+    }
+    if !glossy {
+        return Err(error(scene, "has no glossy material to show".into()));
+    }
+    Ok(())
+}
+
 /// Bytes of a vertex beside its slices: the mesh's bookkeeping (~2.7 faces of
 /// ~80 bytes and ~3 edges in hash maps per vertex of a subdivided mesh) and
 /// the vertex itself, rounded up.

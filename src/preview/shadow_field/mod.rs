@@ -93,6 +93,39 @@ pub fn precompute(
     Fields { entities, fields }
 }
 
+/// Whether the method models `scene` (what `compare` asks before adding the
+/// preview as a row): diffuse surfaces only (the fields carry no glossy lobe),
+/// emitters that are spheres or rectangles (the light entities it integrates),
+/// and some light or an environment. Returns why not.
+pub fn check_scene(scene: &Scene) -> Result<(), String> {
+    let diffuse =
+        |m: u32, name: &str| match scene.materials.get(m as usize).map(|m| m.preview_parts()) {
+            Some(Ok(parts)) if parts.glossy.is_none() => Ok(()),
+            _ => Err(format!(
+                "shape `{name}` is not diffuse (shadow fields shade Lambertian surfaces only)"
+            )),
+        };
+    for m in &scene.meshes {
+        if m.emission != Vec3::ZERO {
+            if m.rect.is_none() {
+                return Err(format!(
+                    "emitter `{}` is neither a sphere nor a rectangle",
+                    m.name
+                ));
+            }
+        } else {
+            diffuse(m.material, &m.name)?;
+        }
+    }
+    for s in scene.spheres.iter().filter(|s| s.emission == Vec3::ZERO) {
+        diffuse(s.material, &s.name)?;
+    }
+    if scene.emitter_count() == 0 && scene.environment.is_none() {
+        return Err("nothing lights the scene (no light, no environment)".into());
+    }
+    Ok(())
+}
+
 /// A rigid pose of an entity relative to its rest pose: x ↦ c + t + R (x − c)
 /// about the rest bounding centre c.
 #[derive(Clone, Copy, Debug, PartialEq)]
