@@ -1,5 +1,5 @@
 //! What analytic gradients cost: render time with and without `--gradients` at
-//! the same samples per pixel on `spheres_table` and `objects_bumpy`, and the
+//! the same samples per pixel, part by part, on four bundled scenes, and the
 //! visibility-gradient analysis alone (jump finding + Eq. 45–46/72 per line)
 //! against casting the same shadow rays without it.
 
@@ -11,8 +11,16 @@ use gradtrace::render::{render, RenderOptions};
 use gradtrace::scene::{self, Integrator};
 use std::path::Path;
 
+/// The cost breakdown of issue 53: each variant adds one part of the gradient
+/// to the one before (shading terms: the SV/CDV/camera/DV duals and the indirect
+/// term; the lines; the gated rings; every ring; bisection), at the same spp.
 fn overhead(c: &mut Criterion) {
-    for name in ["spheres_table", "objects_bumpy"] {
+    for name in [
+        "spheres_table",
+        "objects_bumpy",
+        "three_spheres_env",
+        "bunny_env",
+    ] {
         let path = format!("scenes/{name}.toml");
         let scene = scene::load(Path::new(&path)).expect("bundled scene loads");
         let accel = Accel::build(&scene.meshes, &scene.spheres);
@@ -21,27 +29,23 @@ fn overhead(c: &mut Criterion) {
         let base = RenderOptions {
             spp: Some(4),
             resolution: Some((160, 120)),
-            integrator: Some(Integrator::Direct),
             ..Default::default()
         };
+        let gradients = |vis: u32, gate: f32, refine: u32| RenderOptions {
+            gradients: true,
+            vis_samples: Some(vis),
+            vis_gate: Some(gate),
+            vis_refine: Some(refine),
+            ..base.clone()
+        };
         let variants = [
-            ("no_gradients", base.clone()),
-            (
-                "gradients_line1",
-                RenderOptions {
-                    gradients: true,
-                    vis_samples: Some(1),
-                    ..base.clone()
-                },
-            ),
-            (
-                "gradients_line32",
-                RenderOptions {
-                    gradients: true,
-                    vis_samples: Some(32),
-                    ..base.clone()
-                },
-            ),
+            ("plain", base.clone()),
+            ("shading_terms", gradients(0, 1.0, 0)),
+            ("lines_rare_rings", gradients(4, 1e-6, 0)),
+            ("default_gated_rings", gradients(4, 0.25, 0)),
+            ("every_ring", gradients(4, 1.0, 0)),
+            ("every_ring_refine2", gradients(4, 1.0, 2)),
+            ("every_ring_32_rays", gradients(32, 1.0, 0)),
         ];
         for (label, opts) in variants {
             group.bench_function(label, |b| {

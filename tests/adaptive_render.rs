@@ -374,6 +374,7 @@ fn gradients_on_the_back_of_a_rect_light_are_finite() {
         spp: 16,
         gradient_spp: 16,
         seed: 0,
+        timing: Default::default(),
     };
     let light_id = scene.object_names.len() as u32;
     let (mut on_light, mut bad) = (0, 0);

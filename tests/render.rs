@@ -735,6 +735,7 @@ fn back_facing_shading_normals_are_flagged_and_black() {
         camera: &s.camera,
         spp: 1,
         gradient_spp: 1,
+        timing: Default::default(),
         seed: 0,
     };
     let mut flagged = 0;

@@ -52,6 +52,9 @@ pub struct AdaptiveStats {
     pub reconstruct_s: f64,
     /// Wall time of the estimate batches (the rendering itself).
     pub estimate_s: f64,
+    /// The analytic gradients' share of the estimates' tracing time
+    /// (`PointEstimator::gradient_share`).
+    pub gradient_share: Option<f64>,
 }
 
 /// What an adaptive render produced.
@@ -100,6 +103,7 @@ pub fn render_adaptive(
             quadtree_s: refine.quadtree_s,
             reconstruct_s,
             estimate_s: refine.evaluate_s,
+            gradient_share: est.0.gradient_share(),
         },
     })
 }

@@ -273,8 +273,9 @@ pub fn compare(
     let mut rendering_s = if info.reused { 0.0 } else { info.time_s };
 
     let mut runs = Vec::new();
+    let mut shares = Vec::new();
     for k in 0..opts.seeds {
-        let (seed_runs, seconds) = seed_runs(&plan, k, progress)?;
+        let (seed_runs, seconds) = seed_runs(&plan, k, progress, &mut shares)?;
         rendering_s += seconds;
         runs.extend(seed_runs);
     }
@@ -299,6 +300,7 @@ pub fn compare(
         outside_s,
         start.elapsed().as_secs_f64(),
     );
+    notes.extend(gradient_share_note(&shares));
     notes.extend(preview_notes);
     let (w, h) = plan.size;
     let input = ReportInput {
@@ -351,7 +353,14 @@ const GRADIENT_OIDN: &str = "gradient+oidn";
 /// One repetition: the full render, every strategy × budget, and for every budget
 /// the baselines at the `gradient` run's cost (wall or CPU time, `--equal`). Also
 /// returns the wall seconds spent rendering (and denoising), each counted once.
-fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, f64)> {
+/// The runs of repetition `k`; the adaptive runs' gradient shares of their tracing
+/// time go to `shares` (strategy name, share).
+fn seed_runs(
+    plan: &Plan,
+    k: u32,
+    progress: &dyn Fn(&str),
+    shares: &mut Vec<(&'static str, f64)>,
+) -> Result<(Vec<Run>, f64)> {
     let seed = repetition_seed(plan.base.seed.unwrap_or(plan.scene.settings.seed), k);
     let base = RenderOptions {
         seed: Some(seed),
@@ -391,6 +400,9 @@ fn seed_runs(plan: &Plan, k: u32, progress: &dyn Fn(&str)) -> Result<(Vec<Run>, 
                 wall_s: out.stats.wall_s,
                 cpu_s: clock.cost().cpu_s,
             };
+            if let Some(g) = out.stats.gradient_share {
+                shares.push((strategy.name(), g));
+            }
             progress(&format!(
                 "seed {k}: {} at {:.0}%, {} samples, {:.2} s",
                 strategy.name(),
@@ -752,6 +764,35 @@ fn interpolation_runs(plan: &Plan, reference: &[Vec3]) -> Result<(Vec<Run>, Opti
         }
     };
     Ok((runs, note))
+}
+
+/// What share of the adaptive runs' tracing time the analytic gradients took, per
+/// strategy (mean over budgets and seeds).
+fn gradient_share_note(shares: &[(&str, f64)]) -> Option<String> {
+    let mut names: Vec<&str> = shares.iter().map(|(n, _)| *n).collect();
+    names.dedup();
+    names.sort_unstable();
+    names.dedup();
+    let parts: Vec<String> = names
+        .iter()
+        .map(|n| {
+            let of: Vec<f64> = shares
+                .iter()
+                .filter(|(m, _)| m == n)
+                .map(|(_, g)| *g)
+                .collect();
+            format!(
+                "{n} {:.0} %",
+                100.0 * of.iter().sum::<f64>() / of.len() as f64
+            )
+        })
+        .collect();
+    (!parts.is_empty()).then(|| {
+        format!(
+            "Gradient share of the adaptive runs' tracing time (one camera sample in 64 traced with and without its analytic gradient and timed; --vis-samples and --gradient-spp set it): {}.",
+            parts.join(", ")
+        )
+    })
 }
 
 fn notes(

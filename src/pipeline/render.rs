@@ -91,6 +91,8 @@ pub enum SummaryKind {
         reconstruct_s: f64,
         /// The G-buffer pass and the denoiser's wall time, with `--denoise`.
         denoise_s: Option<f64>,
+        /// The gradients' share of the estimates' tracing time.
+        gradient_share: Option<f64>,
     },
 }
 
@@ -130,13 +132,18 @@ impl fmt::Display for RenderSummary {
                 quadtree_s,
                 reconstruct_s,
                 denoise_s,
+                gradient_share,
             } => {
                 write!(
                     f,
-                    "{} at budget {}: {samples} samples, {seconds:.3} s (quadtree {quadtree_s:.3} s, reconstruction {reconstruct_s:.3} s)",
+                    "{} at budget {}: {samples} samples, {seconds:.3} s (quadtree {quadtree_s:.3} s, reconstruction {reconstruct_s:.3} s",
                     settings.strategy.name(),
                     settings.budget
                 )?;
+                if let Some(g) = gradient_share {
+                    write!(f, "; gradients {:.0} % of the tracing", g * 100.0)?;
+                }
+                write!(f, ")")?;
                 if let Some(d) = denoise_s {
                     write!(f, ", denoised in {d:.3} s")?;
                 }
@@ -509,6 +516,7 @@ fn run_adaptive(
             quadtree_s: out.stats.quadtree_s,
             reconstruct_s: out.stats.reconstruct_s,
             denoise_s,
+            gradient_share: out.stats.gradient_share,
         },
     })
 }

@@ -748,7 +748,9 @@ impl Film {
                                 )
                             };
                             let r = if ctx.gradients && is_timed(pixel as u32, s) {
-                                acc.time_gradient(pixel as u32, s, sample)
+                                let (r, t) = timed_gradient_sample(pixel as u32, s, sample);
+                                acc.timing = add_timing(acc.timing, t);
+                                r
                             } else {
                                 sample(ctx.gradients)
                             };
@@ -827,15 +829,13 @@ impl Film {
             let (x, y) = (pixel % self.full_width, pixel / self.full_width);
             let i = (y - cy0) * cw + x - cx0;
             rays += acc.rays;
-            timing[0] += acc.timing[0];
-            timing[1] += acc.timing[1];
+            timing = add_timing(timing, acc.timing);
             spp = spp.max(acc.count);
             acc.store(&mut out, i, gradient);
         });
         out.spp = spp;
         out.stats.rays = rays;
-        out.stats.gradient_share =
-            (timing[0] > 0.0).then(|| (1.0 - timing[1] / timing[0]).max(0.0));
+        out.stats.gradient_share = gradient_share(timing);
         out
     }
 }
@@ -926,9 +926,49 @@ pub(crate) struct PixelAccumulator {
 
 /// The samples whose gradient cost is measured (one in 64, spread by a hash): each
 /// is traced once more without gradients and both are timed, so that the summary
-/// can say what share of the render the gradients took (~1.5 % extra work).
-fn is_timed(pixel: u32, sample: u32) -> bool {
-    crate::math::sampler::hash2(pixel, sample ^ 0x6772_6164) % 64 == 0
+/// and `compare` can say what share of the render the gradients took (~1.5 % extra
+/// work; no pixel changes).
+pub(crate) fn is_timed(key: u32, sample: u32) -> bool {
+    crate::math::sampler::hash2(key, sample ^ 0x6772_6164) % 64 == 0
+}
+
+/// Traces `sample(true)`, the sample with gradients, and times it against the same
+/// sample without them: (its result, [seconds with, seconds without]). Which goes
+/// first alternates (the second finds the caches warm), and a pair that took over
+/// a millisecond (the thread was preempted) counts as zero.
+pub(crate) fn timed_gradient_sample(
+    key: u32,
+    index: u32,
+    sample: impl Fn(bool) -> SampleResult,
+) -> (SampleResult, [f64; 2]) {
+    let timed = |gradients| {
+        let start = Instant::now();
+        let r = std::hint::black_box(sample(gradients));
+        (r, start.elapsed().as_secs_f64())
+    };
+    let ((r, with), (_, without)) = if crate::math::sampler::hash2(index, key) & 1 == 0 {
+        (timed(true), timed(false))
+    } else {
+        let plain = timed(false);
+        (timed(true), plain)
+    };
+    let kept = if with.max(without) < 1e-3 {
+        [with, without]
+    } else {
+        [0.0; 2]
+    };
+    (r, kept)
+}
+
+/// Sums two [`timed_gradient_sample`] timings.
+pub(crate) fn add_timing(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] + b[0], a[1] + b[1]]
+}
+
+/// The gradients' share of the tracing time from summed timings; `None` where
+/// nothing was timed.
+pub(crate) fn gradient_share(t: [f64; 2]) -> Option<f64> {
+    (t[0] > 0.0).then(|| (1.0 - t[1] / t[0]).max(0.0))
 }
 
 /// Splits the sample indices into two halves whose means are two independent
@@ -971,34 +1011,6 @@ impl PixelAccumulator {
             }
         }
         self.rays += r.rays as u64;
-    }
-
-    /// Traces `sample(true)`, the sample with gradients, and times it against the
-    /// same sample without them. Which goes first alternates (the second finds the
-    /// caches warm), and a pair that took over a millisecond (the thread was
-    /// preempted) is left out.
-    fn time_gradient(
-        &mut self,
-        pixel: u32,
-        index: u32,
-        sample: impl Fn(bool) -> SampleResult,
-    ) -> SampleResult {
-        let timed = |gradients| {
-            let start = Instant::now();
-            let r = std::hint::black_box(sample(gradients));
-            (r, start.elapsed().as_secs_f64())
-        };
-        let ((r, with), (_, without)) = if crate::math::sampler::hash2(index, pixel) & 1 == 0 {
-            (timed(true), timed(false))
-        } else {
-            let plain = timed(false);
-            (timed(true), plain)
-        };
-        if with.max(without) < 1e-3 {
-            self.timing[0] += with;
-            self.timing[1] += without;
-        }
-        r
     }
 
     /// The pixel mean I and the class-A estimate A (the class-A sum over the

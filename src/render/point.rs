@@ -7,11 +7,12 @@ use super::gradients::geometry::base_curvature;
 use super::gradients::magnitude;
 use super::interaction::{interaction, Interaction};
 use super::path::PathTracer;
-use super::{camera_sample_at, Setup};
+use super::{add_timing, camera_sample_at, gradient_share, is_timed, timed_gradient_sample, Setup};
 use crate::accel::{Accel, PrimRef};
 use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
 use crate::scene::{Camera, Scene};
+use std::sync::Mutex;
 
 /// One estimate at an image point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,6 +63,8 @@ pub struct PointEstimator<'a> {
     /// The first `gradient_spp` of them carry the gradient (1 ≤ it ≤ spp).
     pub gradient_spp: u32,
     pub seed: u32,
+    /// [`timed_gradient_sample`]'s sums over every estimate so far.
+    pub timing: Mutex<[f64; 2]>,
 }
 
 impl<'a> PointEstimator<'a> {
@@ -79,7 +82,13 @@ impl<'a> PointEstimator<'a> {
             spp: setup.spp,
             gradient_spp: gradient_spp.clamp(1, setup.spp),
             seed: setup.seed,
+            timing: Mutex::new([0.0; 2]),
         }
+    }
+
+    /// The gradients' share of the tracing time of the estimates so far.
+    pub fn gradient_share(&self) -> Option<f64> {
+        gradient_share(*self.timing.lock().unwrap_or_else(|e| e.into_inner()))
     }
 
     /// The estimate at image point `p` (continuous pixel coordinates).
@@ -92,15 +101,26 @@ impl<'a> PointEstimator<'a> {
         let mut first = None;
         for s in 0..self.spp {
             // A pixel-sized box footprint around p, as the full render's pixels have.
-            let r = camera_sample_at(
-                &self.tracer,
-                self.camera,
-                p - Vec2::splat(0.5),
-                key,
-                s,
-                self.seed,
-                s < self.gradient_spp,
-            );
+            let sample = |gradients| {
+                camera_sample_at(
+                    &self.tracer,
+                    self.camera,
+                    p - Vec2::splat(0.5),
+                    key,
+                    s,
+                    self.seed,
+                    gradients,
+                )
+            };
+            let with_gradient = s < self.gradient_spp;
+            let r = if with_gradient && is_timed(key, s) {
+                let (r, t) = timed_gradient_sample(key, s, sample);
+                let mut timing = self.timing.lock().unwrap_or_else(|e| e.into_inner());
+                *timing = add_timing(*timing, t);
+                r
+            } else {
+                sample(with_gradient)
+            };
             radiance += r.radiance;
             radiance_sq += r.radiance.length_squared();
             if let Some(g) = r.gradient {
@@ -226,6 +246,7 @@ mod tests {
             camera: &setup.camera,
             spp,
             gradient_spp,
+            timing: Default::default(),
             seed: 7,
         };
         let mut differ = 0;
@@ -264,6 +285,7 @@ mod tests {
             spp: 1,
             gradient_spp: 1,
             seed: 1,
+            timing: Default::default(),
         };
         f(&scene, &setup, est)
     }
