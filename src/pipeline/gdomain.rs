@@ -2,15 +2,16 @@
 //! (`render --reconstruct poisson-l1|poisson-l2`, compare's `gradient-domain` row):
 //! `reconstruct::poisson` fed with the renderer's analytic gradients.
 //!
-//! What is solved for: the analytic gradient is complete for the direct light at
-//! the first hit only (its indirect term omits most of indirect light's variation),
-//! so the solve runs on that direct light D (the mean of the gradient's `value`,
-//! with ∂D from every term but the indirect one) and the rest of the radiance,
-//! I − D, is added back as it was rendered: a term the gradient omits never pulls
-//! the image away from its primal. By default D is demodulated (divided by the
-//! albedo AOV where it is positive; every material's albedo is constant, so
-//! ∂(D/a) = ∂D/a inside a surface). `Domain` names the three choices, which
-//! `examples/gdomain_measure.rs` compares (ARCHITECTURE.md has the figures).
+//! What is solved for (`Domain`): the analytic gradient is complete for the direct
+//! light D at the first hit only; its indirect term has the curvature/bump and
+//! camera terms of indirect light but not its spatial variation. Solving for D
+//! alone (∂D from every term but the indirect one) and adding I − D back as
+//! rendered is consistent, but leaves the indirect noise; solving for the whole
+//! radiance I with the total gradient also smooths indirect light (where its
+//! gradient is partial, towards it), and measured lower RMSE on every bundled scene
+//! tried at 8 and 64 spp (ARCHITECTURE.md, "Gradient-domain reconstruction"), so
+//! it is the default. Demodulating D by the albedo AOV (all materials are
+//! untextured, so ∂(D/a) = ∂D/a inside a surface) changed the RMSE by < 3 %.
 
 use crate::math::{luminance, Vec3};
 use crate::reconstruct::poisson::{self, Guides, Norm, Problem, Settings, Solution};
@@ -42,7 +43,7 @@ impl GradientDomain {
     pub fn new(norm: Norm) -> Self {
         Self {
             norm,
-            domain: Domain::Demodulated,
+            domain: Domain::Full,
             beta: 0.2,
         }
     }

@@ -38,6 +38,8 @@ pub enum Norm {
 }
 
 impl Norm {
+    pub const ALL: [Norm; 2] = [Norm::L1, Norm::L2];
+
     pub fn name(self) -> &'static str {
         match self {
             Norm::L2 => "poisson-l2",
