@@ -543,7 +543,8 @@ pub(crate) fn integrator() -> impl TypedValueParser<Value = Integrator> {
     choices(&Integrator::ALL, Integrator::name, |_| &[])
 }
 
-pub(crate) fn reconstruct_norm() -> impl TypedValueParser<Value = gradtrace::reconstruct::poisson::Norm> {
+pub(crate) fn reconstruct_norm(
+) -> impl TypedValueParser<Value = gradtrace::reconstruct::poisson::Norm> {
     use gradtrace::reconstruct::poisson::Norm;
     choices(&Norm::ALL, Norm::name, |_| &[])
 }
