@@ -84,17 +84,47 @@ fn main() -> gradtrace::Result<()> {
         "{} {w}x{h} {spp} spp (ref {ref_spp}): render {render_s:.2} s, primal RMSE {primal:.5}",
         scene_path.display()
     );
-    for beta in betas {
+    let ks: Vec<f32> = std::env::var("GDOMAIN_K")
+        .map(|k| k.split(',').map(|k| k.parse().expect("a number")).collect())
+        .unwrap_or(vec![4.0]);
+    for (beta, consistency) in betas.iter().flat_map(|&b| ks.iter().map(move |&k| (b, k))) {
         for domain in [Domain::Full, Domain::Direct, Domain::Demodulated] {
             for norm in [Norm::L2, Norm::L1] {
-                let gd = GradientDomain { norm, domain, beta };
+                let gd = GradientDomain {
+                    norm,
+                    domain,
+                    beta,
+                    consistency,
+                };
                 let t = Instant::now();
                 let sol = reconstruct_with(&out, &gd, &Settings::new(norm))?;
                 let (img, its) = (sol.image, sol.iterations);
                 let s = t.elapsed().as_secs_f64();
                 let e = rmse(&img, &reference);
+                if std::env::var_os("GDOMAIN_WORST").is_some() && norm == Norm::L2 {
+                    let mut worst: Vec<(f32, usize)> = img
+                        .iter()
+                        .zip(&reference)
+                        .map(|(a, b)| (*a - *b).abs().max_element())
+                        .enumerate()
+                        .map(|(i, e)| (e, i))
+                        .collect();
+                    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+                    for &(e, i) in &worst[..8] {
+                        let aov = |p: &Option<Vec<f32>>| p.as_ref().map_or(-1.0, |p| p[i]);
+                        println!(
+                            "    worst ({}, {}): err {e:.3} ref {:.3} primal {:.3} id {} depth {:.2}",
+                            i % w as usize,
+                            i / w as usize,
+                            reference[i].x,
+                            out.beauty[i].x,
+                            aov(&out.object_id),
+                            aov(&out.depth)
+                        );
+                    }
+                }
                 println!(
-                    "  beta {beta:<5} {domain:<12?} {:<10} RMSE {e:.5} ({:.2}x primal) solve {s:.3} s ({:.1}% of render, {its} CG iterations)",
+                    "  beta {beta:<5} k {consistency:<3} {domain:<12?} {:<10} RMSE {e:.5} ({:.2}x primal) solve {s:.3} s ({:.1}% of render, {its} CG iterations)",
                     norm.name(),
                     primal / e,
                     100.0 * s / render_s

@@ -148,11 +148,11 @@ fn compare_writes_the_report_and_caches_the_reference() {
     opts.resolution = Some((96, 72));
     opts.vis_samples = Some(4);
     let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
-    // full + 2×2 adaptive + 2×(uniform-all-pixels, cycles-adaptive, and
-    // oidn-uniform and gradient+oidn where the build has OIDN) + 2 interpolation runs.
-    let baselines = 2 + 2 * usize::from(gradtrace::denoise::available());
+    // full + 2×2 adaptive + 2×(uniform-all-pixels, cycles-adaptive, gradient-domain,
+    // and oidn-uniform and gradient+oidn where the build has OIDN) + 2 interpolation runs.
+    let baselines = 3 + 2 * usize::from(gradtrace::denoise::available());
     assert_eq!(rows.len(), 1 + 4 + 2 * baselines + 2);
-    for name in ["uniform-all-pixels", "cycles-adaptive"] {
+    for name in ["uniform-all-pixels", "cycles-adaptive", "gradient-domain"] {
         assert_eq!(rows.iter().filter(|r| r.name == name).count(), 2, "{name}");
     }
     assert!(rows

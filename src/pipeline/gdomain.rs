@@ -37,6 +37,8 @@ pub struct GradientDomain {
     /// β of [`poisson::primal_weights`]: a typical pixel's primal weight
     /// relative to one pair.
     pub beta: f32,
+    /// k of [`poisson::drop_inconsistent`]; 0 keeps every continuous pair.
+    pub consistency: f32,
 }
 
 impl GradientDomain {
@@ -45,6 +47,7 @@ impl GradientDomain {
             norm,
             domain: Domain::Full,
             beta: 0.2,
+            consistency: 4.0,
         }
     }
 }
@@ -125,6 +128,14 @@ pub fn reconstruct_with(
         .collect();
     let alpha = poisson::primal_weights(&var, gd.beta);
     let (dx, dy) = poisson::trapezoid_differences(w, h, &gu, &gv);
+    if gd.consistency > 0.0 {
+        let var: Vec<Vec3> = variance
+            .iter()
+            .zip(&scale)
+            .map(|(v, a)| *v / (*a * *a))
+            .collect();
+        poisson::drop_inconsistent(w, &primal, &var, &dx, &dy, &mut vx, &mut vy, gd.consistency);
+    }
     let problem = Problem {
         width: w,
         height: h,

@@ -497,3 +497,46 @@ pub fn primal_weights(variance: &[f32], beta: f32) -> Vec<f32> {
         })
         .collect()
 }
+
+/// Pairs whose difference disagrees with the primal's own, |G_e − (P_q − P_p)| >
+/// `k` √(σ²_p + σ²_q) in any channel (σ²: the primal's variance of the mean, at
+/// least (1e-3 |P|)²), become invalid. A correct G passes with the probability of
+/// a k-sigma event (k = 4: > 99.99 % for Gaussian noise, before G's own noise);
+/// a biased one (a highlight narrower than the trapezoid rule resolves) fails once
+/// the primal is precise enough to tell, so the solve tends to the primal as the
+/// sample count grows instead of to the bias. Pixels without variance (one sample)
+/// are not tested.
+pub fn drop_inconsistent(
+    width: usize,
+    primal: &[Vec3],
+    variance: &[Vec3],
+    dx: &[Vec3],
+    dy: &[Vec3],
+    valid_x: &mut [bool],
+    valid_y: &mut [bool],
+    k: f32,
+) {
+    let n = primal.len();
+    if variance.len() != n || dx.len() != n || dy.len() != n || width == 0 {
+        return;
+    }
+    let agrees = |p: usize, q: usize, g: Vec3| -> bool {
+        let (vp, vq) = (variance[p], variance[q]);
+        if vp == Vec3::ZERO && vq == Vec3::ZERO {
+            return true;
+        }
+        let floor = 1e-3 * primal[p].abs().max(primal[q].abs());
+        let sigma = (vp + vq).max(floor * floor).max(Vec3::splat(1e-20)).sqrt();
+        let off = (g - (primal[q] - primal[p])).abs();
+        // NaN compares false: a non-finite pair fails.
+        off.cmple(k * sigma).all()
+    };
+    for i in 0..n {
+        if valid_x[i] && i % width + 1 < width && !agrees(i, i + 1, dx[i]) {
+            valid_x[i] = false;
+        }
+        if valid_y[i] && i + width < n && !agrees(i, i + width, dy[i]) {
+            valid_y[i] = false;
+        }
+    }
+}
