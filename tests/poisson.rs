@@ -67,6 +67,7 @@ fn tight(norm: Norm) -> Settings {
     Settings {
         tolerance: 1e-12,
         max_iterations: 20_000,
+        irls_max_iterations: 20_000,
         ..Settings::new(norm)
     }
 }

@@ -72,6 +72,9 @@ pub struct Settings {
     pub max_iterations: usize,
     /// L1: reweighted solves after the first (L2) one.
     pub irls_iterations: usize,
+    /// L1: CG iterations per reweighted solve (each starts from the last
+    /// solution, so a few refine it; IRLS needs no exact inner solves).
+    pub irls_max_iterations: usize,
     /// L1: ε as a fraction of the channel's mean |P| (floor 1e-8 absolute).
     pub epsilon: f64,
     /// L1: s_1 of the objective; `None`: the mean |r_e| of the L2 solution.
@@ -85,6 +88,7 @@ impl Settings {
             tolerance: 1e-4,
             max_iterations: 400,
             irls_iterations: 4,
+            irls_max_iterations: 25,
             epsilon: 1e-3,
             l1_scale: None,
         }
@@ -222,7 +226,11 @@ impl Channel {
                     .collect()
             };
             let (wx, wy) = (reweight(&rx, &self.vx), reweight(&ry, &self.vy));
-            iterations += self.cg(&wx, &wy, &mut x, s);
+            let inner = Settings {
+                max_iterations: s.irls_max_iterations,
+                ..*s
+            };
+            iterations += self.cg(&wx, &wy, &mut x, &inner);
         }
         (x, iterations)
     }
@@ -244,29 +252,40 @@ impl Channel {
         (rx, ry)
     }
 
-    /// (diag α + Dᵀ W D) x, W = diag(wx, wy).
+    /// (diag α + Dᵀ W D) x, W = diag(wx, wy); in bands of whole rows, so that
+    /// no pixel needs a division to find its neighbours.
     fn apply(&self, wx: &[f64], wy: &[f64], x: &[f64], out: &mut [f64]) {
         let (w, h) = (self.w, self.h);
-        out.par_chunks_mut(CHUNK).enumerate().for_each(|(k, o)| {
-            for (j, o) in o.iter_mut().enumerate() {
-                let i = k * CHUNK + j;
-                let mut v = self.alpha[i] * x[i];
-                let (px, py) = (i % w, i / w);
-                if px + 1 < w {
-                    v += wx[i] * (x[i] - x[i + 1]);
+        if w == 0 {
+            return;
+        }
+        let rows = (CHUNK / w).max(1);
+        out.par_chunks_mut(rows * w)
+            .enumerate()
+            .for_each(|(k, band)| {
+                for (r, o) in band.chunks_mut(w).enumerate() {
+                    let y = k * rows + r;
+                    let row = y * w;
+                    for (px, o) in o.iter_mut().enumerate() {
+                        let i = row + px;
+                        let xi = x[i];
+                        let mut v = self.alpha[i] * xi;
+                        if px + 1 < w {
+                            v += wx[i] * (xi - x[i + 1]);
+                        }
+                        if px > 0 {
+                            v += wx[i - 1] * (xi - x[i - 1]);
+                        }
+                        if y + 1 < h {
+                            v += wy[i] * (xi - x[i + w]);
+                        }
+                        if y > 0 {
+                            v += wy[i - w] * (xi - x[i - w]);
+                        }
+                        *o = v;
+                    }
                 }
-                if px > 0 {
-                    v += wx[i - 1] * (x[i] - x[i - 1]);
-                }
-                if py + 1 < h {
-                    v += wy[i] * (x[i] - x[i + w]);
-                }
-                if py > 0 {
-                    v += wy[i - w] * (x[i] - x[i - w]);
-                }
-                *o = v;
-            }
-        });
+            });
     }
 
     /// Preconditioned CG on the normal equations with pair weights (wx, wy), from
