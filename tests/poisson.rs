@@ -231,7 +231,8 @@ fn edges(p: &Owned, c: usize) -> Vec<(usize, usize, f64)> {
 }
 
 /// Dense least squares: (diag α + Σ_e d_e d_eᵀ) x = α P + Σ_e d_e G_e, by Gaussian
-/// elimination with partial pivoting.
+/// elimination with partial pivoting (indices, as the textbook writes it).
+#[allow(clippy::needless_range_loop)]
 fn dense_l2(p: &Owned, c: usize) -> Vec<f64> {
     let n = p.w * p.h;
     let mut a = vec![vec![0.0f64; n + 1]; n];

@@ -134,7 +134,14 @@ pub fn reconstruct_with(
             .zip(&scale)
             .map(|(v, a)| *v / (*a * *a))
             .collect();
-        poisson::drop_inconsistent(w, &primal, &var, &dx, &dy, &mut vx, &mut vy, gd.consistency);
+        poisson::drop_inconsistent(
+            w,
+            &primal,
+            &var,
+            (&dx, &dy),
+            (&mut vx, &mut vy),
+            gd.consistency,
+        );
     }
     let problem = Problem {
         width: w,

@@ -529,10 +529,8 @@ pub fn drop_inconsistent(
     width: usize,
     primal: &[Vec3],
     variance: &[Vec3],
-    dx: &[Vec3],
-    dy: &[Vec3],
-    valid_x: &mut [bool],
-    valid_y: &mut [bool],
+    (dx, dy): (&[Vec3], &[Vec3]),
+    (valid_x, valid_y): (&mut [bool], &mut [bool]),
     k: f32,
 ) {
     let n = primal.len();
