@@ -574,7 +574,7 @@ fn gradient_domain_run(
     };
     let (_, _, probe_render, probe_solve) = attempt(1)?;
     let fit = |per_spp: f64, solve: f64| {
-        (((equal.target - solve) / per_spp.max(1e-9)).floor() as u32).max(1)
+        (((equal.target - solve) / per_spp.max(1e-9)).round() as u32).max(1)
     };
     let mut spp = fit(probe_render, probe_solve);
     let mut discarded = probe_render + probe_solve;
