@@ -19,7 +19,8 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-BASELINES = ["uniform-all-pixels", "cycles-adaptive", "oidn-uniform", "cycles-adaptive+oidn", "gradient+oidn"]
+BASELINES = ["uniform-all-pixels", "cycles-adaptive", "oidn-uniform", "cycles-adaptive+oidn", "gradient+oidn",
+             "gradient-domain"]
 
 
 def resolution(scene):
@@ -62,7 +63,7 @@ def table(out_root, scenes):
         cells = [fmt(runs[b]) if b in runs else "—" for b in BASELINES]
         contenders = [runs[n] for n in ["gradient"] + BASELINES if n in runs]
         best = min(contenders, key=lambda r: r["rmse"])
-        other = min((r for r in contenders if not r["name"].startswith("gradient")), key=lambda r: r["rmse"])
+        other = min((r for r in contenders if r["name"] not in ("gradient", "gradient+oidn")), key=lambda r: r["rmse"])
         size = sum(f.stat().st_size for f in d.rglob("*")
                    if f.is_file() and not f.name.startswith("reference-"))
         log = (out_root / f"{scene.stem}.log").read_text() if (out_root / f"{scene.stem}.log").exists() else ""

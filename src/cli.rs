@@ -330,6 +330,11 @@ pub(crate) struct RenderArgs {
     /// build with `--features oidn` (README.md, "Optional: denoiser").
     #[arg(long, conflicts_with = "strategy")]
     pub(crate) denoise: bool,
+    /// Gradient-domain reconstruction: render with --gradients and solve a
+    /// screened Poisson problem (L1 by IRLS, or L2) for the direct light from the
+    /// analytic gradients: R,G,B (and the PNG) hold it, `noisy.R/G/B` the render.
+    #[arg(long, value_parser = reconstruct_norm(), value_name = "KIND", conflicts_with_all = ["strategy", "denoise"])]
+    pub(crate) reconstruct: Option<gradtrace::reconstruct::poisson::Norm>,
     /// With --gradients: shadow rays per azimuth line for the first hit's
     /// visibility (soft-shadow) gradient; the radiance is the plain render's, bit for
     /// bit [default: 4; at most 1024]. 0: no visibility term.
@@ -567,6 +572,12 @@ pub(crate) fn equal_cost() -> impl TypedValueParser<Value = EqualCost> {
     choices(&[EqualCost::Wall, EqualCost::Cpu], EqualCost::name, |_| &[])
 }
 
+pub(crate) fn reconstruct_norm(
+) -> impl TypedValueParser<Value = gradtrace::reconstruct::poisson::Norm> {
+    use gradtrace::reconstruct::poisson::Norm;
+    choices(&Norm::ALL, Norm::name, |_| &[])
+}
+
 pub(crate) fn diff_metric() -> impl TypedValueParser<Value = DiffMetric> {
     choices(&DiffMetric::ALL, DiffMetric::name, |_| &[])
 }
@@ -645,6 +656,7 @@ impl RenderArgs {
             command: gradtrace::pipeline::command_line(),
             adaptive,
             denoise: self.denoise,
+            reconstruct: self.reconstruct,
             threads: c.threads,
             max_memory: c
                 .max_memory

@@ -190,6 +190,10 @@ fn image_of_render_names_every_plane() {
         vis: s(13.0),
         indirect: s(15.0),
         ratio: s(14.0),
+        // In memory only (for `--reconstruct`): no layer below.
+        direct: v(16.0),
+        direct_u: v(17.0),
+        direct_v: v(18.0),
     });
     let img = image_of_render(&r);
     let names: Vec<&str> = img.channels.iter().map(|c| c.name.as_str()).collect();

@@ -196,7 +196,7 @@ pub fn run(
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
     let oidn = crate::denoise::available();
-    let baselines = 2 + 2 * usize::from(oidn);
+    let baselines = 3 + 2 * usize::from(oidn);
     let gradient_oidn = usize::from(oidn && opts.strategies.contains(&Strategy::Gradient));
     let per_budget = opts.strategies.len() + gradient_oidn + baselines;
     let per_seed = 1 + per_budget * opts.budgets.len();
@@ -472,6 +472,9 @@ fn seed_runs(
             ..r
         }));
         extra_s += discarded_s;
+        let (run, discarded_s) = gradient_domain_run(plan, &base, &equal, k, progress)?;
+        runs.push(run);
+        extra_s += discarded_s;
     }
     let rendering_s = runs
         .iter()
@@ -672,6 +675,70 @@ fn cycles_oidn_run(
         cost.of(mode)
     ));
     Ok(run)
+}
+
+/// The `gradient-domain` row: every pixel rendered with gradients and AOVs, then
+/// the L1 screened Poisson solve (`gdomain`), render + solve at the `target` wall
+/// time. A 1-spp probe (render and solve) sizes the spp; an attempt that misses the
+/// target by more than 10 % is redone once at the spp its own time implies. Returns
+/// the run and the discarded seconds (probe and missed attempt).
+fn gradient_domain_run(
+    plan: &Plan,
+    base: &RenderOptions,
+    equal: &EqualTime,
+    k: u32,
+    progress: &dyn Fn(&str),
+) -> Result<(Run, f64)> {
+    use super::gdomain::{reconstruct, GradientDomain};
+    let gd = GradientDomain::new(crate::reconstruct::poisson::Norm::L1);
+    let opts = RenderOptions {
+        gradients: true,
+        aovs: true,
+        ..base.clone()
+    };
+    let mode = plan.opts.equal;
+    let attempt = |spp: u32| -> Result<(RenderOutput, Vec<Vec3>, Cost, Cost)> {
+        let (out, render) = timed_render(
+            plan,
+            &RenderOptions {
+                spp: Some(spp),
+                ..opts.clone()
+            },
+        )?;
+        let clock = Clock::start();
+        let image = reconstruct(&out, &gd)?;
+        Ok((out, image, render, clock.cost()))
+    };
+    let (_, _, probe_render, probe_solve) = attempt(1)?;
+    let fit = |per_spp: f64, solve: f64| {
+        (((equal.target - solve) / per_spp.max(1e-9)).round() as u32).max(1)
+    };
+    let mut spp = fit(probe_render.of(mode), probe_solve.of(mode));
+    let mut discarded = probe_render.wall_s + probe_solve.wall_s;
+    let (mut out, mut image, mut render, mut solve) = attempt(spp)?;
+    let secs = (render + solve).of(mode);
+    let again = fit(render.of(mode) / f64::from(spp), solve.of(mode));
+    if (secs / equal.target - 1.0).abs() > 0.10 && again != spp {
+        discarded += (render + solve).wall_s;
+        spp = again;
+        (out, image, render, solve) = attempt(spp)?;
+    }
+    progress(&format!(
+        "seed {k}: gradient-domain ({}) at the time of {:.0}%: {spp} spp, render {:.2} s + solve {:.2} s",
+        gd.norm.name(),
+        equal.budget * 100.0,
+        render.of(mode),
+        solve.of(mode)
+    ));
+    let kind = RunKind::Baseline {
+        budget: equal.budget,
+        spp,
+    };
+    let mut run = full_run("gradient-domain", kind, k, out, render + solve);
+    run.overhead_s = solve.wall_s;
+    run.image = image;
+    run.target_s = Some(equal.target);
+    Ok((run, discarded))
 }
 
 /// Two strategies that placed exactly the same samples at one budget and seed

@@ -29,7 +29,8 @@ pub fn full_render_bytes(pixels: u64, opts: &RenderOptions, several_passes: bool
         per_pixel += 3 * vec3 + 8 + 2 * 44;
     }
     if opts.gradients {
-        per_pixel += 52 * 3;
+        // The planes and the three in-memory ones of a gradient-domain solve.
+        per_pixel += 52 * 3 + 3 * vec3;
     }
     pixels * per_pixel
 }

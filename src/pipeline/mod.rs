@@ -8,6 +8,7 @@ pub mod adaptive;
 pub mod cache;
 pub mod compare;
 pub mod diff;
+pub mod gdomain;
 pub mod memory;
 pub mod merge;
 pub mod output_set;

@@ -3,6 +3,7 @@
 //! run's provenance in the EXR header.
 
 use super::adaptive::render_adaptive;
+use super::gdomain::GradientDomain;
 use super::merge::{attr, merge_sample_ranges, Part};
 use super::output_set::{
     image_of_reconstruction, image_of_render, output_paths, write_output_set_with_header,
@@ -14,6 +15,7 @@ use crate::denoise;
 use crate::math::Vec3;
 use crate::output::names::RGB;
 use crate::output::{ExrHeader, OutputImage};
+use crate::reconstruct::poisson::Norm;
 use crate::reconstruct::Interpolation;
 use crate::render::noise_adaptive::{render_noise_adaptive, NoiseAdaptive};
 use crate::render::{self, Crop, Passes, RenderOptions, RenderOutput};
@@ -42,6 +44,9 @@ pub struct RenderJob {
     pub max_memory: Option<u64>,
     /// Full renders: denoise the beauty with OIDN (`denoise::denoise`).
     pub denoise: bool,
+    /// Full renders: with gradients, reconstruct in the gradient domain
+    /// (`gdomain::reconstruct`) with this norm.
+    pub reconstruct: Option<Norm>,
     pub progress: ProgressMode,
     /// Time limit and cancel flag (Ctrl-C) of a render in passes.
     pub passes: Passes,
@@ -76,6 +81,8 @@ pub enum SummaryKind {
         denoise_s: Option<f64>,
         /// With `--gradients`: their share of the tracing time (`RenderStats`).
         gradient_share: Option<f64>,
+        /// The gradient-domain solve's norm and wall time, with `--reconstruct`.
+        reconstruct: Option<(Norm, f64)>,
     },
     NoiseAdaptive {
         mean_spp: f64,
@@ -106,6 +113,7 @@ impl fmt::Display for RenderSummary {
                 rays,
                 denoise_s,
                 gradient_share,
+                reconstruct,
             } => {
                 write!(f, "{spp} spp, {seconds:.3} s, {}", rate(*rays, *seconds))?;
                 if let Some(g) = gradient_share {
@@ -113,6 +121,9 @@ impl fmt::Display for RenderSummary {
                 }
                 if let Some(d) = denoise_s {
                     write!(f, ", denoised in {d:.3} s")?;
+                }
+                if let Some((norm, d)) = reconstruct {
+                    write!(f, ", {} reconstruction in {d:.3} s", norm.name())?;
                 }
             }
             SummaryKind::NoiseAdaptive {
@@ -230,6 +241,7 @@ fn run_full(
     png: &Path,
 ) -> Result<RenderSummary> {
     let mut opts = job.options.clone();
+    opts.gradients |= job.reconstruct.is_some();
     let progressive = job.passes.time_limit.is_some() || resume.is_some();
     if progressive || opts.sample_range.is_some() {
         opts.merge_planes = true;
@@ -257,7 +269,15 @@ fn run_full(
     let out = render::render_passes(scene, accel, &opts, &job.passes, &phase.callback())?;
     drop(phase);
     let header = provenance(scene, &opts, &job.command, &out)?;
-    let (image, denoised, denoise_s) = full_image(&out, job.denoise)?;
+    let (mut image, mut denoised, denoise_s) = full_image(&out, job.denoise)?;
+    let mut reconstruct = None;
+    if let Some(norm) = job.reconstruct {
+        let t0 = Instant::now();
+        let solved = super::gdomain::reconstruct(&out, &GradientDomain::new(norm))?;
+        reconstruct = Some((norm, t0.elapsed().as_secs_f64()));
+        swap_in_denoised(&mut image, &solved);
+        denoised = Some(solved);
+    }
     let (image, header) = match resume {
         None => (image, header),
         Some(prev) => {
@@ -290,6 +310,7 @@ fn run_full(
             rays: out.stats.rays,
             denoise_s,
             gradient_share: out.stats.gradient_share,
+            reconstruct,
         },
     })
 }
@@ -565,7 +586,8 @@ pub(crate) fn denoise_with(beauty: &[Vec3], gbuffer: &RenderOutput) -> Result<Ve
     )
 }
 
-/// The denoised beauty becomes `R,G,B`; the noisy one stays as `noisy.R/G/B`.
+/// The denoised (or gradient-domain) beauty becomes `R,G,B`; the noisy one
+/// stays as `noisy.R/G/B`.
 fn swap_in_denoised(image: &mut OutputImage, clean: &[Vec3]) {
     for ch in image
         .channels
@@ -592,6 +614,28 @@ fn check_combinations(job: &RenderJob) -> Result<()> {
              reconstruct with it; the per-pixel grad.* layers come from full renders: \
              drop --gradients or --strategy",
         );
+    }
+    if job.reconstruct.is_some() {
+        let why = if job.adaptive.is_some() {
+            Some("reconstructs full renders, not --strategy ones (drop one of them)")
+        } else if job.denoise {
+            Some("replaces R,G,B as --denoise does: use one of them")
+        } else if job.noise_adaptive.is_some() {
+            Some("needs every pixel at --spp, not --noise-threshold renders")
+        } else if job.resume.is_some()
+            || job.options.sample_range.is_some()
+            || job.tile.is_some()
+            || job.passes.time_limit.is_some()
+        {
+            Some("solves over the whole image once: not with --resume, --spp-range, --tile or --time-limit")
+        } else if !job.options.aovs {
+            Some("needs the AOVs (object id, depth, normal, albedo, variance): drop --no-aovs")
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            return bad("--reconstruct", why);
+        }
     }
     if job.denoise {
         if job.noise_adaptive.is_some() {

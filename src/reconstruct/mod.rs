@@ -48,6 +48,7 @@
 
 mod hint;
 mod natural;
+pub mod poisson;
 
 use crate::adaptive::{surfaces_differ, SampleSet, SurfacePoint};
 use crate::math::sampler::hash2;

@@ -166,6 +166,12 @@ pub struct GradientPlanes {
     pub indirect: Vec<f32>,
     /// CDV / SV (the paper's Fig. 5e), 0 where both vanish.
     pub ratio: Vec<f32>,
+    /// The mean of [`GradientSample::value`] (the direct light the gradient
+    /// describes) and ∂/∂u, ∂/∂v of it alone (all terms but the indirect one):
+    /// what a gradient-domain reconstruction solves for. Not written to files.
+    pub direct: Vec<Vec3>,
+    pub direct_u: Vec<Vec3>,
+    pub direct_v: Vec<Vec3>,
 }
 
 impl GradientPlanes {
@@ -180,6 +186,9 @@ impl GradientPlanes {
             vis: vec![0.0; n],
             indirect: vec![0.0; n],
             ratio: vec![0.0; n],
+            direct: vec![Vec3::ZERO; n],
+            direct_u: vec![Vec3::ZERO; n],
+            direct_v: vec![Vec3::ZERO; n],
         }
     }
 
@@ -188,6 +197,9 @@ impl GradientPlanes {
         let t = g.total();
         self.grad_u[i] = finite_or_zero(t[0]);
         self.grad_v[i] = finite_or_zero(t[1]);
+        self.direct[i] = finite_or_zero(g.value);
+        self.direct_u[i] = finite_or_zero(t[0] - g.indirect[0]);
+        self.direct_v[i] = finite_or_zero(t[1] - g.indirect[1]);
         let fin = |x: f32| if x.is_finite() { x } else { 0.0 };
         let sv = fin(gradients::magnitude(&g.sv));
         let cdv = fin(gradients::magnitude(&g.cdv));
