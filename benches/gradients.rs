@@ -8,7 +8,7 @@ use gradtrace::accel::{Accel, SurfacePoint};
 use gradtrace::math::{Frame, Ray, Vec3};
 use gradtrace::render::gradients::visibility::{trace_line, Domain};
 use gradtrace::render::{render, RenderOptions};
-use gradtrace::scene::{self, Integrator};
+use gradtrace::scene;
 use std::path::Path;
 
 /// The cost breakdown of issue 53: each variant adds one part of the gradient
