@@ -878,3 +878,49 @@ radiance = [1, 1, 1]
     );
     assert!(rel <= 0.08, "shadow RMSE {:.1} % of its mean", 100.0 * rel);
 }
+
+/// The cache leaves out lobes of zero weight (a 4-bit mask per slice, 12 bytes
+/// per lobe written): its exact length says so, and the transfer read back
+/// renders the same image bit for bit.
+#[test]
+fn cache_leaves_out_empty_lobes_and_renders_the_same() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/glossy/cube_floor.toml");
+    let scene = gradtrace::scene::load(&path).unwrap();
+    let accel = gradtrace::accel::Accel::build(&scene.meshes, &scene.spheres);
+    let settings = Settings {
+        samples: 8,
+        diffuse_samples: 16,
+        fit_samples: 512,
+        max_angular_level: 1,
+        initial_edge_fraction: 0.25,
+        batch: 20,
+        max_vertices: 100,
+        ..Settings::default()
+    };
+    let t = glossy::precompute(&scene, &accel, &settings, &|_, _, _| {}).unwrap();
+    let key = "test key";
+    let bytes = t.encode(key);
+    let lobes = || t.vertices.iter().flat_map(|v| v.glossy.iter().flatten());
+    let empty = lobes()
+        .filter(|l| l.kappa_alpha[1..].iter().all(|h| h & 0x7fff == 0))
+        .count();
+    let written = lobes().count() - empty;
+    assert!(empty > 0 && written > 0, "{empty} empty, {written} written");
+    let header = 8 + 4 + key.len() + 8 + 12 + 4 + 4 * t.stats.angular_levels.len() + 4;
+    let per_vertex: usize = t
+        .vertices
+        .iter()
+        .map(|v| 12 + 112 + v.glossy.len().div_ceil(2))
+        .sum();
+    assert_eq!(
+        bytes.len(),
+        header + 4 * t.mesh.split_log.len() + 4 + per_vertex + 12 * written
+    );
+    let back = glossy::Transfer::decode(&bytes, key, &scene, &settings).unwrap();
+    let env = PrefilteredEnv::new(scene.environment.as_ref().unwrap());
+    let a = glossy::render(&t, &env, &scene, &accel, &scene.camera);
+    let b = glossy::render(&back, &env, &scene, &accel, &scene.camera);
+    assert!(a == b, "the cached transfer renders another image");
+    // A cut-short file is a miss, not a panic.
+    assert!(glossy::Transfer::decode(&bytes[..bytes.len() - 1], key, &scene, &settings).is_none());
+}
