@@ -144,7 +144,8 @@ pub(crate) struct PreviewArgs {
     /// against at equal error; angular refinement still runs).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=6))]
     pub(crate) uniform: Option<u8>,
-    /// glossy: vertex budget of the adaptive spatial refinement [default: 20000].
+    /// glossy: vertices the tessellation and adaptive refinement may add to the
+    /// scene's own, however dense its meshes [default: 16000].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_vertices: Option<u32>,
     /// Samples per pixel the path-traced reference starts at [default: 256]; raised

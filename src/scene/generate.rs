@@ -17,6 +17,12 @@
 //! * `diffuse_only`: lambert materials, no bumps, sphere lights only, no mirror,
 //!   no quad objects (what `preview shadow-field` models: it takes a lone quad for
 //!   a half-space, right for a floor or wall only); skies constant, image or none.
+//! * `glossy_only`: what `preview glossy` models: no lights, a constant or image
+//!   sky always, lambert, blinn_phong and cook_torrance materials of exponent
+//!   2–128 (the paper's range: low-frequency transfer) on the objects, a lambert
+//!   floor and wall (the paper's diffuse plane), no bumps, and meshes only (cubes,
+//!   the cow and the teapot; no spheres, no quad objects: a vertex holds one
+//!   side's transfer).
 //! * `asset_dir`: the folder that holds `models/` and `envs/`, as the scene names
 //!   it: `None` writes `models/cow.obj`, right for a scene file in `scenes/` (or
 //!   parsed with a path there); a test writing its file elsewhere passes the
@@ -33,6 +39,7 @@ use std::fmt::Write;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
     pub diffuse_only: bool,
+    pub glossy_only: bool,
     pub asset_dir: Option<String>,
     pub resolution: [u32; 2],
     pub spp: u32,
@@ -44,6 +51,7 @@ impl Default for Options {
     fn default() -> Self {
         Self {
             diffuse_only: false,
+            glossy_only: false,
             asset_dir: None,
             resolution: [32, 24],
             spp: 4,
@@ -160,25 +168,29 @@ impl Generator<'_> {
         );
         self.sky();
         // The floor, and half the time a wall behind the objects.
-        let m = self.material(false);
+        let m = self.receiver_material();
         self.shape(
             "quad",
             &format!("corner = [-3.0, 0.0, 3.0]\nedge_u = [6.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, -6.0]\n{m}"),
         );
         if self.rng.chance(0.5) {
-            let m = self.material(false);
+            let m = self.receiver_material();
             let z = self.rng.range(-1.6, -0.6);
             self.shape(
                 "quad",
                 &format!("corner = [-3.0, 0.0, {}]\nedge_u = [6.0, 0.0, 0.0]\nedge_v = [0.0, 3.0, 0.0]\n{m}", num(z)),
             );
         }
-        let objects = 1 + self.rng.below(4);
+        let objects = 1 + self.rng.below(if self.opts.glossy_only { 3 } else { 4 });
         let mut tops = Vec::new();
         for _ in 0..objects {
             tops.push(self.object());
         }
-        let lights = 1 + self.rng.below(3);
+        let lights = if self.opts.glossy_only {
+            0
+        } else {
+            1 + self.rng.below(3)
+        };
         for _ in 0..lights {
             self.light(&tops);
         }
@@ -188,7 +200,15 @@ impl Generator<'_> {
     fn sky(&mut self) {
         let opts = self.opts;
         let r = &mut self.rng;
-        let kind = r.below(4);
+        let kind = if opts.glossy_only {
+            if r.chance(0.5) {
+                1
+            } else {
+                3
+            }
+        } else {
+            r.below(4)
+        };
         let text = match kind {
             1 => format!(
                 "type = \"constant\"\nradiance = {}",
@@ -219,8 +239,15 @@ impl Generator<'_> {
         let r = &mut self.rng;
         let kind = if self.opts.diffuse_only {
             0
+        } else if self.opts.glossy_only {
+            r.below(3)
         } else {
             r.below(5)
+        };
+        let exponent = if self.opts.glossy_only {
+            (2.0, 128.0)
+        } else {
+            (1.0, 1e4)
         };
         let body = match kind {
             1 | 2 => {
@@ -235,7 +262,7 @@ impl Generator<'_> {
                     },
                     v3(kd),
                     v3(ks),
-                    num(r.log_range(1.0, 1e4))
+                    num(r.log_range(exponent.0, exponent.1))
                 )
             }
             3 => format!(
@@ -245,7 +272,7 @@ impl Generator<'_> {
             _ => format!("type = \"lambert\"\nalbedo = {}", v3(r.colour(0.02, 0.9))),
         };
         let _ = writeln!(self.out, "[materials.{name}]\n{body}\n");
-        if bumpable && !self.opts.diffuse_only && self.rng.chance(0.3) {
+        if bumpable && !self.opts.diffuse_only && !self.opts.glossy_only && self.rng.chance(0.3) {
             let b = format!("b{}", self.bumps);
             self.bumps += 1;
             let r = &mut self.rng;
@@ -271,6 +298,25 @@ impl Generator<'_> {
         format!("material = \"{name}\"")
     }
 
+    /// The floor's or the wall's material: lambert in `glossy_only` scenes, as the
+    /// paper's plane. A large glossy plane's highlight moves within faces that
+    /// the spatial criterion sees no reason to split (the transfer, in each
+    /// vertex's frame, is the same all over an open plane) and that the lookup at
+    /// the vertices' view directions cannot hold: 132 % RMSE on one such scene.
+    fn receiver_material(&mut self) -> String {
+        if !self.opts.glossy_only {
+            return self.material(false);
+        }
+        let name = format!("m{}", self.materials);
+        self.materials += 1;
+        let albedo = v3(self.rng.colour(0.02, 0.9));
+        let _ = writeln!(
+            self.out,
+            "[materials.{name}]\ntype = \"lambert\"\nalbedo = {albedo}\n"
+        );
+        format!("material = \"{name}\"")
+    }
+
     fn shape(&mut self, kind: &str, body: &str) {
         let _ = writeln!(self.out, "[[shapes]]\ntype = \"{kind}\"\n{body}\n");
     }
@@ -288,6 +334,9 @@ impl Generator<'_> {
         let mut kind = r.below(if self.opts.meshes { 6 } else { 4 });
         if kind == 2 && self.opts.diffuse_only {
             kind = 0;
+        }
+        if self.opts.glossy_only && kind < 3 {
+            kind = 3;
         }
         match kind {
             0 | 1 => {
@@ -341,7 +390,11 @@ impl Generator<'_> {
             }
             _ => {
                 // Model, scale range, height of its base below its origin, height.
-                let pick = r.below(10);
+                let pick = if self.opts.glossy_only {
+                    1 + r.below(9)
+                } else {
+                    r.below(10)
+                };
                 let (file, lo, hi, base, tall) = match pick {
                     0 => ("models/stanford-bunny.obj", 2.0, 5.0, 0.033, 0.154),
                     1..=4 => ("models/cow.obj", 0.05, 0.15, 3.637, 6.397),

@@ -179,7 +179,7 @@ fn glossy_frame(plan: &Plan) -> Result<Run> {
         settings: plan.opts.glossy.clone(),
         ..GlossyOptions::new(scene.path.clone())
     };
-    let transfer = glossy_cmd::transfer(scene, plan.accel, &opts)?;
+    let (transfer, _) = glossy_cmd::transfer(scene, plan.accel, &opts)?;
     let environment = scene.environment.as_ref().ok_or_else(|| Error::Scene {
         path: scene.path.clone(),
         location: "glossy preview".into(),

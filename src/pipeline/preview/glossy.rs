@@ -83,7 +83,10 @@ pub struct GlossySummary {
     pub vertices_initial: usize,
     pub vertices_final: usize,
     pub angular_levels: Vec<usize>,
+    /// The transfer in memory.
     pub bytes: usize,
+    /// The transfer's cache entry (empty lobes left out, see `preview::glossy::store`).
+    pub cache_bytes: usize,
     pub image_mean: f64,
     pub reference_mean: f64,
     pub rmse: f64,
@@ -133,16 +136,17 @@ pub fn transfer_entry(scene: &Scene, out_dir: &Path, settings: &Settings) -> cra
     ))
 }
 
-/// The transfer from the cache, or precomputed (and cached) with a progress bar.
+/// The transfer from the cache, or precomputed (and cached) with a progress bar;
+/// and the bytes of its cache entry.
 pub(crate) fn transfer(
     scene: &Scene,
     accel: &Accel,
     opts: &GlossyOptions,
-) -> crate::Result<Transfer> {
+) -> crate::Result<(Transfer, usize)> {
     let entry = transfer_entry(scene, &opts.out_dir, &opts.settings)?;
     if let Some(hit) = entry.read_bytes() {
         if let Some(t) = Transfer::decode(&hit.value, entry.key(), scene, &opts.settings) {
-            return Ok(t);
+            return Ok((t, hit.value.len()));
         }
     }
     // One phase over every refinement step's vertices.
@@ -154,8 +158,9 @@ pub(crate) fn transfer(
     );
     let t = glossy::precompute(scene, accel, &opts.settings, &phase.steps())?;
     drop(phase);
-    entry.write_bytes(&t.encode(entry.key()), t.stats.precompute_s)?;
-    Ok(t)
+    let bytes = t.encode(entry.key());
+    entry.write_bytes(&bytes, t.stats.precompute_s)?;
+    Ok((t, bytes.len()))
 }
 
 /// The path-traced reference (direct + one bounce) at `spp` and the seed of
@@ -276,7 +281,7 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         }
         None => scene.camera.clone(),
     };
-    let transfer = transfer(&scene, &accel, opts)?;
+    let (transfer, cache_bytes) = transfer(&scene, &accel, opts)?;
     let env = scene
         .environment
         .as_ref()
@@ -374,6 +379,7 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
         vertices_final: s.vertices_final,
         angular_levels: s.angular_levels.clone(),
         bytes: transfer.bytes(),
+        cache_bytes,
         image_mean: mean_luminance(&image),
         reference_mean: mean_luminance(&reference),
         rmse,
@@ -508,6 +514,7 @@ fn index(
         "vertices_final": s.vertices_final,
         "angular_levels": s.angular_levels,
         "bytes": s.bytes,
+        "cache_bytes": s.cache_bytes,
         "image_mean": s.image_mean,
         "reference_mean": s.reference_mean,
         "rmse": s.rmse,
@@ -546,6 +553,7 @@ fn stats_page(s: &GlossySummary, levels_png: &Path, t: &Transfer) -> String {
             ),
         ),
         ("memory", format!("{:.1} MB", s.bytes as f64 / 1e6)),
+        ("cache", format!("{:.1} MB", s.cache_bytes as f64 / 1e6)),
         (
             "render",
             format!(

@@ -25,6 +25,9 @@ struct Face {
     mesh: u32,
     tri: u32,
     level: u8,
+    /// The level the face's ancestor had when the adaptive refinement began
+    /// ([`AdaptiveMesh::start_refinement`]): its depth limit counts from there.
+    base: u8,
     /// First of four children, or `u32::MAX` for a leaf.
     children: u32,
 }
@@ -111,6 +114,7 @@ impl AdaptiveMesh {
                     mesh: mi as u32,
                     tri: ti as u32,
                     level: 0,
+                    base: 0,
                     children: u32::MAX,
                 });
             }
@@ -142,6 +146,24 @@ impl AdaptiveMesh {
 
     pub fn face_level(&self, f: u32) -> u8 {
         self.faces[f as usize].level
+    }
+
+    /// Marks the current leaves as where the adaptive refinement starts: a long
+    /// floor triangle tessellated four levels deep before it must still be free to
+    /// split where a shadow falls on it.
+    pub fn start_refinement(&mut self) {
+        for f in 0..self.faces.len() {
+            if self.is_leaf(f as u32) {
+                self.faces[f].base = self.faces[f].level;
+            }
+        }
+    }
+
+    /// 1-to-4 splits between the face and the leaf it descends from at
+    /// [`start_refinement`](Self::start_refinement).
+    pub fn refinement_depth(&self, f: u32) -> u8 {
+        let face = &self.faces[f as usize];
+        face.level - face.base
     }
 
     /// World area of a face.
@@ -242,6 +264,7 @@ impl AdaptiveMesh {
                 mesh: face.mesh,
                 tri: face.tri,
                 level: face.level + 1,
+                base: face.base,
                 children: u32::MAX,
             });
         }

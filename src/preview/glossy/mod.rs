@@ -55,7 +55,9 @@ pub struct Settings {
     pub spatial_threshold: f64,
     /// Spatial subdivision on/off (off: the initial mesh, as Green et al.).
     pub spatial: bool,
-    /// Deepest 1-to-4 level below a scene triangle.
+    /// Deepest adaptive 1-to-4 level below a face of the initial tessellation
+    /// (counted from the scene triangle, a floor tessellated to level 4 could
+    /// never be split where a shadow falls on it).
     pub max_spatial_level: u8,
     /// Triangles smaller than this fraction of the scene's squared diagonal stay.
     pub min_area_fraction: f32,
@@ -65,10 +67,14 @@ pub struct Settings {
     /// the scene diagonal are split first (a two-triangle floor has no interior
     /// vertex to catch a shadow with).
     pub initial_edge_fraction: f32,
-    /// Stop refining at this many vertices: a budget, spent on the faces whose
-    /// vertices differ most first (each batch takes the largest metrics). With the
-    /// direct lobes nearly noise-free the 0.05 threshold would refine the e = 128
-    /// teapot to ~37k vertices (570 s under load); 20k keep it under the 10-minute bar.
+    /// Vertices the initial tessellation and the refinement may add to the scene's
+    /// own: a budget, spent on the faces whose vertices differ most first (each
+    /// batch takes the largest metrics). It counts added vertices, not all of them,
+    /// so that a dense input mesh (the 34.8k-vertex bunny) does not spend it before
+    /// any refinement and leave a coarse floor without its shadow (issue 57). With
+    /// the direct lobes nearly noise-free the 0.05 threshold would refine the
+    /// e = 128 teapot to ~37k vertices (570 s under load); 16k added (≈ 20k in all)
+    /// keep it under the 10-minute bar.
     pub max_vertices: usize,
     /// Uniform 1-to-4 splits of every triangle before anything else (0: none); with
     /// `spatial: false`, the uniform mesh the adaptive one is compared against.
@@ -89,7 +95,7 @@ impl Default for Settings {
             min_area_fraction: 1e-6,
             batch: 200,
             initial_edge_fraction: 1.0 / 16.0,
-            max_vertices: 20_000,
+            max_vertices: 16_000,
             uniform_levels: 0,
         }
     }
@@ -192,13 +198,13 @@ const MESH_BYTES_PER_VERTEX: u64 = 640;
 /// The most vertices a precompute of `settings` reaches from a mesh of
 /// `vertices` vertices and `faces` triangles: each uniform 1-to-4 split adds
 /// about half a vertex per face (a closed mesh has twice as many faces as
-/// vertices), and the refinement stops past `max_vertices` after its last batch
-/// of at most `batch` splits (three new vertices each).
+/// vertices), and the tessellation and refinement stop past `max_vertices` added
+/// after their last batch of at most `batch` splits (three new vertices each).
 fn vertex_bound(settings: &Settings, vertices: usize, faces: usize) -> u64 {
     let splits = 4u64.saturating_pow(u32::from(settings.uniform_levels)) - 1;
     let uniform = (vertices as u64).saturating_add((faces as u64).saturating_mul(splits) / 2);
     uniform
-        .max(settings.max_vertices as u64)
+        .saturating_add(settings.max_vertices as u64)
         .saturating_add(3 * settings.batch as u64)
 }
 
@@ -409,12 +415,15 @@ pub fn precompute(
     let diagonal = accel
         .bounds()
         .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-6));
+    // The budget is what the tessellation and refinement add to the scene's own
+    // vertices, however many those are.
+    let budget_end = mesh.vertices.len().saturating_add(settings.max_vertices);
     loop {
         let long: Vec<u32> = mesh
             .leaves()
             .filter(|&f| mesh.face_longest_edge(f) > settings.initial_edge_fraction * diagonal)
             .collect();
-        if long.is_empty() || mesh.vertices.len() > settings.max_vertices {
+        if long.is_empty() || mesh.vertices.len() >= budget_end {
             break;
         }
         for f in long {
@@ -440,7 +449,12 @@ pub fn precompute(
     };
     compute_new_vertices(&ctx, settings, &mut t, "initial vertices", progress);
     if settings.spatial {
-        refine_spatially(&ctx, settings, &mut t, diagonal, &interp, progress);
+        t.mesh.start_refinement();
+        let space = Space {
+            diagonal,
+            budget_end,
+        };
+        refine_spatially(&ctx, settings, &mut t, space, &interp, progress);
     }
     t.mesh.resolve();
     t.ico = ico;
@@ -486,6 +500,14 @@ fn compute_new_vertices(
     t.vertices.extend(new);
 }
 
+/// The scene's size and where the vertex budget ends, for [`refine_spatially`].
+#[derive(Clone, Copy)]
+struct Space {
+    diagonal: f32,
+    /// The scene's own vertices plus `max_vertices`.
+    budget_end: usize,
+}
+
 /// Sec. 4.3: split the `batch` leaves whose vertex-to-vertex difference is above
 /// the threshold and largest (weighted by area, see below), compute the new
 /// vertices, repeat.
@@ -493,11 +515,11 @@ fn refine_spatially(
     ctx: &TraceContext,
     settings: &Settings,
     t: &mut Transfer,
-    diagonal: f32,
+    space: Space,
     interp: &dyn Fn(u32, u32, Vec3) -> Vertex,
     progress: Progress,
 ) {
-    let min_area = settings.min_area_fraction * diagonal * diagonal;
+    let min_area = settings.min_area_fraction * space.diagonal * space.diagonal;
     let mut metric: Vec<f64> = Vec::new();
     loop {
         let faces = t.mesh.face_count();
@@ -523,13 +545,14 @@ fn refine_spatially(
             .mesh
             .leaves()
             .filter(|&f| {
-                t.mesh.face_level(f) < settings.max_spatial_level && t.mesh.face_area(f) >= min_area
+                t.mesh.refinement_depth(f) < settings.max_spatial_level
+                    && t.mesh.face_area(f) >= min_area
             })
             .map(|f| (f, metric[f as usize]))
             .filter(|&(_, m)| m > settings.spatial_threshold)
             .map(|(f, m)| (f, m * m * t.mesh.face_area(f) as f64))
             .collect();
-        if candidates.is_empty() || t.mesh.vertices.len() >= settings.max_vertices {
+        if candidates.is_empty() || t.mesh.vertices.len() >= space.budget_end {
             break;
         }
         candidates.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));

@@ -70,7 +70,9 @@ pub fn indirect_sample(
     pdf: f32,
     l_in: Vec3,
 ) -> [Vec3; 2] {
-    if !(pdf > 0.0 && pdf.is_finite()) {
+    // A path that brought nothing back (it escaped into a black sky, or ended)
+    // has no indirect gradient: skip the dual evaluation.
+    if !(pdf > 0.0 && pdf.is_finite()) || l_in == Vec3::ZERO {
         return [Vec3::ZERO; 2];
     }
     let f_cos = brdf_cos(material, h.n, h.wo, GVec3::constant(wi));
