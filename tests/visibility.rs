@@ -508,8 +508,8 @@ fn gated_rings_keep_the_gradient_unbiased() {
                 );
                 rays += g.rays as u64;
                 rays_ungated += full.rays as u64;
-                for c in 0..2 {
-                    gated[c] += g.vis[c].x as f64 / (n * n) as f64;
+                for (sum, v) in gated.iter_mut().zip(g.vis) {
+                    *sum += v.x as f64 / (n * n) as f64;
                 }
             }
         }

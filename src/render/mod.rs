@@ -941,7 +941,7 @@ pub(crate) struct PixelAccumulator {
 /// and `compare` can say what share of the render the gradients took (~1.5 % extra
 /// work; no pixel changes).
 pub(crate) fn is_timed(key: u32, sample: u32) -> bool {
-    crate::math::sampler::hash2(key, sample ^ 0x6772_6164) % 64 == 0
+    crate::math::sampler::hash2(key, sample ^ 0x6772_6164).is_multiple_of(64)
 }
 
 /// Traces `sample(true)`, the sample with gradients, and times it against the same
