@@ -20,7 +20,7 @@ use std::time::Instant;
 
 /// Process CPU seconds (NaN where the OS does not report them).
 fn cpu_s() -> f64 {
-    gradtrace::pipeline::preview::glossy::process_cpu_s().unwrap_or(f64::NAN)
+    gradtrace::cpu_time::process_s().unwrap_or(f64::NAN)
 }
 
 fn main() {

@@ -396,10 +396,8 @@ fn seed_runs(
                 Interpolation::Gradient,
                 &|_, _| {},
             )?;
-            let cost = Cost {
-                wall_s: out.stats.wall_s,
-                cpu_s: clock.cost().cpu_s,
-            };
+            // Wall and CPU time over the same span.
+            let cost = clock.cost();
             if let Some(g) = out.stats.gradient_share {
                 shares.push((strategy.name(), g));
             }
@@ -678,8 +676,8 @@ fn cycles_oidn_run(
 }
 
 /// The `gradient-domain` row: every pixel rendered with gradients and AOVs, then
-/// the L1 screened Poisson solve (`gdomain`), render + solve at the `target` wall
-/// time. A 1-spp probe (render and solve) sizes the spp; an attempt that misses the
+/// the L1 screened Poisson solve (`gdomain`), render + solve at the `target` cost
+/// (wall or CPU seconds, as `--equal` says). A 1-spp probe (render and solve) sizes the spp; an attempt that misses the
 /// target by more than 10 % is redone once at the spp its own time implies. Returns
 /// the run and the discarded seconds (probe and missed attempt).
 fn gradient_domain_run(
@@ -837,7 +835,6 @@ fn interpolation_runs(plan: &Plan, reference: &[Vec3]) -> Result<(Vec<Run>, Opti
 /// strategy (mean over budgets and seeds).
 fn gradient_share_note(shares: &[(&str, f64)]) -> Option<String> {
     let mut names: Vec<&str> = shares.iter().map(|(n, _)| *n).collect();
-    names.dedup();
     names.sort_unstable();
     names.dedup();
     let parts: Vec<String> = names

@@ -335,18 +335,6 @@ impl LightSet {
         }
     }
 
-    /// Whether light sampling of `prim` would go through [`Self::pick_line`]
-    /// (rectangles and spheres; the environment is handled by the caller).
-    pub fn is_line_light(&self, scene: &Scene, prim: PrimRef) -> bool {
-        match prim {
-            PrimRef::Sphere(i) => self.sphere_light[i as usize] != u32::MAX,
-            PrimRef::Triangle { mesh, .. } => {
-                self.mesh_first_light[mesh as usize] != u32::MAX
-                    && scene.meshes[mesh as usize].rect.is_some()
-            }
-        }
-    }
-
     /// Solid-angle density with which [`Self::sample`] would produce the direction
     /// from `p` to the point `q` (normal `nq`) on the emitter `prim`.
     pub fn pdf_emitter(&self, scene: &Scene, prim: PrimRef, p: Vec3, q: Vec3, nq: Vec3) -> f32 {

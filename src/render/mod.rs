@@ -290,6 +290,13 @@ impl Setup {
                 message: "must be at least 1".into(),
             });
         }
+        // 0 would never march a ring: its crossings' density would vanish (Inf).
+        if let Some(q) = opts.vis_gate.filter(|q| !(*q > 0.0 && *q <= 1.0)) {
+            return Err(crate::Error::Option {
+                option: "--vis-gate".into(),
+                message: format!("expected a probability in (0, 1], got {q}"),
+            });
+        }
         let integrator = opts.integrator.unwrap_or(settings.integrator);
         let max_depth = match integrator {
             Integrator::Path => opts.max_depth.unwrap_or(settings.max_depth),
@@ -759,13 +766,13 @@ impl Film {
                                     Vec2::ZERO,
                                 )
                             };
-                            let r = if ctx.gradients && is_timed(pixel as u32, s) {
-                                let (r, t) = timed_gradient_sample(pixel as u32, s, sample);
-                                acc.timing = add_timing(acc.timing, t);
-                                r
-                            } else {
-                                sample(ctx.gradients)
-                            };
+                            let r = traced_sample(
+                                pixel as u32,
+                                s,
+                                ctx.gradients,
+                                &mut acc.timing,
+                                sample,
+                            );
                             acc.add(&r, s, s == ctx.first);
                             if let (Some(g), Some(sum)) = (&r.gradient, t.gradients.get_mut(i)) {
                                 sum.add(g);
@@ -847,7 +854,7 @@ impl Film {
         });
         out.spp = spp;
         out.stats.rays = rays;
-        out.stats.gradient_share = gradient_share(timing);
+        out.stats.gradient_share = gradient_share(timing, 1.0);
         out
     }
 }
@@ -940,15 +947,34 @@ pub(crate) struct PixelAccumulator {
 /// is traced once more without gradients and both are timed, so that the summary
 /// and `compare` can say what share of the render the gradients took (~1.5 % extra
 /// work; no pixel changes).
-pub(crate) fn is_timed(key: u32, sample: u32) -> bool {
+fn is_timed(key: u32, sample: u32) -> bool {
     crate::math::sampler::hash2(key, sample ^ 0x6772_6164).is_multiple_of(64)
 }
 
+/// `sample(gradients)`; where it carries a gradient and [`is_timed`], also timed
+/// against the same sample without one, the times added to `timing`.
+pub(crate) fn traced_sample(
+    key: u32,
+    index: u32,
+    gradients: bool,
+    timing: &mut [f64; 2],
+    sample: impl Fn(bool) -> SampleResult,
+) -> SampleResult {
+    if gradients && is_timed(key, index) {
+        let (r, t) = timed_gradient_sample(key, index, sample);
+        *timing = add_timing(*timing, t);
+        r
+    } else {
+        sample(gradients)
+    }
+}
+
 /// Traces `sample(true)`, the sample with gradients, and times it against the same
-/// sample without them: (its result, [seconds with, seconds without]). Which goes
+/// sample without them (the scalar tracer's: a plain render's lane kernel, where
+/// the scene takes it, is faster still, so the share is a lower bound there): (its result, [seconds with, seconds without]). Which goes
 /// first alternates (the second finds the caches warm), and a pair that took over
 /// a millisecond (the thread was preempted) counts as zero.
-pub(crate) fn timed_gradient_sample(
+fn timed_gradient_sample(
     key: u32,
     index: u32,
     sample: impl Fn(bool) -> SampleResult,
@@ -977,10 +1003,14 @@ pub(crate) fn add_timing(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [a[0] + b[0], a[1] + b[1]]
 }
 
-/// The gradients' share of the tracing time from summed timings; `None` where
-/// nothing was timed.
-pub(crate) fn gradient_share(t: [f64; 2]) -> Option<f64> {
-    (t[0] > 0.0).then(|| (1.0 - t[1] / t[0]).max(0.0))
+/// The gradients' share of the tracing time from summed timings, where a fraction
+/// `carried` of the samples carry one; `None` where nothing was timed. With r the
+/// time without over the time with: carried (1 − r) / (carried + (1 − carried) r).
+pub(crate) fn gradient_share(t: [f64; 2], carried: f64) -> Option<f64> {
+    (t[0] > 0.0).then(|| {
+        let r = t[1] / t[0];
+        (carried * (1.0 - r) / (carried + (1.0 - carried) * r)).max(0.0)
+    })
 }
 
 /// Splits the sample indices into two halves whose means are two independent

@@ -103,10 +103,11 @@ pub struct LineConfig {
     pub gate: f32,
 }
 
-/// The first hit's gate and line numbers: a hashed dimension set of their own, far
-/// past the path's, so that `--gradients` leaves every number the radiance reads
-/// (and with it the radiance) as a plain render has them.
-const GATE_DIM: u32 = 1 << 16;
+/// The first hit's gate and line numbers: a hashed dimension set of their own, the
+/// last the sampler addresses (a path would need ~5·10⁸ vertices to reach it), so
+/// that `--gradients` leaves every number the radiance reads (and with it the
+/// radiance) as a plain render has them.
+const GATE_DIM: u32 = u32::MAX - 7;
 
 /// What one camera sample returns: radiance plus first-hit data for the AOVs.
 #[derive(Clone, Copy, Debug, Default)]

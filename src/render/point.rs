@@ -7,7 +7,7 @@ use super::gradients::geometry::base_curvature;
 use super::gradients::magnitude;
 use super::interaction::{interaction, Interaction};
 use super::path::PathTracer;
-use super::{add_timing, camera_sample_at, gradient_share, is_timed, timed_gradient_sample, Setup};
+use super::{add_timing, camera_sample_at, gradient_share, traced_sample, Setup};
 use crate::accel::{Accel, PrimRef};
 use crate::math::sampler::hash2;
 use crate::math::{Vec2, Vec3};
@@ -86,9 +86,14 @@ impl<'a> PointEstimator<'a> {
         }
     }
 
-    /// The gradients' share of the tracing time of the estimates so far.
+    /// The gradients' share of the tracing time of the estimates so far (only the
+    /// first `gradient_spp` of each estimate's samples carry one).
     pub fn gradient_share(&self) -> Option<f64> {
-        gradient_share(*self.timing.lock().unwrap_or_else(|e| e.into_inner()))
+        let carried = f64::from(self.gradient_spp) / f64::from(self.spp.max(1));
+        gradient_share(
+            *self.timing.lock().unwrap_or_else(|e| e.into_inner()),
+            carried,
+        )
     }
 
     /// The estimate at image point `p` (continuous pixel coordinates).
@@ -99,6 +104,7 @@ impl<'a> PointEstimator<'a> {
         let (mut radiance, mut gu, mut gv, mut vis) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0f32);
         let (mut sq, mut radiance_sq) = (0.0f32, 0.0f32);
         let mut first = None;
+        let mut timing = [0.0; 2];
         for s in 0..self.spp {
             // A pixel-sized box footprint around p, as the full render's pixels have.
             let sample = |gradients| {
@@ -112,15 +118,7 @@ impl<'a> PointEstimator<'a> {
                     gradients,
                 )
             };
-            let with_gradient = s < self.gradient_spp;
-            let r = if with_gradient && is_timed(key, s) {
-                let (r, t) = timed_gradient_sample(key, s, sample);
-                let mut timing = self.timing.lock().unwrap_or_else(|e| e.into_inner());
-                *timing = add_timing(*timing, t);
-                r
-            } else {
-                sample(with_gradient)
-            };
+            let r = traced_sample(key, s, s < self.gradient_spp, &mut timing, sample);
             radiance += r.radiance;
             radiance_sq += r.radiance.length_squared();
             if let Some(g) = r.gradient {
@@ -133,6 +131,10 @@ impl<'a> PointEstimator<'a> {
             if s == 0 {
                 first = Some(r);
             }
+        }
+        if timing[0] > 0.0 {
+            let mut sum = self.timing.lock().unwrap_or_else(|e| e.into_inner());
+            *sum = add_timing(*sum, timing);
         }
         let n = self.spp as f32;
         let ng = self.gradient_spp as f32;

@@ -214,11 +214,6 @@ fn reference(
     Ok((out.beauty, secs))
 }
 
-/// Process CPU time in seconds (all threads), where the OS reports it.
-pub fn process_cpu_s() -> Option<f64> {
-    crate::cpu_time::process_s()
-}
-
 /// How long one frame takes: the wall time is the fastest (and the median) of `FRAMES` warm frames
 /// (one frame first, untimed, pays the first touch of the transfer and the
 /// environment levels and rayon's thread start); the CPU time is their mean
@@ -241,7 +236,7 @@ fn time_frame(
     camera: &Camera,
 ) -> FrameTime {
     let _ = glossy::render(t, env, scene, accel, camera);
-    let cpu0 = process_cpu_s();
+    let cpu0 = crate::cpu_time::process_s();
     let mut walls: Vec<f64> = (0..FRAMES)
         .map(|_| {
             let start = Instant::now();
@@ -251,7 +246,7 @@ fn time_frame(
         .collect();
     walls.sort_by(f64::total_cmp);
     let cpu_ms = cpu0
-        .zip(process_cpu_s())
+        .zip(crate::cpu_time::process_s())
         .map(|(a, b)| (b - a) * 1e3 / FRAMES as f64);
     FrameTime {
         wall_ms: walls[0],

@@ -129,7 +129,9 @@ impl<'a> Reader<'a> {
     fn glossy(&mut self, n: usize) -> Option<Vec<PackedSlice>> {
         let masks = self.take(n.div_ceil(2))?;
         let empty = PackedLobe::pack(&Lobe::default());
-        let mut out = Vec::with_capacity(n);
+        // Grown as slices are read: `n` comes from the file, and a corrupt count
+        // must end in `None`, not in a huge allocation.
+        let mut out = Vec::new();
         for i in 0..n {
             let m = masks[i / 2] >> (4 * (i % 2)) & 0xf;
             let mut s = [empty; 4];

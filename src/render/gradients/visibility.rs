@@ -135,20 +135,7 @@ pub fn trace_line_and_ring(
     on_point: &mut dyn FnMut(&LinePoint),
 ) -> LineEstimate {
     let m = Marcher::new(scene, accel, at, domain, refine_steps, dx, transport);
-    let ring_max = m.ring_extent();
-    if ring_max.is_nan() || ring_max <= 0.0 {
-        return m.line(phi, theta_jitter, n_theta, Families::Line, on_point);
-    }
-    let both = Families::Both(ring_max, 1.0);
-    let mut est = m.line(phi, theta_jitter, n_theta, both, on_point);
-    let theta_r = ring_max * (theta_jitter + 0.5).fract();
-    let ring = m.ring(theta_r, phi, ring_rays(n_theta, theta_r, ring_max), both);
-    for k in 0..2 {
-        est.vis[k] += ring.vis[k];
-    }
-    est.rays += ring.rays;
-    est.jumps += ring.jumps;
-    est
+    m.line_and_ring(phi, theta_jitter, n_theta, 1.0, true, on_point)
 }
 
 /// The penumbra gate (issue 53): whether a shading point's ring is marched. The
@@ -189,13 +176,9 @@ pub fn trace_gated(
     gate: Gate,
 ) -> LineEstimate {
     let m = Marcher::new(scene, accel, at, domain, refine_steps, dx, transport);
-    let ring_max = m.ring_extent();
-    if ring_max.is_nan() || ring_max <= 0.0 {
-        return m.line(phi, theta_jitter, n_theta, Families::Line, &mut |_| {});
-    }
     let [coin, probes @ ..] = gate.u;
     let (mut probe_rays, mut q) = (0, 1.0);
-    if gate.q_agree < 1.0 {
+    if gate.q_agree < 1.0 && m.ring_extent() > 0.0 {
         let mut seen = gate.seen;
         let mut disagree = false;
         for pair in probes.chunks_exact(2) {
@@ -211,18 +194,8 @@ pub fn trace_gated(
         }
         q = if disagree { 1.0 } else { gate.q_agree };
     }
-    let both = Families::Both(ring_max, q);
-    let mut est = m.line(phi, theta_jitter, n_theta, both, &mut |_| {});
+    let mut est = m.line_and_ring(phi, theta_jitter, n_theta, q, coin < q, &mut |_| {});
     est.rays += probe_rays;
-    if coin < q {
-        let theta_r = ring_max * (theta_jitter + 0.5).fract();
-        let ring = m.ring(theta_r, phi, ring_rays(n_theta, theta_r, ring_max), both);
-        for k in 0..2 {
-            est.vis[k] += ring.vis[k];
-        }
-        est.rays += ring.rays;
-        est.jumps += ring.jumps;
-    }
     est
 }
 
@@ -410,6 +383,37 @@ impl<'a> Marcher<'a> {
             })
             .fold(0.0, f32::max),
         }
+    }
+
+    /// The φ-line at `phi` and, when `ring`, its ring at θ_r = Θ · frac(jitter + ½)
+    /// (lines alone where the domain has no Θ), combined by the balance heuristic
+    /// with the ring's crossing density scaled by `q`, the probability that it was
+    /// marched.
+    fn line_and_ring(
+        &self,
+        phi: f32,
+        jitter: f32,
+        n: u32,
+        q: f32,
+        ring: bool,
+        on_point: &mut dyn FnMut(&LinePoint),
+    ) -> LineEstimate {
+        let ring_max = self.ring_extent();
+        if ring_max.is_nan() || ring_max <= 0.0 {
+            return self.line(phi, jitter, n, Families::Line, on_point);
+        }
+        let both = Families::Both(ring_max, q);
+        let mut est = self.line(phi, jitter, n, both, on_point);
+        if ring {
+            let theta_r = ring_max * (jitter + 0.5).fract();
+            let ring = self.ring(theta_r, phi, ring_rays(n, theta_r, ring_max), both);
+            for k in 0..2 {
+                est.vis[k] += ring.vis[k];
+            }
+            est.rays += ring.rays;
+            est.jumps += ring.jumps;
+        }
+        est
     }
 
     /// The φ-line: `n` stratified rays along θ ∈ [0, θmax(φ)].
