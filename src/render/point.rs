@@ -63,7 +63,8 @@ pub struct PointEstimator<'a> {
     /// The first `gradient_spp` of them carry the gradient (1 ≤ it ≤ spp).
     pub gradient_spp: u32,
     pub seed: u32,
-    /// [`timed_gradient_sample`]'s sums over every estimate so far.
+    /// Seconds of the timed samples with and without their gradient, summed over
+    /// every estimate so far (`gradient_share`).
     pub timing: Mutex<[f64; 2]>,
 }
 
