@@ -1,6 +1,7 @@
 //! first hit + light samples → analytic image gradients ∂I/∂u, ∂I/∂v and the
-//! first-order paper's terms (SV, DV, CV, CDV), from the same light samples and
-//! shadow rays as the radiance: no extra rays.
+//! first-order paper's terms (SV, DV, CV, CDV): the shading terms from the same
+//! light sample and shadow ray as the radiance, the visibility term from a φ-line
+//! and ring of shadow rays of its own (`visibility`).
 //!
 //! How: the direct-lighting integrand at a fixed light sample (a point y on an
 //! emitter, in area measure, or a direction at infinity) is evaluated over dual

@@ -8,10 +8,10 @@
 //! ∂B = ∫_φ Σ_j sgn_j T(α_j) sin α_j dα_j dφ.
 //!
 //! Image-space ("semianalytic") method: one φ-line per camera sample, with
-//! `n_theta` stratified shadow rays along θ. The same rays estimate the radiance
-//! (a line estimator of B) and locate the jumps, so the gradient needs no extra
-//! rays. A jump is placed between the two samples that differ (optionally refined
-//! by bisection); the blocked sample's hit gives the blocker distance D_j and its
+//! `n_theta` stratified shadow rays along θ, locates the jumps (the tests also
+//! read its rays as a line estimator of B; the renderer takes the radiance from
+//! its light sample, [`trace_gated`]). A jump is placed between the two samples
+//! that differ (optionally refined by bisection); the blocked sample's hit gives the blocker distance D_j and its
 //! geometry (sphere normal, or the nearest triangle edge k for Eq. 72).
 //!
 //! Beyond the paper, the domain can be the cone of a sphere light or the solid
