@@ -708,19 +708,14 @@ fn gradient_domain_run(
         Ok((out, image, render, clock.cost()))
     };
     let (_, _, probe_render, probe_solve) = attempt(1)?;
-    let fit = |per_spp: f64, solve: f64| {
-        (((equal.target - solve) / per_spp.max(1e-9)).round() as u32).max(1)
-    };
-    let mut spp = fit(probe_render.of(mode), probe_solve.of(mode));
-    let mut discarded = probe_render.wall_s + probe_solve.wall_s;
-    let (mut out, mut image, mut render, mut solve) = attempt(spp)?;
-    let secs = (render + solve).of(mode);
-    let again = fit(render.of(mode) / f64::from(spp), solve.of(mode));
-    if (secs / equal.target - 1.0).abs() > 0.10 && again != spp {
-        discarded += (render + solve).wall_s;
-        spp = again;
-        (out, image, render, solve) = attempt(spp)?;
-    }
+    let guess = spp_for(equal.target, probe_render.of(mode), probe_solve.of(mode));
+    let fitted = at_target(mode, guess, equal.target, |spp| {
+        let (out, image, render, solve) = attempt(spp)?;
+        Ok(((out, image), render, solve))
+    })?;
+    let ((out, image), render, solve, spp) =
+        (fitted.value, fitted.scaled, fitted.fixed, fitted.spp);
+    let discarded = probe_render.wall_s + probe_solve.wall_s + fitted.discarded_s;
     progress(&format!(
         "seed {k}: gradient-domain ({}) at the time of {:.0}%: {spp} spp, render {:.2} s + solve {:.2} s",
         gd.norm.name(),
@@ -1010,44 +1005,78 @@ struct EqualTimeRender {
 }
 
 /// A full render at the `target` cost (wall or CPU seconds, `--equal`): `guess`
-/// spp (scaled from the full render's cost), and once more at the spp its own cost
-/// implies when it missed the target by more than 10% (the machine's load can
-/// change between the two renders, and an equal-time comparison must not hand a
-/// baseline half the time).
+/// spp (scaled from the full render's cost), retried as [`at_target`] says.
 fn equal_time_render(
     plan: &Plan,
     base: &RenderOptions,
     guess: u32,
     target: f64,
 ) -> Result<EqualTimeRender> {
-    let mode = plan.opts.equal;
-    let at = |spp: u32| {
-        timed_render(
+    let fitted = at_target(plan.opts.equal, guess, target, |spp| {
+        let (out, cost) = timed_render(
             plan,
             &RenderOptions {
                 spp: Some(spp),
                 ..base.clone()
             },
-        )
-    };
-    let (out, cost) = at(guess)?;
-    let secs = cost.of(mode);
-    let spp = ((f64::from(guess) * target / secs.max(1e-9)).round() as u32).max(1);
-    if (secs / target - 1.0).abs() <= 0.10 || spp == guess {
-        return Ok(EqualTimeRender {
-            out,
-            cost,
-            spp: guess,
-            discarded_s: 0.0,
-        });
-    }
-    let (out, kept) = at(spp)?;
+        )?;
+        Ok((out, cost, Cost::default()))
+    })?;
     Ok(EqualTimeRender {
-        out,
-        cost: kept,
-        spp,
-        discarded_s: cost.wall_s,
+        out: fitted.value,
+        cost: fitted.scaled,
+        spp: fitted.spp,
+        discarded_s: fitted.discarded_s,
     })
+}
+
+/// What [`at_target`] kept: the attempt's value, its cost (the part that scales
+/// with spp and the fixed part) and spp, and the
+/// wall seconds of a discarded first attempt (0 when it was kept).
+struct Fitted<T> {
+    value: T,
+    scaled: Cost,
+    fixed: Cost,
+    spp: u32,
+    discarded_s: f64,
+}
+
+/// `attempt(guess)`, whose cost is a part that grows with spp and a `fixed` part;
+/// where their sum missed `target` by more than 10 %, once more at the spp its
+/// own costs imply (the machine's load can change between the two, and an
+/// equal-time comparison must not hand a method half the time).
+fn at_target<T>(
+    mode: EqualCost,
+    guess: u32,
+    target: f64,
+    attempt: impl Fn(u32) -> Result<(T, Cost, Cost)>,
+) -> Result<Fitted<T>> {
+    let (value, scaled, fixed) = attempt(guess)?;
+    let secs = (scaled + fixed).of(mode);
+    let again = spp_for(target, scaled.of(mode) / f64::from(guess), fixed.of(mode));
+    let first = Fitted {
+        value,
+        scaled,
+        fixed,
+        spp: guess,
+        discarded_s: 0.0,
+    };
+    if (secs / target - 1.0).abs() <= 0.10 || again == guess {
+        return Ok(first);
+    }
+    let (value, scaled, fixed) = attempt(again)?;
+    Ok(Fitted {
+        value,
+        scaled,
+        fixed,
+        spp: again,
+        discarded_s: (first.scaled + first.fixed).wall_s,
+    })
+}
+
+/// The spp whose cost, `per_spp` each plus `fixed`, is `target` (at least 1).
+fn spp_for(target: f64, per_spp: f64, fixed: f64) -> u32 {
+    (((target - fixed) / per_spp.max(1e-9)).round() as u32).max(1)
 }
 
 /// Every pixel rendered with `opts`, and what it cost.
