@@ -87,6 +87,72 @@ fn generated_diffuse_scenes_preview_finite_and_close_to_the_path_tracer() {
     );
 }
 
+/// Issue 57, item 3 (a benchmark, not a timed test): speed-up at equal error
+/// and CPU µs per point and entity over `GRADTRACE_SF_SCENES` (default 20)
+/// generated scenes at 160 × 120, their distribution printed.
+/// `cargo test --release --test shadow_field_generated speed -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn speed_over_generated_scenes() {
+    let n: u64 = std::env::var("GRADTRACE_SF_SCENES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20);
+    let dir = std::env::temp_dir().join(format!("gradtrace-sfspeed-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let opts = Options {
+        diffuse_only: true,
+        asset_dir: Some(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes").into()),
+        resolution: [160, 120],
+        spp: 4,
+        ..Options::default()
+    };
+    let (mut speed, mut us, mut rmse) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..n {
+        let path = dir.join(format!("sf-{seed}.toml"));
+        std::fs::write(&path, scene_toml(seed, &opts)).unwrap();
+        let mut o = ShadowFieldOptions::new(&path);
+        o.out_dir = dir.join(format!("out-{seed}"));
+        o.quiet = true;
+        o.cache = false;
+        let s = run(&o).unwrap();
+        let exr = gradtrace::output::read_exr(&s.exr).unwrap();
+        let scene = gradtrace::scene::load(&path).unwrap();
+        let rel = masked_rmse(&scene, &exr);
+        let x = s.figures.speedup_per_frame.unwrap_or(f64::NAN);
+        println!(
+            "seed {seed:2}: {} entities, {:.3} µs per point-entity, frame {:.4} s, RMSE {:.1}% ({:.1}% away from emitters), {:.1}× the path tracer at equal error per frame",
+            s.entities,
+            s.us_per_point_entity,
+            s.figures.frame_s,
+            100.0 * s.rmse_relative,
+            100.0 * rel,
+            x
+        );
+        speed.push(x);
+        us.push(s.us_per_point_entity);
+        rmse.push(rel);
+        let _ = std::fs::remove_dir_all(&o.out_dir);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let show = |name: &str, v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
+        println!(
+            "{name}: min {:.3}, quartile {:.3}, median {:.3}, quartile {:.3}, max {:.3}",
+            q(0.0),
+            q(0.25),
+            q(0.5),
+            q(0.75),
+            q(1.0)
+        );
+    };
+    show("speed-up per frame at equal error", &mut speed);
+    show("CPU µs per point and entity", &mut us);
+    show("RMSE / mean away from emitters", &mut rmse);
+}
+
 /// What the method holds on these scenes, at 48 × 36 with 2 × 2 receivers a pixel
 /// (measured: median 16%, 1.6–92%): the median within 20% of the mean and
 /// every scene within 100%. The worst are lights a few centimetres from a

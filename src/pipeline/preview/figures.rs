@@ -50,8 +50,26 @@ pub struct Reference {
     pub alpha: f64,
 }
 
-fn mse(a: &[Vec3], b: &[Vec3]) -> Result<f64> {
-    Ok(f64::from(metrics::rmse(a, b)?).powi(2))
+fn mse(a: &[Vec3], b: &[Vec3], scored: Option<&[bool]>) -> Result<f64> {
+    Ok(scored_rmse(a, b, scored)?.powi(2))
+}
+
+/// RMSE over the pixels `scored` keeps (every pixel without it).
+pub fn scored_rmse(a: &[Vec3], b: &[Vec3], scored: Option<&[bool]>) -> Result<f64> {
+    let Some(keep) = scored else {
+        return Ok(f64::from(metrics::rmse(a, b)?));
+    };
+    let pick = |v: &[Vec3]| -> Vec<Vec3> {
+        v.iter()
+            .zip(keep)
+            .filter(|(_, k)| **k)
+            .map(|(c, _)| *c)
+            .collect()
+    };
+    if keep.iter().all(|k| !k) {
+        return Ok(0.0);
+    }
+    Ok(f64::from(metrics::rmse(&pick(a), &pick(b))?))
 }
 
 /// Whether the preview's RMSE `rmse` against a reference of noise `noise_var`
@@ -88,8 +106,10 @@ pub fn next_reference_spp(rmse: f64, noise_var: f64, spp: u32, max: u32) -> Opti
 /// noise), then at more spp (see [`next_reference_spp`]) until it resolves
 /// `preview`'s bias or reaches `max`; α comes from the first and last spp, or,
 /// when the first one resolved it, from one more render at a quarter of it.
+/// Every error is taken over the pixels `scored` keeps (all without it).
 pub fn converge_reference(
     preview: &[Vec3],
+    scored: Option<&[bool]>,
     start: u32,
     max: u32,
     mut render: impl FnMut(u32, u32) -> Result<(Vec<Vec3>, f64)>,
@@ -100,8 +120,8 @@ pub fn converge_reference(
     loop {
         let (beauty, seconds) = render(spp, 0)?;
         let (other, _) = render(spp, 1)?;
-        let noise_var = mse(&beauty, &other)? / 2.0;
-        let rmse = mse(preview, &beauty)?.sqrt();
+        let noise_var = mse(&beauty, &other, scored)? / 2.0;
+        let rmse = mse(preview, &beauty, scored)?.sqrt();
         let next = next_reference_spp(rmse, noise_var, spp, max);
         if next.is_none() {
             let low = match first {
@@ -109,7 +129,7 @@ pub fn converge_reference(
                 None if spp >= 4 => {
                     // E|C − A|² = noise²(spp/4) + noise²(spp).
                     let (c, _) = render(spp / 4, 2)?;
-                    Some((spp / 4, mse(&c, &beauty)? - noise_var))
+                    Some((spp / 4, mse(&c, &beauty, scored)? - noise_var))
                 }
                 None => None,
             };
@@ -358,7 +378,7 @@ mod tests {
     }
 
     fn rmse(preview: &[Vec3], r: &Reference) -> f64 {
-        mse(preview, &r.beauty).unwrap().sqrt()
+        mse(preview, &r.beauty, None).unwrap().sqrt()
     }
 
     const TIMING: Timing = Timing {
@@ -373,7 +393,7 @@ mod tests {
         let preview = biased_preview();
         let mut asked = Vec::new();
         let mut pt = tracer(0.1, 1.0);
-        let r = converge_reference(&preview, 1024, 4096, |spp, seed| {
+        let r = converge_reference(&preview, None, 1024, 4096, |spp, seed| {
             asked.push((spp, seed));
             pt(spp, seed)
         })
@@ -410,7 +430,7 @@ mod tests {
         // 64 spp give noise² 2.44e-6; bias² 1e-4 is reached at
         // 64 × (2.44e-6 / 1e-4)^½ = 10 spp, where the 1/spp law says 1.56.
         let preview = biased_preview();
-        let r = converge_reference(&preview, 64, 4096, tracer(0.1, 2.0)).unwrap();
+        let r = converge_reference(&preview, None, 64, 4096, tracer(0.1, 2.0)).unwrap();
         assert_eq!(r.spp, 64);
         let f = figures(rmse(&preview, &r), &r, 4096, TIMING);
         assert!((f.path_tracer_noise_exponent - 2.0).abs() < 0.05, "{f:?}");
@@ -423,7 +443,7 @@ mod tests {
         // 64 spp of σ = 0.1: noise 0.0125 > the bias 0.01. Subtracting it gives
         // a bias estimate, but one the noise can fake, so no number is written.
         let preview = biased_preview();
-        let r = converge_reference(&preview, 64, 64, tracer(0.1, 1.0)).unwrap();
+        let r = converge_reference(&preview, None, 64, 64, tracer(0.1, 1.0)).unwrap();
         let f = figures(rmse(&preview, &r), &r, 64, TIMING);
         assert!(!f.bias_resolved);
         assert_eq!(f.rmse_bias, None);
@@ -450,7 +470,7 @@ mod tests {
         let preview = biased_preview();
         let mut asked = Vec::new();
         let mut pt = tracer(0.1, 1.0);
-        let r = converge_reference(&preview, 64, 4096, |spp, seed| {
+        let r = converge_reference(&preview, None, 64, 4096, |spp, seed| {
             asked.push((spp, seed));
             pt(spp, seed)
         })
@@ -470,7 +490,7 @@ mod tests {
         let exact = vec![Vec3::splat(TRUTH); PIXELS];
         let mut asked = Vec::new();
         let mut pt = tracer(0.1, 1.0);
-        let r = converge_reference(&exact, 64, 1000, |spp, seed| {
+        let r = converge_reference(&exact, None, 64, 1000, |spp, seed| {
             asked.push(spp);
             pt(spp, seed)
         })
@@ -484,8 +504,10 @@ mod tests {
     fn a_black_reference_gives_null_and_a_reason_not_a_placeholder() {
         // A scene with no light: both images black, no noise, no error.
         let black = vec![Vec3::ZERO; 16];
-        let r =
-            converge_reference(&black, 256, 4096, |_, _| Ok((vec![Vec3::ZERO; 16], 1.0))).unwrap();
+        let r = converge_reference(&black, None, 256, 4096, |_, _| {
+            Ok((vec![Vec3::ZERO; 16], 1.0))
+        })
+        .unwrap();
         let f = figures(0.0, &r, 4096, TIMING);
         assert_eq!(f.speedup_per_frame, None);
         assert_eq!(f.path_tracer_spp_equal_error, None);

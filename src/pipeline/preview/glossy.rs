@@ -300,6 +300,7 @@ pub fn run(opts: &GlossyOptions) -> crate::Result<GlossySummary> {
     let spp_max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
     let refs = figures::converge_reference(
         &image,
+        None,
         opts.reference_spp.unwrap_or(256),
         spp_max,
         |spp, seed| reference(&scene, &accel, &camera, opts, spp, seed),

@@ -75,14 +75,22 @@ pub struct ShadowFieldSummary {
     pub precompute_cached: bool,
     /// Shading the image, without precomputation (all threads).
     pub render_s: f64,
-    /// render_s × threads / (points × entities): CPU µs per point and entity,
-    /// first-hit tracing included.
+    /// The frame's process CPU time (render_s × threads where the OS does not
+    /// report it) / (points × entities): CPU µs per point and entity, first-hit
+    /// tracing included.
     pub us_per_point_entity: f64,
     pub threads: usize,
-    /// Mean of the reference over pixels and channels.
+    /// Mean of the reference over the scored pixels and channels.
     pub image_mean: f64,
-    /// Against the converged path-traced direct-lighting reference.
+    /// Pixels the RMSE and the figures are taken over: those that neither see
+    /// an emitter directly nor touch one that does (`Shaded::scored`).
+    pub scored_pixels: usize,
+    pub pixels: usize,
+    /// Against the converged path-traced direct-lighting reference, over the
+    /// scored pixels.
     pub rmse: f64,
+    /// The same over every pixel, directly seen lights included.
+    pub rmse_all_pixels: f64,
     pub rmse_relative: f64,
     /// Against the reference with the environment replaced by its order-4 projection.
     pub rmse_lowfreq: f64,
@@ -112,13 +120,22 @@ impl std::fmt::Display for ShadowFieldSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         write!(
             f,
-            "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean), {}; wrote {}",
+            "shadow-field: {} entities, precompute {:.2} s{}, shading {:.3} s, RMSE {:.3e} ({:.1}% of the mean{}), {}; wrote {}",
             self.entities,
             self.precompute_s,
             if self.precompute_cached { " (cached)" } else { "" },
             self.render_s,
             self.rmse,
             100.0 * self.rmse_relative,
+            if self.scored_pixels < self.pixels {
+                format!(
+                    ", over the {:.0}% of pixels that see no light; {:.3e} over all",
+                    100.0 * self.scored_pixels as f64 / self.pixels.max(1) as f64,
+                    self.rmse_all_pixels
+                )
+            } else {
+                String::new()
+            },
             self.figures.summary(),
             self.exr.display()
         )
@@ -157,7 +174,7 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
         None => {
             let accel = Accel::build(&scene.meshes, &scene.spheres);
             let frame = shade_frame(&scene, &accel, &fields, &[], &env, &opts.settings);
-            let refs = references(&scene, &accel, &env, &frame.shaded.rgb, opts)?;
+            let refs = references(&scene, &accel, &env, &frame.shaded, opts)?;
             let stem = opts.out_dir.join(&name);
             let mut set = PreviewSet::default();
             add_images(&mut set, &stem, &frame.shaded, &refs.reference.beauty);
@@ -175,6 +192,10 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
 pub(crate) struct Frame {
     pub(crate) shaded: sf::Shaded,
     pub(crate) render_s: f64,
+    /// Process CPU seconds of the frame (None where the OS does not say): what
+    /// the µs per point and entity are read from, so other jobs on the machine
+    /// do not inflate them.
+    pub(crate) cpu_s: Option<f64>,
 }
 
 pub(crate) fn shade_frame(
@@ -185,13 +206,14 @@ pub(crate) fn shade_frame(
     env: &[ShF; 3],
     settings: &Settings,
 ) -> Frame {
-    let start = Instant::now();
+    let (start, cpu) = (Instant::now(), crate::cpu_time::process_s());
     let (combiner, mesh_self) = fields.combiner(poses, *env);
     let receivers = Receivers::new(scene, accel, fields, &mesh_self);
     let shaded = sf::shade_image(&receivers, &combiner, settings.pixel_samples);
     Frame {
         shaded,
         render_s: start.elapsed().as_secs_f64(),
+        cpu_s: cpu.zip(crate::cpu_time::process_s()).map(|(a, b)| b - a),
     }
 }
 
@@ -223,25 +245,27 @@ fn references(
     scene: &Scene,
     accel: &Accel,
     env: &[ShF; 3],
-    preview: &[Vec3],
+    preview: &sf::Shaded,
     opts: &ShadowFieldOptions,
 ) -> Result<References> {
+    let scored = preview.scored();
     let mode = ProgressMode::detect(opts.quiet);
     let start = opts.reference_spp.unwrap_or(256);
     let max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
     // Seed index 0 is the reference written (the seed it always had); 1 and 2
     // only measure its noise and the rate.
     let seeds = [0x5eed_0001, 0x5eed_0003, 0x5eed_0004];
-    let reference = figures::converge_reference(preview, start, max, |spp, k| {
-        let phase = Phase::new(mode, &format!("reference at {spp} spp"), 0, "pixels");
-        let out = render(
-            scene,
-            accel,
-            &direct(spp, seeds[k as usize % 3]),
-            &phase.callback(),
-        )?;
-        Ok((out.beauty, out.stats.wall_time.as_secs_f64()))
-    })?;
+    let reference =
+        figures::converge_reference(&preview.rgb, Some(&scored), start, max, |spp, k| {
+            let phase = Phase::new(mode, &format!("reference at {spp} spp"), 0, "pixels");
+            let out = render(
+                scene,
+                accel,
+                &direct(spp, seeds[k as usize % 3]),
+                &phase.callback(),
+            )?;
+            Ok((out.beauty, out.stats.wall_time.as_secs_f64()))
+        })?;
     let lowfreq = match &scene.environment {
         Some(crate::scene::Environment::Constant { .. }) | None => reference.beauty.clone(),
         Some(_) => {
@@ -265,16 +289,21 @@ fn summarise(
     opts: &ShadowFieldOptions,
 ) -> ShadowFieldSummary {
     let img = &frame.shaded.rgb;
+    let scored = frame.shaded.scored();
+    let kept = scored.iter().filter(|k| **k).count();
     let mean = refs
         .reference
         .beauty
         .iter()
-        .map(|c| f64::from(c.x + c.y + c.z))
+        .zip(&scored)
+        .filter(|(_, k)| **k)
+        .map(|(c, _)| f64::from(c.x + c.y + c.z))
         .sum::<f64>()
-        / (3 * refs.reference.beauty.len().max(1)) as f64;
+        / (3 * kept.max(1)) as f64;
     // Same-sized planes of one camera: the metric cannot fail.
-    let rmse = metrics::rmse(img, &refs.reference.beauty).unwrap_or(0.0) as f64;
-    let rmse_low = metrics::rmse(img, &refs.lowfreq).unwrap_or(0.0) as f64;
+    let rmse = figures::scored_rmse(img, &refs.reference.beauty, Some(&scored)).unwrap_or(0.0);
+    let rmse_low = figures::scored_rmse(img, &refs.lowfreq, Some(&scored)).unwrap_or(0.0);
+    let rmse_all = metrics::rmse(img, &refs.reference.beauty).unwrap_or(0.0) as f64;
     let max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
     let threads = rayon::current_num_threads();
     let entities = fields.entities.len();
@@ -287,11 +316,14 @@ fn summarise(
         precompute_s: timing.precompute_s,
         precompute_cached: cached,
         render_s: frame.render_s,
-        us_per_point_entity: frame.render_s * 1e6 * threads as f64
+        us_per_point_entity: frame.cpu_s.unwrap_or(frame.render_s * threads as f64) * 1e6
             / (points * entities).max(1) as f64,
         threads,
         image_mean: mean,
+        scored_pixels: kept,
+        pixels: scored.len(),
         rmse,
+        rmse_all_pixels: rmse_all,
         rmse_relative: rmse / mean.max(1e-30),
         rmse_lowfreq: rmse_low,
         rmse_lowfreq_relative: rmse_low / mean.max(1e-30),
@@ -468,7 +500,7 @@ fn run_frames(
             add_images(&mut set, &stem, &frame.shaded, &reference.beauty);
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &reference.beauty)? as f64);
         } else {
-            let refs = references(&posed, &accel, env, &frame.shaded.rgb, opts)?;
+            let refs = references(&posed, &accel, env, &frame.shaded, opts)?;
             add_images(&mut set, &stem, &frame.shaded, &refs.reference.beauty);
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &refs.reference.beauty)? as f64);
             first = Some((frame, refs, stem));
