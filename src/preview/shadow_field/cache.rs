@@ -98,7 +98,7 @@ pub fn from_bytes(
     let mut out = Vec::with_capacity(entities.len());
     for e in entities {
         let grid = grid_for(e, settings);
-        let has_occ = !matches!(e.kind, EntityKind::Plane { .. });
+        let has_occ = !matches!(e.kind, EntityKind::Quad(_));
         let is_light = e.kind == EntityKind::Light;
         let field = |r: &mut Reader, present: bool| -> Option<Option<Field>> {
             let data = r.block(if present { grid.len() } else { 0 })?;

@@ -213,10 +213,11 @@ impl Fields {
                 }
             };
             let kind = match e.kind {
-                EntityKind::Plane { point, normal } => EntityKind::Plane {
-                    point: point + pose.translation,
-                    normal: pose.rotation * normal,
-                },
+                EntityKind::Quad(r) => EntityKind::Quad(crate::scene::Rect {
+                    corner: e.center + pose.translation + pose.rotation * (r.corner - e.center),
+                    edge_u: pose.rotation * r.edge_u,
+                    edge_v: pose.rotation * r.edge_v,
+                }),
                 k => k,
             };
             placed.push(Placed {

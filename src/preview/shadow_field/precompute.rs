@@ -13,7 +13,7 @@ use super::Settings;
 use crate::accel::{Accel, PrimRef};
 use crate::math::sh::{self, ShF, COEFFS};
 use crate::math::{cross, warp, Frame, Ray, Vec2, Vec3};
-use crate::scene::{Mesh, Scene, Sphere};
+use crate::scene::{Mesh, Rect, Scene, Sphere};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -24,9 +24,12 @@ pub enum EntityKind {
     Occluder,
     /// An emitter: an SRF, plus an OOF for what it hides behind it.
     Light,
-    /// A single non-emitting quad: a half-space occluder (exact for an infinite
-    /// plane; a bounding sphere around a floor would be far too coarse a field).
-    Plane { point: Vec3, normal: Vec3 },
+    /// A single non-emitting quad (a floor, a wall): its occlusion is
+    /// integrated over its exact spherical rectangle at each receiver
+    /// (`combine::quad_visibility`) — a field on spheres around a floor's
+    /// bounding sphere would be far too coarse, and a half-space hides the sky
+    /// above a wall of finite height (issue 57's generated scenes).
+    Quad(Rect),
 }
 
 /// One scene-file shape (all meshes and spheres of one object id).
@@ -81,11 +84,7 @@ pub fn entities(scene: &Scene) -> Vec<Entity> {
             )?;
             let kind = match (emits, meshes.as_slice(), spheres.is_empty()) {
                 (false, [m], true) if scene.meshes[*m].rect.is_some() => {
-                    let r = scene.meshes[*m].rect.unwrap_or_else(|| unreachable!());
-                    EntityKind::Plane {
-                        point: r.corner,
-                        normal: r.normal(),
-                    }
+                    EntityKind::Quad(scene.meshes[*m].rect.unwrap_or_else(|| unreachable!()))
                 }
                 (true, _, _) => EntityKind::Light,
                 _ => EntityKind::Occluder,
@@ -317,7 +316,7 @@ pub fn grid_for(e: &Entity, settings: &Settings) -> Grid {
 /// Units of work of [`compute_fields`] for an entity, for progress.
 pub fn work_units(scene: &Scene, e: &Entity, settings: &Settings) -> usize {
     match e.kind {
-        EntityKind::Plane { .. } => 0,
+        EntityKind::Quad(_) => 0,
         EntityKind::Light => grid_for(e, settings).len(),
         EntityKind::Occluder => {
             grid_for(e, settings).len()
@@ -351,7 +350,7 @@ pub fn compute_fields(
     settings: &Settings,
     tick: &(dyn Fn() + Sync),
 ) -> EntityFields {
-    if let EntityKind::Plane { .. } = e.kind {
+    if let EntityKind::Quad(_) = e.kind {
         return EntityFields {
             occlusion: None,
             radiance: None,
