@@ -175,3 +175,50 @@ fn the_same_bits_on_one_and_two_threads() {
     assert_eq!(bits(&ia), bits(&ib));
     assert!(all_finite(&a, &ia));
 }
+
+/// `render --dense-adaptive` needs `--reconstruct` (one `error:` line, nothing
+/// written); with it, the EXR and the summary's solve time.
+#[test]
+fn the_render_option_needs_a_reconstruction() {
+    let dir = common::temp_dir("gd_adaptive_cli");
+    let scene = std::fs::canonicalize(SCENE).unwrap();
+    let scene = scene.to_str().unwrap();
+    let bad = common::run_in(
+        &dir,
+        &["render", scene, "--dense-adaptive", "--out", "a.exr"],
+    );
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.lines().count() == 1, "{err}");
+    assert!(
+        err.starts_with("error:") && err.contains("--reconstruct"),
+        "{err}"
+    );
+    assert!(!dir.join("a.exr").exists());
+    let ok = common::run_in(
+        &dir,
+        &[
+            "render",
+            scene,
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--spp",
+            "8",
+            "--reconstruct",
+            "poisson-l2",
+            "--dense-adaptive",
+            "--out",
+            "b.exr",
+        ],
+    );
+    let out = String::from_utf8_lossy(&ok.stdout);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(out.contains("poisson-l2 reconstruction"), "{out}");
+    assert!(dir.join("b.exr").exists() && dir.join("b.png").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
