@@ -49,7 +49,7 @@ fn all_finite(out: &RenderOutput, image: &[Vec3]) -> bool {
         && out
             .spp_map
             .as_ref()
-            .map_or(true, |m| m.iter().all(|c| c.is_finite()))
+            .is_none_or(|m| m.iter().all(|c| c.is_finite()))
 }
 
 #[test]
