@@ -336,6 +336,12 @@ pub(crate) struct RenderArgs {
     /// analytic gradients: R,G,B (and the PNG) hold it, `noisy.R/G/B` the render.
     #[arg(long, value_parser = reconstruct_norm(), value_name = "KIND", conflicts_with_all = ["strategy", "denoise"])]
     pub(crate) reconstruct: Option<gradtrace::reconstruct::poisson::Norm>,
+    /// With --reconstruct: a quarter of --spp in every pixel, then the rest (the
+    /// same total) where one sample's noise, the analytic gradient and the contrast
+    /// the gradient leaves unexplained are largest (at most 16 × --spp a pixel);
+    /// writes `samples.spp`.
+    #[arg(long, requires = "reconstruct")]
+    pub(crate) dense_adaptive: bool,
     /// With --gradients: shadow rays per azimuth line for the first hit's
     /// visibility (soft-shadow) gradient; the radiance is the plain render's, bit for
     /// bit [default: 4; at most 1024]. 0: no visibility term.
@@ -658,6 +664,7 @@ impl RenderArgs {
             adaptive,
             denoise: self.denoise,
             reconstruct: self.reconstruct,
+            dense_adaptive: self.dense_adaptive,
             threads: c.threads,
             max_memory: c
                 .max_memory

@@ -149,13 +149,18 @@ fn compare_writes_the_report_and_caches_the_reference() {
     opts.vis_samples = Some(4);
     let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
     // full + 2×2 adaptive + 2×(uniform-all-pixels, cycles-adaptive, gradient-domain,
-    // and oidn-uniform, cycles-adaptive+oidn and gradient+oidn where the build has
+    // gradient-domain-adaptive, and oidn-uniform, cycles-adaptive+oidn and gradient+oidn where the build has
     // OIDN) + 2 interpolation runs + the shadow-field preview (diffuse spheres
     // under a sky).
-    let baselines = 3 + 3 * usize::from(gradtrace::denoise::available());
+    let baselines = 4 + 3 * usize::from(gradtrace::denoise::available());
     assert_eq!(rows.len(), 1 + 4 + 2 * baselines + 2 + 1);
     assert_eq!(rows.last().unwrap().name, "shadow-field");
-    for name in ["uniform-all-pixels", "cycles-adaptive", "gradient-domain"] {
+    for name in [
+        "uniform-all-pixels",
+        "cycles-adaptive",
+        "gradient-domain",
+        "gradient-domain-adaptive",
+    ] {
         assert_eq!(rows.iter().filter(|r| r.name == name).count(), 2, "{name}");
     }
     assert!(rows

@@ -196,7 +196,7 @@ pub fn run(
     opts.validate()?;
     let (scene, accel) = super::load(scene_path)?;
     let oidn = crate::denoise::available();
-    let baselines = 3 + 2 * usize::from(oidn);
+    let baselines = 4 + 2 * usize::from(oidn);
     let gradient_oidn = usize::from(oidn && opts.strategies.contains(&Strategy::Gradient));
     let per_budget = opts.strategies.len() + gradient_oidn + baselines;
     let per_seed = 1 + per_budget * opts.budgets.len();
@@ -470,7 +470,12 @@ fn seed_runs(
             ..r
         }));
         extra_s += discarded_s;
-        let (run, discarded_s) = gradient_domain_run(plan, &base, &equal, k, progress)?;
+        let (run, discarded_s) = gradient_domain_run(plan, &base, &equal, k, None, progress)?;
+        let spp_gd = run.kind.spp();
+        runs.push(run);
+        extra_s += discarded_s;
+        let (run, discarded_s) =
+            gradient_domain_run(plan, &base, &equal, k, Some(spp_gd), progress)?;
         runs.push(run);
         extra_s += discarded_s;
     }
@@ -680,14 +685,19 @@ fn cycles_oidn_run(
 /// (wall or CPU seconds, as `--equal` says). A 1-spp probe (render and solve) sizes the spp; an attempt that misses the
 /// target by more than 10 % is redone once at the spp its own time implies. Returns
 /// the run and the discarded seconds (probe and missed attempt).
+///
+/// With `dense: Some(spp)`, the [`GD_ADAPTIVE`] row: the same solve on a render
+/// whose samples `gdomain::render_dense_adaptive` placed, starting from the
+/// `gradient-domain` row's fitted `spp` instead of a probe.
 fn gradient_domain_run(
     plan: &Plan,
     base: &RenderOptions,
     equal: &EqualTime,
     k: u32,
+    dense: Option<u32>,
     progress: &dyn Fn(&str),
 ) -> Result<(Run, f64)> {
-    use super::gdomain::{reconstruct, GradientDomain};
+    use super::gdomain::{reconstruct, render_dense_adaptive, DenseAdaptive, GradientDomain};
     let gd = GradientDomain::new(crate::reconstruct::poisson::Norm::L1);
     let opts = RenderOptions {
         gradients: true,
@@ -696,28 +706,45 @@ fn gradient_domain_run(
     };
     let mode = plan.opts.equal;
     let attempt = |spp: u32| -> Result<(RenderOutput, Vec<Vec3>, Cost, Cost)> {
-        let (out, render) = timed_render(
-            plan,
-            &RenderOptions {
-                spp: Some(spp),
-                ..opts.clone()
-            },
-        )?;
+        let opts = RenderOptions {
+            spp: Some(spp),
+            ..opts.clone()
+        };
+        let (out, render) = match dense {
+            None => timed_render(plan, &opts)?,
+            Some(_) => {
+                let clock = Clock::start();
+                let dense = DenseAdaptive::new(spp);
+                let out = render_dense_adaptive(plan.scene, plan.accel, &opts, &dense)?;
+                (out, clock.cost())
+            }
+        };
         let clock = Clock::start();
         let image = reconstruct(&out, &gd)?;
         Ok((out, image, render, clock.cost()))
     };
-    let (_, _, probe_render, probe_solve) = attempt(1)?;
-    let guess = spp_for(equal.target, probe_render.of(mode), probe_solve.of(mode));
+    let (guess, probe_s) = match dense {
+        Some(spp) => (spp, 0.0),
+        None => {
+            let (_, _, probe_render, probe_solve) = attempt(1)?;
+            let guess = spp_for(equal.target, probe_render.of(mode), probe_solve.of(mode));
+            (guess, probe_render.wall_s + probe_solve.wall_s)
+        }
+    };
     let fitted = at_target(mode, guess, equal.target, |spp| {
         let (out, image, render, solve) = attempt(spp)?;
         Ok(((out, image), render, solve))
     })?;
     let ((out, image), render, solve, spp) =
         (fitted.value, fitted.scaled, fitted.fixed, fitted.spp);
-    let discarded = probe_render.wall_s + probe_solve.wall_s + fitted.discarded_s;
+    let discarded = probe_s + fitted.discarded_s;
+    let name = if dense.is_some() {
+        GD_ADAPTIVE
+    } else {
+        "gradient-domain"
+    };
     progress(&format!(
-        "seed {k}: gradient-domain ({}) at the time of {:.0}%: {spp} spp, render {:.2} s + solve {:.2} s",
+        "seed {k}: {name} ({}) at the time of {:.0}%: {spp} spp, render {:.2} s + solve {:.2} s",
         gd.norm.name(),
         equal.budget * 100.0,
         render.of(mode),
@@ -727,12 +754,15 @@ fn gradient_domain_run(
         budget: equal.budget,
         spp,
     };
-    let mut run = full_run("gradient-domain", kind, k, out, render + solve);
+    let mut run = full_run(name, kind, k, out, render + solve);
     run.overhead_s = solve.wall_s;
     run.image = image;
     run.target_s = Some(equal.target);
     Ok((run, discarded))
 }
+
+/// The gradient-domain strategy with dense adaptive sampling (issue 56, item 2).
+const GD_ADAPTIVE: &str = "gradient-domain-adaptive";
 
 /// Two strategies that placed exactly the same samples at one budget and seed
 /// (forced boundary cells can take the whole budget) are one result twice. (The

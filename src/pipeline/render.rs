@@ -47,6 +47,10 @@ pub struct RenderJob {
     /// Full renders: with gradients, reconstruct in the gradient domain
     /// (`gdomain::reconstruct`) with this norm.
     pub reconstruct: Option<Norm>,
+    /// With `reconstruct`: place the samples by `gdomain::metric` (a uniform
+    /// quarter of `--spp`, the rest where noise, gradient and unexplained contrast
+    /// are) instead of `--spp` in every pixel.
+    pub dense_adaptive: bool,
     pub progress: ProgressMode,
     /// Time limit and cancel flag (Ctrl-C) of a render in passes.
     pub passes: Passes,
@@ -207,7 +211,7 @@ pub fn run(job: &RenderJob) -> Result<RenderSummary> {
         None => memory::full_render_bytes(
             pixels,
             &job.options,
-            job.passes.time_limit.is_some() || job.noise_adaptive.is_some(),
+            job.passes.time_limit.is_some() || job.noise_adaptive.is_some() || job.dense_adaptive,
         ),
         Some((s, _)) => memory::adaptive_render_bytes(pixels, s.budget, &job.options),
     };
@@ -266,7 +270,13 @@ fn run_full(
         Some(_) => Phase::new(job.progress, "render", 0, "ms"),
         None => Phase::new(job.progress, "render", w as u64 * h as u64, "pixels"),
     };
-    let out = render::render_passes(scene, accel, &opts, &job.passes, &phase.callback())?;
+    let out = if job.dense_adaptive {
+        let spp = opts.spp.unwrap_or(scene.settings.spp);
+        let dense = super::gdomain::DenseAdaptive::new(spp);
+        super::gdomain::render_dense_adaptive(scene, accel, &opts, &dense)?
+    } else {
+        render::render_passes(scene, accel, &opts, &job.passes, &phase.callback())?
+    };
     drop(phase);
     let header = provenance(scene, &opts, &job.command, &out)?;
     let (mut image, mut denoised, denoise_s) = full_image(&out, job.denoise)?;
@@ -613,6 +623,12 @@ fn check_combinations(job: &RenderJob) -> Result<()> {
             "adaptive renders (--strategy) compute the gradient at their samples and \
              reconstruct with it; the per-pixel grad.* layers come from full renders: \
              drop --gradients or --strategy",
+        );
+    }
+    if job.dense_adaptive && job.reconstruct.is_none() {
+        return bad(
+            "--dense-adaptive",
+            "places the samples for a gradient-domain solve: add --reconstruct poisson-l1 or poisson-l2",
         );
     }
     if job.reconstruct.is_some() {

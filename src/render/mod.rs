@@ -11,6 +11,7 @@ pub mod lights;
 pub mod noise_adaptive;
 pub mod path;
 pub mod point;
+pub mod two_pass;
 
 use crate::accel::Accel;
 use crate::math::sampler::PixelSampler;
