@@ -3,7 +3,8 @@
 //! scene → [`precompute`](fn@precompute) (one OOF per occluder, SRF + OOF per light, self-occlusion
 //! at mesh vertices; rays traced with our BVH, in parallel) → [`Fields`] →
 //! [`Fields::combiner`] for a frame's poses → [`shade_image`] (first hit per pixel
-//! sample) or [`shade_vertices`]. Rigid fields are rotated in SH; deforming entities
+//! sample) or [`shade_vertices`]. Glossy receivers (BlinnPhong, CookTorrance) add
+//! their lobe, seen from the camera ([`glossy`]). Rigid fields are rotated in SH; deforming entities
 //! (a procedural `deform` or an `obj_sequence`: both are just a frame's posed
 //! geometry here) are rebuilt each frame from their base-sphere visibility ([`deform`]).
 
@@ -14,6 +15,7 @@ pub mod cache;
 pub mod combine;
 pub mod deform;
 pub mod field;
+pub mod glossy;
 pub mod precompute;
 
 use crate::accel::{Accel, PrimRef};
@@ -94,17 +96,19 @@ pub fn precompute(
 }
 
 /// Whether the method models `scene` (what `compare` asks before adding the
-/// preview as a row): diffuse surfaces only (the fields carry no glossy lobe),
-/// emitters that are spheres or rectangles (the light entities it integrates),
-/// and some light or an environment. Returns why not.
+/// preview as a row): diffuse or glossy surfaces (no mirror: a delta lobe is
+/// neither in an order-4 transfer nor at a light's few directions), emitters
+/// that are spheres or rectangles (the light entities it integrates), and some
+/// light or an environment. Returns why not.
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
-    let diffuse =
-        |m: u32, name: &str| match scene.materials.get(m as usize).map(|m| m.preview_parts()) {
-            Some(Ok(parts)) if parts.glossy.is_none() => Ok(()),
+    let diffuse = |m: u32, name: &str| {
+        match scene.materials.get(m as usize).map(|m| m.preview_parts()) {
+            Some(Ok(_)) => Ok(()),
             _ => Err(format!(
-                "shape `{name}` is not diffuse (shadow fields shade Lambertian surfaces only)"
+                "shape `{name}` is a mirror (shadow fields shade diffuse and glossy lobes, not a delta lobe)"
             )),
-        };
+        }
+    };
     for m in &scene.meshes {
         if m.emission != Vec3::ZERO {
             if m.rect.is_none() {
@@ -272,6 +276,8 @@ pub struct Receivers<'a> {
     pub entity_of_object: Vec<Option<usize>>,
     /// Per scene mesh: visibility SH at each vertex (self-shadowing), if any.
     pub mesh_self: &'a [Option<Vec<ShF>>],
+    /// Per scene material: its glossy lobe's transfer table, if it has one.
+    pub glossy: Vec<Option<glossy::GlossyLobe>>,
 }
 
 impl<'a> Receivers<'a> {
@@ -296,11 +302,17 @@ impl<'a> Receivers<'a> {
             accel,
             entity_of_object,
             mesh_self,
+            glossy: scene
+                .materials
+                .iter()
+                .map(glossy::GlossyLobe::new)
+                .collect(),
         }
     }
 
     /// Radiance along one camera ray: emission seen directly, or the shadow-field
-    /// estimate of the direct light reflected at the first hit, or the environment.
+    /// estimate of the direct light reflected at the first hit (its glossy lobe
+    /// towards the camera included), or the environment.
     /// The bool says whether a receiver was shaded; the usize how many entities.
     pub fn radiance(&self, combiner: &Combiner, ray: &crate::math::Ray) -> (Vec3, bool, usize) {
         let Some(hit) = self.accel.intersect(ray) else {
@@ -369,7 +381,13 @@ impl<'a> Receivers<'a> {
             (shading_n, self_vis)
         };
         let albedo = self.scene.materials[material as usize].diffuse_albedo();
-        if albedo == Vec3::ZERO || n == Vec3::ZERO {
+        let glossy = self
+            .glossy
+            .get(material as usize)
+            .and_then(|g| g.as_ref())
+            .filter(|_| n != Vec3::ZERO)
+            .and_then(|g| g.receiver(n, -ray.dir));
+        if (albedo == Vec3::ZERO && glossy.is_none()) || n == Vec3::ZERO {
             return (emission, false, 0);
         }
         let own = self
@@ -377,9 +395,12 @@ impl<'a> Receivers<'a> {
             .get(object_id as usize)
             .copied()
             .flatten();
-        let (e, count) = combiner.shade(sp.p, n, own, self_vis.as_ref());
-        let value = emission + albedo * e.max(Vec3::ZERO);
-        (crate::math::finite_or_zero(value), true, count)
+        let s = combiner.shade_parts(sp.p, n, own, self_vis.as_ref(), glossy.as_ref());
+        let mut value = emission + albedo * s.diffuse.max(Vec3::ZERO);
+        if glossy.is_some() {
+            value += s.glossy.max(Vec3::ZERO);
+        }
+        (crate::math::finite_or_zero(value), true, s.count)
     }
 }
 
@@ -429,7 +450,8 @@ pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: us
 }
 
 /// Shades every vertex of a mesh (the paper's per-vertex mode): reflected radiance
-/// towards the vertex normal's side, self-visibility included.
+/// towards the vertex normal's side, self-visibility included. Diffuse part only
+/// (kd): a vertex colour has no view direction, which a glossy lobe needs.
 pub fn shade_vertices(receivers: &Receivers, combiner: &Combiner, mesh: usize) -> Vec<Vec3> {
     let scene = receivers.scene;
     let m = &scene.meshes[mesh];
