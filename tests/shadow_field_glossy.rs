@@ -159,6 +159,11 @@ fn in_shadow(p: Vec3, _wo: Vec3) -> bool {
     (p + d * t - o).length() < r
 }
 
+/// Blinn-Phong and Cook-Torrance floors at e = 100 under a sphere light of 0.2
+/// (about 7° seen from the highlight) with a constant sky; measured: highlight
+/// mean within 0.2 %, shadow mean within 0.4 %, RMSE 3.9 % and 5.5 % of the mean
+/// (diffuse-only shading: the highlight at 10 % and 3 % of the reference, the
+/// shadow 29 % and 66 % too dark, RMSE 126 % and 197 %).
 #[test]
 fn glossy_floor_under_a_sphere_light_has_its_highlight_and_its_shadow() {
     let mut failures = Vec::new();
@@ -184,14 +189,15 @@ fn glossy_floor_under_a_sphere_light_has_its_highlight_and_its_shadow() {
         );
         assert!(hn >= 10 && sn >= 20, "{name}: highlight and shadow in view");
         // The highlight is the light's cap integrated against the renderer's own
-        // BRDF: its mean within 10% (diffuse-only shading had a fraction of it).
-        if (hp / hr - 1.0).abs() > 0.10 {
+        // BRDF: its mean within 5 %, the shadow's (the sky's glossy reflection
+        // under the occluder's order-4 visibility) within 10 %.
+        if (hp / hr - 1.0).abs() > 0.05 {
             failures.push(format!("{name}: highlight {hp:.4} vs {hr:.4}"));
         }
-        if (sp / sr - 1.0).abs() > 0.15 {
+        if (sp / sr - 1.0).abs() > 0.10 {
             failures.push(format!("{name}: shadow {sp:.4} vs {sr:.4}"));
         }
-        if s.rmse_relative > 0.10 {
+        if s.rmse_relative > 0.08 {
             failures.push(format!(
                 "{name}: RMSE {:.1}% of the mean",
                 100.0 * s.rmse_relative
@@ -201,6 +207,8 @@ fn glossy_floor_under_a_sphere_light_has_its_highlight_and_its_shadow() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The floor reaches past the top of the view: a far edge would put pixels half
+/// floor, half sky in the image, which the preview's 2 × 2 point samples alias.
 fn sky_scene(environment: &str) -> String {
     let [ox, oy, oz] = OCCLUDER;
     format!(
@@ -226,9 +234,9 @@ exponent = 4
 [[shapes]]
 name = "floor"
 type = "quad"
-corner = [-8, 0, 8]
-edge_u = [16, 0, 0]
-edge_v = [0, 0, -16]
+corner = [-20, 0, 20]
+edge_u = [40, 0, 0]
+edge_v = [0, 0, -40]
 material = "floor"
 
 [[shapes]]
@@ -244,6 +252,11 @@ material = "ball"
     )
 }
 
+/// A Blinn-Phong floor at e = 8 and a Cook-Torrance ball at e = 4, where order 4
+/// holds the lobes (`preview::shadow_field::glossy`): the whole image within 3 %
+/// (constant sky) and 4 % (Gaussian sky) RMSE of its mean, against the full and
+/// the order-4 sky (measured 1.2 % and 2.1 %, what is left mostly the ball's
+/// silhouette; diffuse-only shading was 47 % and 60 % off).
 #[test]
 fn low_exponent_glossy_surfaces_under_an_environment_match_the_path_tracer() {
     let mut failures = Vec::new();
@@ -251,14 +264,14 @@ fn low_exponent_glossy_surfaces_under_an_environment_match_the_path_tracer() {
         (
             "constant",
             "type = \"constant\"\nradiance = [1, 1, 1]",
-            0.06,
-            0.06,
+            0.03,
+            0.03,
         ),
         (
             "sky",
             "type = \"gaussian_sky\"\ndirection = [0.4, 1.0, -0.6]\nsharpness = 3\npeak = [2, 2, 2]\nambient = [0.2, 0.2, 0.2]",
-            0.10,
-            0.06,
+            0.04,
+            0.04,
         ),
     ] {
         let text = sky_scene(env);
