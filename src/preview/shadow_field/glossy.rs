@@ -93,7 +93,7 @@ impl GlossyLobe {
     /// the horizon (no glossy reflection there).
     pub fn receiver(&self, n: Vec3, wo: Vec3) -> Option<GlossyReceiver<'_>> {
         let cos_o = n.dot(wo);
-        if !(cos_o > 0.0) || !wo.is_finite() {
+        if cos_o.is_nan() || cos_o <= 0.0 || !wo.is_finite() {
             return None;
         }
         let frame = Frame::from_normal(n);
