@@ -187,6 +187,52 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_views_and_extreme_lobes_give_finite_transfers() {
+        // The view on the normal (no tangent), grazing, behind, NaN; exponents
+        // from 0 to the clamp; Cook-Torrance's grazing gain.
+        let n = Vec3::new(0.0, 1.0, 0.0);
+        let views = [
+            n,
+            Vec3::new(1.0, 1e-7, 0.0).normalize(),
+            Vec3::new(0.6, 1e-3, 0.8).normalize(),
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::new(f32::NAN, 1.0, 0.0),
+        ];
+        for e in [0.0, 8.0, 1e4, 1e7, f32::INFINITY] {
+            for m in [
+                Material::BlinnPhong {
+                    kd: Vec3::ZERO,
+                    ks: Vec3::ONE,
+                    exponent: e,
+                },
+                Material::CookTorrance {
+                    kd: Vec3::ZERO,
+                    ks: Vec3::ONE,
+                    exponent: e,
+                },
+            ] {
+                let g = GlossyLobe::new(&m).unwrap();
+                for (k, wo) in views.iter().enumerate() {
+                    let r = g.receiver(n, *wo);
+                    assert_eq!(r.is_some(), k < 3, "{m:?} {wo}");
+                    if let Some(r) = r {
+                        assert!(r.transfer.iter().all(|c| c.is_finite()), "{m:?} {wo}");
+                    }
+                }
+            }
+        }
+        // No glossy lobe, nothing to tabulate.
+        let lambert = Material::Lambert { albedo: Vec3::ONE };
+        assert!(GlossyLobe::new(&lambert).is_none());
+        let black = Material::BlinnPhong {
+            kd: Vec3::ONE,
+            ks: Vec3::ZERO,
+            exponent: 8.0,
+        };
+        assert!(GlossyLobe::new(&black).is_none());
+    }
+
+    #[test]
     fn a_sharp_lobe_reflects_ks_at_normal_incidence_and_matches_brute_force() {
         // The exact normalisation makes the specular albedo 1 (unit ks) at
         // normal incidence: the DC coefficient is Y₀₀ = 0.28209…, even at e = 1000.
