@@ -121,6 +121,8 @@ fn cpu_mode_records_both_costs_and_unsuited_scenes_get_no_preview_row() {
             "{notes}"
         );
     }
+    // The shadow field's reason: the mirror, not the (accepted) diffuse floor.
+    assert!(notes.contains("is a mirror"), "{notes}");
     #[cfg(not(feature = "oidn"))]
     assert!(
         notes.contains("cycles-adaptive+oidn") && notes.contains("not in this report"),

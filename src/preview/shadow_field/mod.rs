@@ -101,13 +101,12 @@ pub fn precompute(
 /// that are spheres or rectangles (the light entities it integrates), and some
 /// light or an environment. Returns why not.
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
-    let diffuse = |m: u32, name: &str| {
-        match scene.materials.get(m as usize).map(|m| m.preview_parts()) {
-            Some(Ok(_)) => Ok(()),
-            _ => Err(format!(
-                "shape `{name}` is a mirror (shadow fields shade diffuse and glossy lobes, not a delta lobe)"
-            )),
-        }
+    let shaded = |m: u32, name: &str| match scene.materials.get(m as usize) {
+        Some(m) if m.preview_parts().is_ok() => Ok(()),
+        Some(_) => Err(format!(
+            "shape `{name}` is a mirror (a delta lobe: shadow fields shade smooth lobes only)"
+        )),
+        None => Err(format!("shape `{name}` has no material")),
     };
     for m in &scene.meshes {
         if m.emission != Vec3::ZERO {
@@ -118,11 +117,11 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
                 ));
             }
         } else {
-            diffuse(m.material, &m.name)?;
+            shaded(m.material, &m.name)?;
         }
     }
     for s in scene.spheres.iter().filter(|s| s.emission == Vec3::ZERO) {
-        diffuse(s.material, &s.name)?;
+        shaded(s.material, &s.name)?;
     }
     if scene.emitter_count() == 0 && scene.environment.is_none() {
         return Err("nothing lights the scene (no light, no environment)".into());
