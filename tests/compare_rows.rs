@@ -35,6 +35,43 @@ fn compare_cli(dir: &Path, scene: &str, extra: &[&str]) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
 
+/// A mirror ball on a diffuse floor under a rectangle light, no environment.
+const MIRROR_BALL: &str = r#"
+[camera]
+from = [0, 1.5, 4]
+to = [0, 0.4, 0]
+fov = 40
+resolution = [64, 48]
+
+[materials.floor]
+type = "lambert"
+albedo = [0.6, 0.6, 0.6]
+
+[materials.ball]
+type = "mirror"
+reflectance = [0.9, 0.9, 0.9]
+
+[[shapes]]
+type = "quad"
+corner = [-3, 0, 3]
+edge_u = [6, 0, 0]
+edge_v = [0, 0, -6]
+material = "floor"
+
+[[shapes]]
+type = "sphere"
+center = [0, 0.5, 0]
+radius = 0.5
+material = "ball"
+
+[[lights]]
+type = "rect"
+corner = [-0.5, 2.5, -0.5]
+edge_u = [1, 0, 0]
+edge_v = [0, 0, 1]
+radiance = [20, 20, 20]
+"#;
+
 fn runs(json: &serde_json::Value) -> &Vec<serde_json::Value> {
     json["runs"].as_array().unwrap()
 }
@@ -47,14 +84,17 @@ fn num(run: &serde_json::Value, key: &str) -> f64 {
 
 /// One thread, `--equal cpu`: the mode is recorded, every run has wall and CPU
 /// seconds, CPU time is positive and (one thread) at most the wall time and not
-/// far below it; spheres_table (glossy materials, no environment) suits neither
-/// preview: no preview row, a note each, no error.
+/// far below it; a mirror sphere under a rectangle light (a delta lobe, no
+/// environment) suits neither preview: no preview row, a note each, no error.
 #[test]
 fn cpu_mode_records_both_costs_and_unsuited_scenes_get_no_preview_row() {
     let dir = temp_dir("cpu-one-thread");
+    let scene_dir = temp_dir("mirror-ball-scene");
+    let scene = scene_dir.join("mirror_ball.toml");
+    std::fs::write(&scene, MIRROR_BALL).unwrap();
     let json = compare_cli(
         &dir,
-        "scenes/spheres_table.toml",
+        scene.to_str().unwrap(),
         &["--equal", "cpu", "--threads", "1"],
     );
     assert_eq!(json["equal_cost"], "cpu");
@@ -81,6 +121,8 @@ fn cpu_mode_records_both_costs_and_unsuited_scenes_get_no_preview_row() {
             "{notes}"
         );
     }
+    // The shadow field's reason: the mirror, not the (accepted) diffuse floor.
+    assert!(notes.contains("is a mirror"), "{notes}");
     #[cfg(not(feature = "oidn"))]
     assert!(
         notes.contains("cycles-adaptive+oidn") && notes.contains("not in this report"),
@@ -95,6 +137,7 @@ fn cpu_mode_records_both_costs_and_unsuited_scenes_get_no_preview_row() {
         assert!(num(run, "rmse").is_finite() && num(run, "cpu_s") > 0.0);
     }
     std::fs::remove_dir_all(&dir).ok();
+    std::fs::remove_dir_all(&scene_dir).ok();
 }
 
 /// `--equal cpu` on two threads: the uniform baseline is matched on the gradient
@@ -206,9 +249,9 @@ fn a_diffuse_scene_gets_a_shadow_field_row() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A glossy mesh under an environment alone gets a `glossy` row (and, glossy, no
-/// shadow-field row): finite RMSE against compare's reference, its precompute
-/// apart. The transfer of tests/glossy.rs's small end-to-end run (≤ 3000
+/// A glossy mesh under an environment alone gets a `glossy` row, and a
+/// shadow-field row too (it shades glossy receivers): finite RMSE against
+/// compare's reference, its precompute apart. The transfer of tests/glossy.rs's small end-to-end run (≤ 3000
 /// vertices, angular level 3).
 #[test]
 fn a_glossy_scene_gets_a_glossy_row() {
@@ -231,6 +274,15 @@ fn a_glossy_scene_gets_a_glossy_row() {
         max_vertices: 3000,
         ..Default::default()
     };
+    opts.shadow_field = gradtrace::preview::shadow_field::Settings {
+        n_theta: 6,
+        n_phi: 8,
+        n_radii: 4,
+        rays: 4,
+        self_rays: 4,
+        pixel_samples: 1,
+        ..Default::default()
+    };
     let rows = compare(&scene, &accel, &opts, &|_| {}).unwrap();
     let row = rows
         .iter()
@@ -239,6 +291,10 @@ fn a_glossy_scene_gets_a_glossy_row() {
     assert_eq!(row.kind, "preview");
     assert!(row.rmse.is_finite() && row.rmse > 0.0, "{row:?}");
     assert!(row.precompute_s.unwrap() > 0.0 && row.wall_s > 0.0 && row.cpu_s > 0.0);
-    assert!(rows.iter().all(|r| r.name != "shadow-field"));
+    let sf = rows
+        .iter()
+        .find(|r| r.name == "shadow-field")
+        .expect("a shadow-field row on a glossy scene");
+    assert!(sf.rmse.is_finite() && sf.rmse > 0.0, "{sf:?}");
     std::fs::remove_dir_all(&dir).ok();
 }

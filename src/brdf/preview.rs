@@ -54,6 +54,31 @@ impl Material {
         };
         Ok(PreviewParts { kd, glossy })
     }
+
+    /// The glossy lobe's colour ks (sanitised, as `eval` reads it) and the lobe
+    /// with kd = 0 and ks = 1: a preview that tabulates the lobe once in one
+    /// channel scales it by ks. `None` without a smooth glossy lobe.
+    pub fn glossy_lobe_unit(&self) -> Option<(Vec3, Material)> {
+        match self {
+            Material::BlinnPhong { ks, exponent, .. } => Some((
+                super::sanitize(*ks),
+                Material::BlinnPhong {
+                    kd: Vec3::ZERO,
+                    ks: Vec3::ONE,
+                    exponent: *exponent,
+                },
+            )),
+            Material::CookTorrance { ks, exponent, .. } => Some((
+                super::sanitize(*ks),
+                Material::CookTorrance {
+                    kd: Vec3::ZERO,
+                    ks: Vec3::ONE,
+                    exponent: *exponent,
+                },
+            )),
+            Material::Lambert { .. } | Material::Mirror { .. } => None,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -85,5 +110,11 @@ mod tests {
         let mirror = Material::Mirror { reflectance: ks };
         assert_eq!(mirror.diffuse_albedo(), Vec3::ZERO);
         assert!(mirror.preview_parts().unwrap_err().contains("delta lobe"));
+        let (c, unit) = m.glossy_lobe_unit().unwrap();
+        assert_eq!(c, ks);
+        let (wo, wi) = (Vec3::new(0.3, 0.1, 0.9), Vec3::new(-0.2, 0.0, 0.95));
+        let (f, g) = (parts.glossy.unwrap().eval(wo, wi), unit.eval(wo, wi));
+        assert!((f - ks * g).abs().max_element() <= 1e-6 * f.max_element());
+        assert!(lambert.glossy_lobe_unit().is_none() && mirror.glossy_lobe_unit().is_none());
     }
 }

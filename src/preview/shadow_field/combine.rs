@@ -13,6 +13,7 @@
 
 use super::field::{cone_cos, ConeMap, Field};
 use super::precompute::EntityKind;
+use crate::brdf::Material;
 use crate::math::sh::{self, ShF, COEFFS};
 use crate::math::{cross, warp, Frame, Vec2, Vec3};
 use crate::scene::Rect;
@@ -35,6 +36,31 @@ pub struct Placed {
     pub sphere_light: Option<Vec3>,
     /// The occlusion unblurred, which a sphere light's directions look up.
     pub visibility: Option<ConeMap>,
+}
+
+/// A glossy receiver's lobe seen from its viewer ([`super::glossy::GlossyLobe::receiver`]).
+#[derive(Clone, Debug)]
+pub struct GlossyReceiver<'a> {
+    /// The lobe alone (kd = 0), evaluated at a sphere light's directions.
+    pub lobe: &'a Material,
+    /// ks, which scales `transfer`.
+    pub ks: Vec3,
+    /// The shading frame the renderer evaluates the lobe in.
+    pub frame: Frame,
+    pub wo_local: Vec3,
+    /// Order-4 SH of f_s(·, ω_o)·max(n·ω_i, 0) for ks = 1, world-aligned.
+    pub transfer: ShF,
+}
+
+/// What [`Combiner::shade_parts`] returns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shade {
+    /// Per unit diffuse albedo, as [`Combiner::shade`].
+    pub diffuse: Vec3,
+    /// The glossy lobe's reflected radiance (ks included); zero without one.
+    pub glossy: Vec3,
+    /// Entities combined.
+    pub count: usize,
 }
 
 /// Directions per sphere light and receiver, uniform over its cap on a golden-angle
@@ -117,17 +143,39 @@ impl Combiner {
         own: Option<usize>,
         self_visibility: Option<&ShF>,
     ) -> (Vec3, usize) {
+        let s = self.shade_parts(p, n, own, self_visibility, None);
+        (s.diffuse, s.count)
+    }
+
+    /// [`shade`](Self::shade), and with `glossy` the glossy lobe's reflected
+    /// radiance too: its SH transfer carried through the same triple products as
+    /// the diffuse one (SRFs, planes, the environment), and each sphere light's
+    /// cap directions weighted by the lobe itself (times the receiver's own SH
+    /// shadowing share of that light, which is the diffuse transfer's). The
+    /// diffuse result is the same, bit for bit, with or without `glossy`.
+    pub fn shade_parts(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        own: Option<usize>,
+        self_visibility: Option<&ShF>,
+        glossy: Option<&GlossyReceiver>,
+    ) -> Shade {
         let bare = diffuse_transfer(n);
         let mut t = bare;
+        let mut tg = glossy.map(|g| g.transfer);
         let mut shadows_itself = false;
         if let Some(v) = self_visibility {
             t = sh::product(&t, v);
+            tg = tg.map(|g| sh::product(&g, v));
             shadows_itself = true;
         }
         if let Some(e) = own.map(|i| &self.entities[i]).filter(|e| e.self_from_field) {
             if let Some(occ) = &e.occlusion {
                 let q = e.to_rest * (p - e.center);
-                t = sh::product(&t, &visibility_from_occlusion(&occ.lookup(q)));
+                let v = visibility_from_occlusion(&occ.lookup(q));
+                t = sh::product(&t, &v);
+                tg = tg.map(|g| sh::product(&g, &v));
                 shadows_itself = true;
             }
         }
@@ -178,12 +226,16 @@ impl Combiner {
         };
         order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
         let mut out = Vec3::ZERO;
+        // The glossy lobe: sphere lights (ks in the lobe) and the SH part (unit ks).
+        let (mut out_g, mut out_g_sh) = (Vec3::ZERO, Vec3::ZERO);
         for (k, &(_, i)) in order.iter().enumerate() {
             let e = &self.entities[i as usize];
             let q = e.to_rest * (p - e.center);
             if let Some(le) = e.sphere_light {
                 let share = own_share(e, q);
-                out += share * self.sphere_light(p, n, e, le, &order[..k], own);
+                let (d, g) = self.sphere_light(p, n, e, le, &order[..k], own, glossy);
+                out += share * d;
+                out_g += share * g;
             }
             let Some(occ) = &e.occlusion else {
                 continue;
@@ -192,20 +244,32 @@ impl Combiner {
             let corners = occ.grid.corners(q);
             if let Some(rad) = e.radiance.as_ref().filter(|_| e.sphere_light.is_none()) {
                 if !self.behind_a_quad(p, e.center, own) {
+                    let l = [0, 1, 2].map(|c| rad[c].lookup_at(&corners));
                     out += Vec3::new(
-                        sh::dot_f32(&t, &rad[0].lookup_at(&corners)),
-                        sh::dot_f32(&t, &rad[1].lookup_at(&corners)),
-                        sh::dot_f32(&t, &rad[2].lookup_at(&corners)),
+                        sh::dot_f32(&t, &l[0]),
+                        sh::dot_f32(&t, &l[1]),
+                        sh::dot_f32(&t, &l[2]),
                     );
+                    if let Some(g) = &tg {
+                        out_g_sh += Vec3::new(
+                            sh::dot_f32(g, &l[0]),
+                            sh::dot_f32(g, &l[1]),
+                            sh::dot_f32(g, &l[2]),
+                        );
+                    }
                 }
             }
-            t = sh::product(&t, &visibility_from_occlusion(&occ.lookup_at(&corners)));
+            let v = visibility_from_occlusion(&occ.lookup_at(&corners));
+            t = sh::product(&t, &v);
+            tg = tg.map(|g| sh::product(&g, &v));
         }
         let mut combined = count;
         for (i, e) in self.entities.iter().enumerate() {
             if let EntityKind::Quad(r) = e.kind {
                 if Some(i) != own && above_horizon(&r, p, n) {
-                    t = sh::product(&t, &quad_visibility(&r, p));
+                    let v = quad_visibility(&r, p);
+                    t = sh::product(&t, &v);
+                    tg = tg.map(|g| sh::product(&g, &v));
                     combined += 1;
                 }
             }
@@ -216,11 +280,26 @@ impl Combiner {
             sh::dot_f32(&t, &env[1]),
             sh::dot_f32(&t, &env[2]),
         );
-        (out, combined)
+        if let (Some(g), Some(r)) = (&tg, glossy) {
+            out_g_sh += Vec3::new(
+                sh::dot_f32(g, &env[0]),
+                sh::dot_f32(g, &env[1]),
+                sh::dot_f32(g, &env[2]),
+            );
+            out_g += r.ks * out_g_sh;
+        }
+        Shade {
+            diffuse: out,
+            glossy: out_g,
+            count: combined,
+        }
     }
 
     /// A sphere light's direct light at a Lambertian receiver per unit albedo,
-    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions.
+    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions;
+    /// with `glossy`, second, ∫ L·V·f_s(ω, ω_o)·max(n·ω, 0) by the same
+    /// directions, f_s the renderer's own `Material::eval` (a highlight is as
+    /// sharp as the lobe, not as order 4).
     /// V is the product of the unblurred cone maps of the entities `nearer`
     /// than the light (the paper's near-to-far rule), and for an entity without
     /// a map its SH visibility towards the light's centre. The receiver's own
@@ -235,12 +314,13 @@ impl Combiner {
         le: Vec3,
         nearer: &[(f32, u32)],
         own: Option<usize>,
-    ) -> Vec3 {
+        glossy: Option<&GlossyReceiver>,
+    ) -> (Vec3, Vec3) {
         let to_l = light.center - p;
         let d = to_l.length();
         let cos_max = cone_cos(d, light.radius);
         if cos_max <= -1.0 || !d.is_finite() {
-            return Vec3::ZERO;
+            return (Vec3::ZERO, Vec3::ZERO);
         }
         let frame = Frame::from_normal(to_l / d);
         let mut dirs = [Vec3::ZERO; LIGHT_DIRS];
@@ -257,7 +337,7 @@ impl Combiner {
             any |= vis[k] > 0.0;
         }
         if !any {
-            return Vec3::ZERO;
+            return (Vec3::ZERO, Vec3::ZERO);
         }
         // Quads (floors, walls) hide the light direction by direction, exactly.
         let reach = d - light.radius;
@@ -300,7 +380,19 @@ impl Combiner {
         }
         let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
         let sum: f32 = vis.iter().sum();
-        le * (scale * sum * solid_angle / (LIGHT_DIRS as f32 * std::f32::consts::PI))
+        let diffuse = le * (scale * sum * solid_angle / (LIGHT_DIRS as f32 * std::f32::consts::PI));
+        let glossy = glossy.map_or(Vec3::ZERO, |g| {
+            // vis holds cos·V already: the lobe's f is the only factor left.
+            let mut f_sum = Vec3::ZERO;
+            for k in 0..LIGHT_DIRS {
+                if vis[k] > 0.0 {
+                    let wi = g.frame.to_local(dirs[k]);
+                    f_sum += vis[k] * g.lobe.eval(g.wo_local, wi);
+                }
+            }
+            le * f_sum * (scale * solid_angle / LIGHT_DIRS as f32)
+        });
+        (diffuse, glossy)
     }
 
     /// Whether a quad lies between `p` and a light's centre (an SH light is then

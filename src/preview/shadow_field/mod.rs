@@ -3,7 +3,8 @@
 //! scene → [`precompute`](fn@precompute) (one OOF per occluder, SRF + OOF per light, self-occlusion
 //! at mesh vertices; rays traced with our BVH, in parallel) → [`Fields`] →
 //! [`Fields::combiner`] for a frame's poses → [`shade_image`] (first hit per pixel
-//! sample) or [`shade_vertices`]. Rigid fields are rotated in SH; deforming entities
+//! sample) or [`shade_vertices`]. Glossy receivers (BlinnPhong, CookTorrance) add
+//! their lobe, seen from the camera ([`glossy`]). Rigid fields are rotated in SH; deforming entities
 //! (a procedural `deform` or an `obj_sequence`: both are just a frame's posed
 //! geometry here) are rebuilt each frame from their base-sphere visibility ([`deform`]).
 
@@ -14,6 +15,7 @@ pub mod cache;
 pub mod combine;
 pub mod deform;
 pub mod field;
+pub mod glossy;
 pub mod precompute;
 
 use crate::accel::{Accel, PrimRef};
@@ -95,17 +97,18 @@ pub fn precompute(
 }
 
 /// Whether the method models `scene` (what `compare` asks before adding the
-/// preview as a row): diffuse surfaces only (the fields carry no glossy lobe),
-/// emitters that are spheres or rectangles (the light entities it integrates),
-/// and some light or an environment. Returns why not.
+/// preview as a row): diffuse or glossy surfaces (no mirror: a delta lobe is
+/// neither in an order-4 transfer nor at a light's few directions), emitters
+/// that are spheres or rectangles (the light entities it integrates), and some
+/// light or an environment. Returns why not.
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
-    let diffuse =
-        |m: u32, name: &str| match scene.materials.get(m as usize).map(|m| m.preview_parts()) {
-            Some(Ok(parts)) if parts.glossy.is_none() => Ok(()),
-            _ => Err(format!(
-                "shape `{name}` is not diffuse (shadow fields shade Lambertian surfaces only)"
-            )),
-        };
+    let shaded = |m: u32, name: &str| match scene.materials.get(m as usize) {
+        Some(m) if m.preview_parts().is_ok() => Ok(()),
+        Some(_) => Err(format!(
+            "shape `{name}` is a mirror (a delta lobe: shadow fields shade smooth lobes only)"
+        )),
+        None => Err(format!("shape `{name}` has no material")),
+    };
     for m in &scene.meshes {
         if m.emission != Vec3::ZERO {
             if m.rect.is_none() {
@@ -115,11 +118,11 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
                 ));
             }
         } else {
-            diffuse(m.material, &m.name)?;
+            shaded(m.material, &m.name)?;
         }
     }
     for s in scene.spheres.iter().filter(|s| s.emission == Vec3::ZERO) {
-        diffuse(s.material, &s.name)?;
+        shaded(s.material, &s.name)?;
     }
     if scene.emitter_count() == 0 && scene.environment.is_none() {
         return Err("nothing lights the scene (no light, no environment)".into());
@@ -295,6 +298,8 @@ pub struct Receivers<'a> {
     pub entity_of_object: Vec<Option<usize>>,
     /// Per scene mesh: visibility SH at each vertex (self-shadowing), if any.
     pub mesh_self: &'a [Option<Vec<ShF>>],
+    /// Per scene material: its glossy lobe's transfer table, if it has one.
+    pub glossy: Vec<Option<glossy::GlossyLobe>>,
 }
 
 impl<'a> Receivers<'a> {
@@ -319,11 +324,17 @@ impl<'a> Receivers<'a> {
             accel,
             entity_of_object,
             mesh_self,
+            glossy: scene
+                .materials
+                .iter()
+                .map(glossy::GlossyLobe::new)
+                .collect(),
         }
     }
 
     /// Radiance along one camera ray: emission seen directly, or the shadow-field
-    /// estimate of the direct light reflected at the first hit, or the environment.
+    /// estimate of the direct light reflected at the first hit (its glossy lobe
+    /// towards the camera included), or the environment.
     /// The bool says whether a receiver was shaded; the usize how many entities.
     pub fn radiance(&self, combiner: &Combiner, ray: &crate::math::Ray) -> (Vec3, bool, usize) {
         match self.first_hit(ray) {
@@ -405,14 +416,20 @@ impl<'a> Receivers<'a> {
             (shading_n, self_vis)
         };
         let albedo = self.scene.materials[material as usize].diffuse_albedo();
-        if albedo == Vec3::ZERO || n == Vec3::ZERO {
+        let glossy = self
+            .glossy
+            .get(material as usize)
+            .is_some_and(|g| g.is_some());
+        if (albedo == Vec3::ZERO && !glossy) || n == Vec3::ZERO {
             return FirstHit::Seen(emission, object_id);
         }
         FirstHit::Receiver(Receiver {
             key: object_id.wrapping_mul(2) | u32::from(back),
             p: sp.p,
             n,
+            wo: -ray.dir,
             self_vis,
+            material,
             albedo,
             emission,
             own: self
@@ -426,9 +443,17 @@ impl<'a> Receivers<'a> {
     /// The receiver's reflected radiance (plus its own emission) and the
     /// number of entities combined.
     pub fn shade(&self, combiner: &Combiner, r: &Receiver) -> (Vec3, usize) {
-        let (e, count) = combiner.shade(r.p, r.n, r.own, r.self_vis.as_ref());
-        let value = r.emission + r.albedo * e.max(Vec3::ZERO);
-        (crate::math::finite_or_zero(value), count)
+        let glossy = self
+            .glossy
+            .get(r.material as usize)
+            .and_then(|g| g.as_ref())
+            .and_then(|g| g.receiver(r.n, r.wo));
+        let s = combiner.shade_parts(r.p, r.n, r.own, r.self_vis.as_ref(), glossy.as_ref());
+        let mut value = r.emission + r.albedo * s.diffuse.max(Vec3::ZERO);
+        if glossy.is_some() {
+            value += s.glossy.max(Vec3::ZERO);
+        }
+        (crate::math::finite_or_zero(value), s.count)
     }
 }
 
@@ -453,8 +478,11 @@ pub struct Receiver {
     pub p: Vec3,
     /// Shading normal, facing the viewer.
     pub n: Vec3,
+    /// Towards the viewer (a glossy lobe's ω_o).
+    pub wo: Vec3,
     /// Self-visibility SH, interpolated from the mesh's vertices.
     pub self_vis: Option<ShF>,
+    pub material: u32,
     pub albedo: Vec3,
     pub emission: Vec3,
     /// The receiver's own entity (its field is skipped in the combination).
@@ -472,6 +500,7 @@ struct Group {
     first: Receiver,
     p: Vec3,
     n: Vec3,
+    wo: Vec3,
     self_vis: Option<ShF>,
     hits: u32,
 }
@@ -482,6 +511,7 @@ impl Group {
             first: r,
             p: r.p,
             n: r.n,
+            wo: r.wo,
             self_vis: r.self_vis,
             hits: 1,
         }
@@ -494,6 +524,7 @@ impl Group {
     fn add(&mut self, r: &Receiver) {
         self.p += r.p;
         self.n += r.n;
+        self.wo += r.wo;
         if let (Some(a), Some(b)) = (self.self_vis.as_mut(), r.self_vis.as_ref()) {
             for (a, b) in a.iter_mut().zip(b) {
                 *a += b;
@@ -506,9 +537,11 @@ impl Group {
     fn mean(&self) -> Receiver {
         let k = self.hits as f32;
         let n = self.n.normalize_or_zero();
+        let wo = self.wo.normalize_or_zero();
         Receiver {
             p: self.p / k,
             n: if n == Vec3::ZERO { self.first.n } else { n },
+            wo: if wo == Vec3::ZERO { self.first.wo } else { wo },
             self_vis: self.self_vis.map(|v| v.map(|x| x / k)),
             ..self.first
         }
@@ -649,7 +682,8 @@ pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: us
 }
 
 /// Shades every vertex of a mesh (the paper's per-vertex mode): reflected radiance
-/// towards the vertex normal's side, self-visibility included.
+/// towards the vertex normal's side, self-visibility included. Diffuse part only
+/// (kd): a vertex colour has no view direction, which a glossy lobe needs.
 pub fn shade_vertices(receivers: &Receivers, combiner: &Combiner, mesh: usize) -> Vec<Vec3> {
     let scene = receivers.scene;
     let m = &scene.meshes[mesh];
