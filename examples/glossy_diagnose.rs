@@ -44,7 +44,20 @@ fn main() {
     let paths: u32 = args.get(5).map_or(1024, |s| s.parse().unwrap());
     let settings = Settings::default();
     let accel = Accel::build(&scene.meshes, &scene.spheres);
-    let bytes = std::fs::read(cache).expect("cache file");
+    let mut bytes = std::fs::read(cache).expect("cache file");
+    // A cache entry (`pipeline::cache`) starts with five header lines before the
+    // transfer's own bytes.
+    if bytes.starts_with(b"gradtrace cache 1\n") {
+        let mut at = 0;
+        for _ in 0..5 {
+            at += bytes[at..]
+                .iter()
+                .position(|&b| b == b'\n')
+                .expect("header")
+                + 1;
+        }
+        bytes.drain(..at);
+    }
     // The stored key: a source change since the run changes the key, not the slices.
     let t = Transfer::stored_key(&bytes)
         .and_then(|key| Transfer::decode(&bytes, key, &scene, &settings))
