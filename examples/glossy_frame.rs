@@ -33,7 +33,20 @@ fn main() {
     let frames: usize = args.get(4).map_or(10, |s| s.parse().unwrap());
     let settings = Settings::default();
     let accel = Accel::build(&scene.meshes, &scene.spheres);
-    let bytes = std::fs::read(&args[2]).expect("cache file");
+    let mut bytes = std::fs::read(&args[2]).expect("cache file");
+    // A cache entry (`pipeline::cache`) starts with five header lines before the
+    // transfer's own bytes.
+    if bytes.starts_with(b"gradtrace cache 1\n") {
+        let mut at = 0;
+        for _ in 0..5 {
+            at += bytes[at..]
+                .iter()
+                .position(|&b| b == b'\n')
+                .expect("header")
+                + 1;
+        }
+        bytes.drain(..at);
+    }
     let t = Transfer::stored_key(&bytes)
         .and_then(|key| Transfer::decode(&bytes, key, &scene, &settings))
         .expect("cache matches the scene and default settings");
