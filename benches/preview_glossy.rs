@@ -27,9 +27,10 @@ fn teapot_frame(c: &mut Criterion) {
     let t = match std::env::var_os("GLOSSY_CACHE") {
         Some(path) => {
             let defaults = Settings::default();
-            let bytes = std::fs::read(path).expect("GLOSSY_CACHE reads");
-            glossy::Transfer::stored_key(&bytes)
-                .and_then(|key| glossy::Transfer::decode(&bytes, key, &scene, &defaults))
+            let raw = std::fs::read(path).expect("GLOSSY_CACHE reads");
+            let bytes = gradtrace::pipeline::cache::byte_entry_payload(&raw).unwrap_or(&raw);
+            glossy::Transfer::stored_key(bytes)
+                .and_then(|key| glossy::Transfer::decode(bytes, key, &scene, &defaults))
                 .expect("GLOSSY_CACHE holds this scene's transfer at default settings")
         }
         None => glossy::precompute(&scene, &accel, &settings, &|_, _, _| {}).unwrap(),

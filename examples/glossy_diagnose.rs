@@ -44,10 +44,12 @@ fn main() {
     let paths: u32 = args.get(5).map_or(1024, |s| s.parse().unwrap());
     let settings = Settings::default();
     let accel = Accel::build(&scene.meshes, &scene.spheres);
-    let bytes = std::fs::read(cache).expect("cache file");
+    let raw = std::fs::read(cache).expect("cache file");
+    // The transfer's bytes follow the cache entry's header.
+    let bytes = gradtrace::pipeline::cache::byte_entry_payload(&raw).unwrap_or(&raw);
     // The stored key: a source change since the run changes the key, not the slices.
-    let t = Transfer::stored_key(&bytes)
-        .and_then(|key| Transfer::decode(&bytes, key, &scene, &settings))
+    let t = Transfer::stored_key(bytes)
+        .and_then(|key| Transfer::decode(bytes, key, &scene, &settings))
         .expect("cache holds this scene's transfer at default settings");
     let env_src = scene.environment.as_ref().unwrap();
     let env = PrefilteredEnv::new(env_src);

@@ -33,11 +33,13 @@ fn main() {
     let frames: usize = args.get(4).map_or(10, |s| s.parse().unwrap());
     let settings = Settings::default();
     let accel = Accel::build(&scene.meshes, &scene.spheres);
-    let bytes = std::fs::read(&args[2]).expect("cache file");
-    let t = Transfer::stored_key(&bytes)
-        .and_then(|key| Transfer::decode(&bytes, key, &scene, &settings))
+    let raw = std::fs::read(&args[2]).expect("cache file");
+    // The transfer's bytes follow the cache entry's header.
+    let bytes = gradtrace::pipeline::cache::byte_entry_payload(&raw).unwrap_or(&raw);
+    let t = Transfer::stored_key(bytes)
+        .and_then(|key| Transfer::decode(bytes, key, &scene, &settings))
         .expect("cache matches the scene and default settings");
-    drop(bytes);
+    drop(raw);
     println!("{} vertices, {} bytes", t.vertices.len(), t.bytes());
     let env = PrefilteredEnv::new(scene.environment.as_ref().unwrap());
     let camera = &scene.camera;

@@ -4,7 +4,7 @@
 
 use gradtrace::math::Vec3;
 use gradtrace::output::{ExrHeader, OutputImage};
-use gradtrace::pipeline::cache::{Cache, Epoch};
+use gradtrace::pipeline::cache::{byte_entry_payload, Cache, Epoch};
 use gradtrace::pipeline::preview::shadow_field::{self, ShadowFieldOptions};
 use gradtrace::preview::shadow_field::Settings;
 use std::path::{Path, PathBuf};
@@ -54,6 +54,26 @@ fn a_byte_entry_is_read_only_whole_and_under_its_key() {
     // The miss is rewritten whole.
     entry.write_bytes(&payload, 2.5).unwrap();
     assert_eq!(entry.read_bytes().map(|h| h.seconds), Some(2.5));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The tools handed a cache file by path (`examples/glossy_frame.rs`) read its
+/// payload past the header; before, they handed the header to the decoder.
+#[test]
+fn a_byte_entry_file_yields_its_payload() {
+    let dir = temp_dir("payload");
+    let entry = Cache::under(&dir).entry("t", "bin", Epoch::Source, "scene", "settings");
+    // A payload that itself holds newlines and the magic line.
+    let payload = b"gradtrace cache 1\nline\n\n\x00\xff".to_vec();
+    entry.write_bytes(&payload, 3.0).unwrap();
+    let file = std::fs::read(entry.path()).unwrap();
+    assert_eq!(byte_entry_payload(&file), Some(payload.as_slice()));
+    assert_eq!(byte_entry_payload(&payload[..5]), None, "no header");
+    assert_eq!(
+        byte_entry_payload(b"GTGLOSS5\n1\n2\n3\n4\nx"),
+        None,
+        "no magic"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -212,6 +212,19 @@ impl Entry {
     }
 }
 
+/// The payload of a byte entry read straight from its file (five header lines,
+/// then the bytes), without checking its key: for tools handed a cache file by
+/// path (`examples/glossy_frame.rs`); `None` if `bytes` is no byte entry.
+pub fn byte_entry_payload(bytes: &[u8]) -> Option<&[u8]> {
+    let mut at = 0;
+    for _ in 0..5 {
+        at += bytes.get(at..)?.iter().position(|&b| b == b'\n')? + 1;
+    }
+    bytes
+        .starts_with(format!("{MAGIC}\n").as_bytes())
+        .then(|| &bytes[at..])
+}
+
 fn finite(seconds: f64) -> f64 {
     if seconds.is_finite() {
         seconds
