@@ -8,7 +8,7 @@
 use glam::DVec3;
 use gradtrace::math::sh::{self, COEFFS};
 use gradtrace::math::Vec3;
-use gradtrace::pipeline::preview::shadow_field::{run, ShadowFieldOptions};
+use gradtrace::pipeline::preview::shadow_field::{run, ShadowFieldOptions, ShadowFieldSummary};
 use gradtrace::preview::shadow_field::precompute::EntityGeometry;
 use gradtrace::preview::shadow_field::Settings;
 use gradtrace::scene::Sphere;
@@ -856,18 +856,39 @@ mod obj_sequence {
     }
 }
 
-/// A sphere light in view, 200 times brighter than the floor it lights: at one
+/// A sphere light in view, 80 times brighter than the floor it lights: at one
 /// ray a pixel its edge pixels alias and make most of the image's RMSE; the
 /// edge pixels' finer grid of rays (`pixel_samples`) must take most of that
 /// away, and the figures must be scored without the pixels that see it.
 #[test]
 fn a_light_in_view_is_antialiased_and_left_out_of_the_figures() {
-    let text = "[camera]\nfrom = [0, 1.2, 3]\nto = [0, 0.6, 0]\nfov = 40\nresolution = [48, 36]\n\
+    let (one, four) = light_in_view(0.25, "wide");
+    // The light and its 1-pixel ring: about 100 pixels of 1728.
+    assert!(four.scored_pixels < four.pixels - 60 && four.scored_pixels > four.pixels / 2);
+    assert!(four.rmse < four.rmse_all_pixels / 4.0);
+    assert!(one.rmse_all_pixels.is_finite());
+}
+
+/// A light narrower than a pixel, which the centre rays miss: found from its
+/// projected bounding sphere, its pixels covered by the finer grid.
+#[test]
+fn a_light_narrower_than_a_pixel_is_not_lost() {
+    let (one, four) = light_in_view(0.012, "narrow");
+    assert!(four.scored_pixels < four.pixels);
+    assert!(one.rmse_all_pixels.is_finite());
+}
+
+/// The summaries at one ray a pixel and at 4 × 4 at edges, the latter's RMSE
+/// over all pixels (the light's included) at most half the former's.
+fn light_in_view(radius: f32, name: &str) -> (ShadowFieldSummary, ShadowFieldSummary) {
+    let text = format!(
+        "[camera]\nfrom = [0, 1.2, 3]\nto = [0, 0.6, 0]\nfov = 40\nresolution = [48, 36]\n\
         [render]\nintegrator = \"direct\"\n\
         [materials.m]\ntype = \"lambert\"\nalbedo = [0.5, 0.5, 0.5]\n\
         [[shapes]]\ntype = \"quad\"\ncorner = [-4, 0, 4]\nedge_u = [8, 0, 0]\nedge_v = [0, 0, -8]\nmaterial = \"m\"\n\
-        [[lights]]\ntype = \"sphere\"\ncenter = [0.2, 0.9, 0]\nradius = 0.25\nradiance = [40, 40, 40]\n";
-    let dir = out_dir("light-in-view");
+        [[lights]]\ntype = \"sphere\"\ncenter = [0.2, 0.9, 0]\nradius = {radius}\nradiance = [40, 40, 40]\n"
+    );
+    let dir = out_dir(&format!("light-in-view-{name}"));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("bulb.toml");
     std::fs::write(&path, text).unwrap();
@@ -888,17 +909,15 @@ fn a_light_in_view_is_antialiased_and_left_out_of_the_figures() {
     };
     let (one, four) = (summary(1), summary(4));
     eprintln!(
-        "all pixels: RMSE {:.4} at one ray a pixel, {:.4} with 4 × 4 at edges; scored {} of {} pixels, RMSE {:.4}",
+        "radius {radius}: all pixels RMSE {:.4} at one ray a pixel, {:.4} with 4 × 4 at edges; scored {} of {} pixels, RMSE {:.4}",
         one.rmse_all_pixels, four.rmse_all_pixels, four.scored_pixels, four.pixels, four.rmse
     );
     assert!(
         four.rmse_all_pixels < 0.5 * one.rmse_all_pixels,
-        "edge pixels not refined: {} vs {}",
+        "light's pixels not refined: {} vs {}",
         four.rmse_all_pixels,
         one.rmse_all_pixels
     );
-    // The light and its 1-pixel ring: about 100 pixels of 1728.
-    assert!(four.scored_pixels < four.pixels - 60 && four.scored_pixels > four.pixels / 2);
-    assert!(four.rmse < four.rmse_all_pixels / 4.0);
     let _ = std::fs::remove_dir_all(&dir);
+    (one, four)
 }

@@ -591,6 +591,51 @@ fn same_facet(a: &FirstHit, b: &FirstHit) -> bool {
     }
 }
 
+/// The pixels around each emitter that may be narrower than a few pixels: the
+/// centre rays can miss a light between them, and the edge pixels then lose
+/// all of its radiance (thousands of times what it lights); they are covered
+/// by the edge pixels' grid instead. From each emitter's bounding sphere,
+/// projected, with a pixel and a half of margin.
+fn small_light_pixels(scene: &Scene) -> Vec<bool> {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let mut out = vec![false; w * h];
+    let spheres = scene
+        .spheres
+        .iter()
+        .filter(|s| s.emission != Vec3::ZERO)
+        .map(|s| (s.center, s.radius));
+    let meshes = scene
+        .meshes
+        .iter()
+        .filter(|m| m.emission != Vec3::ZERO)
+        .filter_map(|m| precompute::bounding_sphere(std::iter::once(m), std::iter::empty()));
+    // Pixels per unit of image plane at unit depth.
+    let scale = 0.5 * h as f32 / cam.frustum_slopes().y;
+    for (c, r) in spheres.chain(meshes) {
+        let depth = cam.view_coordinates(c).z as f32 - r;
+        let Some(at) = cam.project(c) else {
+            continue;
+        };
+        if !(depth > 0.0) {
+            continue;
+        }
+        let rad = r / depth * scale + 1.5;
+        if rad > 4.0 {
+            // Wide enough for the centre rays to find it.
+            continue;
+        }
+        let (x0, x1) = ((at.x - rad).floor(), (at.x + rad).ceil());
+        let (y0, y1) = ((at.y - rad).floor(), (at.y + rad).ceil());
+        for y in (y0.max(0.0) as usize)..(y1.clamp(0.0, h as f32) as usize) {
+            for x in (x0.max(0.0) as usize)..(x1.clamp(0.0, w as f32) as usize) {
+                out[y * w + x] = true;
+            }
+        }
+    }
+    out
+}
+
 /// Shades every pixel (box filter) as MSAA does, because the combination, not
 /// the ray, is the cost, and the light varies little within a pixel: one
 /// camera ray through each pixel's centre; where it sees the same facet as
@@ -609,7 +654,11 @@ pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: us
             receivers.first_hit(&cam.generate_ray(p))
         })
         .collect();
+    let small_lights = small_light_pixels(receivers.scene);
     let edge = |x: usize, y: usize| {
+        if small_lights[y * w + x] {
+            return true;
+        }
         let c = &centres[y * w + x];
         (y.saturating_sub(1)..(y + 2).min(h)).any(|j| {
             (x.saturating_sub(1)..(x + 2).min(w)).any(|i| !same_facet(c, &centres[j * w + i]))
