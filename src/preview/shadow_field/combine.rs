@@ -306,6 +306,7 @@ impl Combiner {
     /// shadowing is the caller's (`own_share`). Order-4 SH cannot hold a light a
     /// few degrees wide: its product with an occluder's field leaves about half
     /// of the shadow lit and spreads the rest over tens of degrees (issue 57).
+    #[allow(clippy::too_many_arguments)]
     fn sphere_light(
         &self,
         p: Vec3,
@@ -454,17 +455,17 @@ const QUAD_MAX_DEPTH: u32 = 12;
 /// replaced, hides the sky above a wall of finite height.
 pub fn quad_visibility(r: &Rect, p: Vec3) -> ShF {
     // Gauss–Legendre nodes on [0, 1] (weights ½ each).
-    const G: [f32; 2] = [0.211_324_87, 0.788_675_13];
+    const G: [f32; 2] = [0.211_324_9, 0.788_675_1];
     let normal = cross(r.edge_u, r.edge_v);
     let area = normal.length();
-    if !(area > 0.0) {
+    if area.is_nan() || area <= 0.0 {
         return visibility_from_occlusion(&[0.0; COEFFS]);
     }
     let n_hat = normal / area;
     let height = n_hat.dot(r.corner - p).abs();
     let extent = r.edge_u.length().max(r.edge_v.length());
     let mut occ = [0.0f32; COEFFS];
-    if !(height > 0.0) {
+    if height.is_nan() || height <= 0.0 {
         return visibility_from_occlusion(&occ);
     }
     let mut stack: Vec<(f32, f32, f32, u32)> = vec![(0.0, 0.0, 1.0, 0)];

@@ -617,7 +617,7 @@ fn small_light_pixels(scene: &Scene) -> Vec<bool> {
         let Some(at) = cam.project(c) else {
             continue;
         };
-        if !(depth > 0.0) {
+        if depth.is_nan() || depth <= 0.0 {
             continue;
         }
         let rad = r / depth * scale + 1.5;
