@@ -347,6 +347,25 @@ impl Setup {
         self.lanes.as_ref()
     }
 
+    /// What every sample of a render reads; `first` is its first sample index.
+    pub(crate) fn context<'a>(
+        &'a self,
+        scene: &'a Scene,
+        accel: &'a Accel,
+        opts: &RenderOptions,
+        first: u32,
+    ) -> SampleContext<'a> {
+        SampleContext {
+            tracer: self.tracer(scene, accel),
+            camera: &self.camera,
+            seed: self.seed,
+            gradients: opts.gradients,
+            first,
+            lanes: self.lanes(),
+            first_hits: opts.keeps_first_hits(),
+        }
+    }
+
     pub fn tracer<'a>(&'a self, scene: &'a Scene, accel: &'a Accel) -> PathTracer<'a> {
         PathTracer {
             scene,
@@ -523,15 +542,7 @@ pub fn render_passes(
     let start = Instant::now();
     let setup = Setup::new(scene, opts)?;
     let (crop, range) = extent(&setup, opts)?;
-    let ctx = SampleContext {
-        tracer: setup.tracer(scene, accel),
-        camera: &setup.camera,
-        seed: setup.seed,
-        gradients: opts.gradients,
-        first: range.start,
-        lanes: setup.lanes(),
-        first_hits: opts.keeps_first_hits(),
-    };
+    let ctx = setup.context(scene, accel, opts, range.start);
     let mut film = Film::new(crop, setup.camera.width as usize, ctx.gradients);
     let cancelled = || {
         passes

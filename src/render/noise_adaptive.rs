@@ -12,7 +12,7 @@
 //! dilation, Cycles' two box-filter passes). Samples are addressed by index, so the
 //! image is the same for any thread count.
 
-use super::{extent, Film, RenderOptions, RenderOutput, SampleContext, Setup};
+use super::{extent, Film, RenderOptions, RenderOutput, Setup};
 use super::{Crop, Progress};
 use crate::accel::Accel;
 use crate::scene::Scene;
@@ -163,15 +163,7 @@ pub fn render_noise_adaptive(
     let setup = Setup::new(scene, &opts)?;
     extent(&setup, &opts)?;
     let (w, h) = (setup.camera.width as usize, setup.camera.height as usize);
-    let ctx = SampleContext {
-        tracer: setup.tracer(scene, accel),
-        camera: &setup.camera,
-        seed: setup.seed,
-        gradients: opts.gradients,
-        first: 0,
-        lanes: setup.lanes(),
-        first_hits: opts.keeps_first_hits(),
-    };
+    let ctx = setup.context(scene, accel, &opts, 0);
     let mut film = Film::new(Crop::full(w as u32, h as u32), w, ctx.gradients);
     let max = settings.max_spp;
     let mut counts = vec![0u32; w * h];

@@ -3,7 +3,7 @@
 //! (the gradient-domain strategy's dense adaptive sampling, `pipeline::gdomain`).
 //! The metric lives with its caller: this module only traces the plan.
 
-use super::{extent, Crop, Film, RenderOptions, RenderOutput, SampleContext, Setup};
+use super::{extent, Crop, Film, RenderOptions, RenderOutput, Setup};
 use crate::accel::Accel;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -39,15 +39,7 @@ pub fn render_two_pass(
     let setup = Setup::new(scene, &opts)?;
     extent(&setup, &opts)?;
     let (w, h) = (setup.camera.width as usize, setup.camera.height as usize);
-    let ctx = SampleContext {
-        tracer: setup.tracer(scene, accel),
-        camera: &setup.camera,
-        seed: setup.seed,
-        gradients: opts.gradients,
-        first: 0,
-        lanes: setup.lanes(),
-        first_hits: opts.keeps_first_hits(),
-    };
+    let ctx = setup.context(scene, accel, &opts, 0);
     let mut film = Film::new(Crop::full(w as u32, h as u32), w, ctx.gradients);
     let never = || false;
     let quiet = |_: usize| {};

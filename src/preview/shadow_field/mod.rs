@@ -555,6 +555,8 @@ struct PixelHits {
     groups: Vec<Group>,
     rays: u32,
     emitter: bool,
+    /// Shade every hit on its own (the light changes across the pixel).
+    each: bool,
 }
 
 impl PixelHits {
@@ -567,7 +569,7 @@ impl PixelHits {
             }
             FirstHit::Receiver(r) => {
                 self.emitter |= r.emission != Vec3::ZERO;
-                match self.groups.iter_mut().find(|g| g.takes(&r)) {
+                match self.groups.iter_mut().find(|g| !self.each && g.takes(&r)) {
                     Some(g) => g.add(&r),
                     None => self.groups.push(Group::new(r)),
                 }
@@ -596,23 +598,13 @@ fn same_facet(a: &FirstHit, b: &FirstHit) -> bool {
 /// all of its radiance (thousands of times what it lights); they are covered
 /// by the edge pixels' grid instead. From each emitter's bounding sphere,
 /// projected, with a pixel and a half of margin.
-fn small_light_pixels(scene: &Scene) -> Vec<bool> {
+fn small_light_pixels(scene: &Scene, lights: &[(Vec3, f32)]) -> Vec<bool> {
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let mut out = vec![false; w * h];
-    let spheres = scene
-        .spheres
-        .iter()
-        .filter(|s| s.emission != Vec3::ZERO)
-        .map(|s| (s.center, s.radius));
-    let meshes = scene
-        .meshes
-        .iter()
-        .filter(|m| m.emission != Vec3::ZERO)
-        .filter_map(|m| precompute::bounding_sphere(std::iter::once(m), std::iter::empty()));
     // Pixels per unit of image plane at unit depth.
     let scale = 0.5 * h as f32 / cam.frustum_slopes().y;
-    for (c, r) in spheres.chain(meshes) {
+    for &(c, r) in lights {
         let depth = cam.view_coordinates(c).z as f32 - r;
         let Some(at) = cam.project(c) else {
             continue;
@@ -636,13 +628,46 @@ fn small_light_pixels(scene: &Scene) -> Vec<bool> {
     out
 }
 
+/// Every emitter's bounding sphere.
+fn emitter_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
+    let spheres = scene
+        .spheres
+        .iter()
+        .filter(|s| s.emission != Vec3::ZERO)
+        .map(|s| (s.center, s.radius));
+    let meshes = scene
+        .meshes
+        .iter()
+        .filter(|m| m.emission != Vec3::ZERO)
+        .filter_map(|m| precompute::bounding_sphere(std::iter::once(m), std::iter::empty()));
+    spheres.chain(meshes).collect()
+}
+
+/// A light's irradiance, ∝ 1/d², may change across a pixel's footprint by
+/// more than this fraction before the pixel is shaded at every one of its
+/// rays instead of once ([`near_a_light`]).
+const STEEP: f32 = 0.2;
+
+/// Whether some light's 1/d² changes by more than [`STEEP`] across the
+/// footprint of the pixel whose centre ray hit `r`: the floor beside a light a
+/// few centimetres above it, where the centre's value is not the pixel's mean.
+fn near_a_light(r: &Receiver, cam: &crate::scene::Camera, lights: &[(Vec3, f32)]) -> bool {
+    let pixel = 2.0 * cam.frustum_slopes().y / cam.height as f32;
+    let footprint = (r.p - cam.from).length() * pixel / r.n.dot(r.wo).abs().max(0.05);
+    lights.iter().any(|&(c, rad)| {
+        let d = ((c - r.p).length() - rad).max(1e-6);
+        2.0 * footprint / d > STEEP
+    })
+}
+
 /// Shades every pixel (box filter) as MSAA does, because the combination, not
-/// the ray, is the cost, and the light varies little within a pixel: one
+/// the ray, is the cost, and the light mostly varies little within a pixel: one
 /// camera ray through each pixel's centre; where it sees the same facet as
 /// its eight neighbours' (not a silhouette, a crease or a light's edge) it is
 /// shaded once; elsewhere the pixel is covered by `pixel_samples²` stratified
-/// rays and shaded once per facet they hit, at the facet's mean point. Rows in
-/// parallel; deterministic whatever the thread count.
+/// rays and shaded once per facet they hit, at the facet's mean point, or at
+/// every hit where a light's 1/d² is steep across the pixel ([`near_a_light`]).
+/// Rows in parallel; deterministic whatever the thread count.
 pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: usize) -> Shaded {
     let cam = &receivers.scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
@@ -654,7 +679,9 @@ pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: us
             receivers.first_hit(&cam.generate_ray(p))
         })
         .collect();
-    let small_lights = small_light_pixels(receivers.scene);
+    let lights = emitter_spheres(receivers.scene);
+    let small_lights = small_light_pixels(receivers.scene, &lights);
+    let near = |x: usize, y: usize| matches!(&centres[y * w + x], FirstHit::Receiver(r) if near_a_light(r, cam, &lights));
     let edge = |x: usize, y: usize| {
         if small_lights[y * w + x] {
             return true;
@@ -673,7 +700,8 @@ pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: us
             let (mut points, mut pe) = (0, 0);
             let mut hits = PixelHits::default();
             for x in 0..w {
-                if k == 1 || !edge(x, y) {
+                let each = k > 1 && near(x, y);
+                if k == 1 || !(each || edge(x, y)) {
                     let (v, emitter) = match &centres[y * w + x] {
                         FirstHit::Seen(v, id) => (*v, sees_emitter(*v, *id)),
                         FirstHit::Receiver(r) => {
@@ -691,6 +719,7 @@ pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: us
                 hits.groups.clear();
                 hits.rays = 0;
                 hits.emitter = false;
+                hits.each = each;
                 for a in 0..k {
                     for b in 0..k {
                         let p = Vec2::new(
