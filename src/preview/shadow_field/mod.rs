@@ -643,21 +643,21 @@ fn emitter_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
     spheres.chain(meshes).collect()
 }
 
-/// A light's irradiance, ∝ 1/d², may change across a pixel's footprint by
-/// more than this fraction before the pixel is shaded at every one of its
-/// rays instead of once ([`near_a_light`]).
-const STEEP: f32 = 0.2;
+/// A pixel is shaded at every one of its rays instead of once where its
+/// footprint s is more than this fraction of its distance d to a light: there
+/// the centre's value of 1/d² misses the pixel's mean by about (s/d)²/4 (the
+/// linear change averages out), 2 % at this fraction ([`near_a_light`]).
+const STEEP: f32 = 0.3;
 
-/// Whether some light's 1/d² changes by more than [`STEEP`] across the
-/// footprint of the pixel whose centre ray hit `r`: the floor beside a light a
-/// few centimetres above it, where the centre's value is not the pixel's mean.
+/// Whether some light is within 1/[`STEEP`] footprints of the point `r` the
+/// pixel's centre ray hit: the floor beside a light a few centimetres above
+/// it, where the centre's value is not the pixel's mean.
 fn near_a_light(r: &Receiver, cam: &crate::scene::Camera, lights: &[(Vec3, f32)]) -> bool {
     let pixel = 2.0 * cam.frustum_slopes().y / cam.height as f32;
     let footprint = (r.p - cam.from).length() * pixel / r.n.dot(r.wo).abs().max(0.05);
-    lights.iter().any(|&(c, rad)| {
-        let d = ((c - r.p).length() - rad).max(1e-6);
-        2.0 * footprint / d > STEEP
-    })
+    lights
+        .iter()
+        .any(|&(c, rad)| footprint > STEEP * ((c - r.p).length() - rad).max(1e-6))
 }
 
 /// Shades every pixel (box filter) as MSAA does, because the combination, not
