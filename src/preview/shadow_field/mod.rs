@@ -666,7 +666,7 @@ fn near_a_light(r: &Receiver, cam: &crate::scene::Camera, lights: &[(Vec3, f32)]
 /// its eight neighbours' (not a silhouette, a crease or a light's edge) it is
 /// shaded once; elsewhere the pixel is covered by `pixel_samples²` stratified
 /// rays and shaded once per facet they hit, at the facet's mean point, or at
-/// every hit where a light's 1/d² is steep across the pixel ([`near_a_light`]).
+/// every hit where a light's 1/d² is steep across the pixel (`near_a_light`).
 /// Rows in parallel; deterministic whatever the thread count.
 pub fn shade_image(receivers: &Receivers, combiner: &Combiner, pixel_samples: usize) -> Shaded {
     let cam = &receivers.scene.camera;
