@@ -149,7 +149,7 @@ impl Combiner {
 
     /// [`shade`](Self::shade), and with `glossy` the glossy lobe's reflected
     /// radiance too: its SH transfer carried through the same triple products as
-    /// the diffuse one (SRFs, planes, the environment), and each sphere light's
+    /// the diffuse one (SRFs, quads, the environment), and each sphere light's
     /// cap directions weighted by the lobe itself (times the receiver's own SH
     /// shadowing share of that light, which is the diffuse transfer's). The
     /// diffuse result is the same, bit for bit, with or without `glossy`.

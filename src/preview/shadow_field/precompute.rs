@@ -298,7 +298,7 @@ pub struct EntityFields {
     /// with meshes; empty otherwise).
     pub self_occlusion: Vec<Vec<ShF>>,
     /// The occlusion unblurred, for sphere lights (rigid entities; `None` for
-    /// planes and for fields rebuilt each frame).
+    /// quads and for fields rebuilt each frame).
     pub visibility: Option<ConeMap>,
 }
 
