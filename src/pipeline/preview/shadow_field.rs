@@ -222,6 +222,8 @@ pub(crate) fn shade_frame(
 struct References {
     reference: Reference,
     lowfreq: Vec<Vec3>,
+    /// The pixels both were scored on ([`sf::Shaded::scored`]).
+    scored: Vec<bool>,
 }
 
 fn timing(opts: &ShadowFieldOptions, precompute_s: f64, frame_s: f64) -> Timing {
@@ -274,7 +276,11 @@ fn references(
             render(&low, accel, &direct(reference.spp, 0x5eed_0002), &|_, _| {})?.beauty
         }
     };
-    Ok(References { reference, lowfreq })
+    Ok(References {
+        reference,
+        lowfreq,
+        scored,
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -289,20 +295,20 @@ fn summarise(
     opts: &ShadowFieldOptions,
 ) -> ShadowFieldSummary {
     let img = &frame.shaded.rgb;
-    let scored = frame.shaded.scored();
+    let scored = &refs.scored;
     let kept = scored.iter().filter(|k| **k).count();
     let mean = refs
         .reference
         .beauty
         .iter()
-        .zip(&scored)
+        .zip(scored)
         .filter(|(_, k)| **k)
         .map(|(c, _)| f64::from(c.x + c.y + c.z))
         .sum::<f64>()
         / (3 * kept.max(1)) as f64;
     // Same-sized planes of one camera: the metric cannot fail.
-    let rmse = figures::scored_rmse(img, &refs.reference.beauty, Some(&scored)).unwrap_or(0.0);
-    let rmse_low = figures::scored_rmse(img, &refs.lowfreq, Some(&scored)).unwrap_or(0.0);
+    let rmse = figures::scored_rmse(img, &refs.reference.beauty, Some(scored)).unwrap_or(0.0);
+    let rmse_low = figures::scored_rmse(img, &refs.lowfreq, Some(scored)).unwrap_or(0.0);
     let rmse_all = metrics::rmse(img, &refs.reference.beauty).unwrap_or(0.0) as f64;
     let max = opts.reference_spp_max.unwrap_or(figures::REFERENCE_SPP_MAX);
     let threads = rayon::current_num_threads();
