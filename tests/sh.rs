@@ -265,3 +265,124 @@ fn generated_product_is_up_to_date() {
         "src/math/sh/product.rs is stale: GRADTRACE_REGENERATE=1 cargo test --release --test sh"
     );
 }
+
+/// ∫ Y_i dω over the directions a parallelogram (corner `c`, edges `eu`, `ev`)
+/// subtends from `p`, by an independent route: the area integral
+/// ∫ Y(x̂) |n·(x − p)| / |x − p|³ dA, 4 × 4 Gauss–Legendre on sub-parallelograms
+/// split while they are larger than a tenth of their distance (f64). With
+/// `triangle`, the triangle c, c + eu, c + eu + ev instead.
+fn area_projection(c: DVec3, eu: DVec3, ev: DVec3, p: DVec3, triangle: bool) -> Sh {
+    let gl = sh::gauss_legendre(4);
+    let n = eu.cross(ev);
+    let extent = eu.length().max(ev.length());
+    let mut out = [0.0; COEFFS];
+    let mut stack = vec![(0.0f64, 0.0f64, 1.0f64, 0u32)];
+    while let Some((u0, v0, size, depth)) = stack.pop() {
+        let mid = c + eu * (u0 + 0.5 * size) + ev * (v0 + 0.5 * size);
+        if extent * size > 0.1 * (mid - p).length() && depth < 16 {
+            let h = 0.5 * size;
+            stack.extend([
+                (u0, v0, h, depth + 1),
+                (u0 + h, v0, h, depth + 1),
+                (u0, v0 + h, h, depth + 1),
+                (u0 + h, v0 + h, h, depth + 1),
+            ]);
+            continue;
+        }
+        for &(a, wa) in &gl {
+            for &(b, wb) in &gl {
+                let (u, v) = (u0 + size * 0.5 * (a + 1.0), v0 + size * 0.5 * (b + 1.0));
+                // The triangle c, c + eu, c + eu + ev by the collapsed square
+                // (u, v) ↦ (u, u·v): Jacobian u.
+                let (x, jac) = if triangle {
+                    (c + eu * u + ev * (u * v), u)
+                } else {
+                    (c + eu * u + ev * v, 1.0)
+                };
+                let d = x - p;
+                let r = d.length();
+                let w = wa * wb * 0.25 * size * size * jac * n.dot(d).abs() / (r * r * r);
+                let y = sh::eval(d / r);
+                for i in 0..COEFFS {
+                    out[i] += w * y[i];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The exact projection of a spherical polygon (boundary recurrences over
+/// zonal harmonics) against the area integral: random parallelograms and
+/// triangles, seen from far, from just above them, beside an edge and from
+/// behind; and additivity: a quad is the sum of its four quarters.
+#[test]
+fn polygon_projection_matches_the_area_integral() {
+    let mut rng = Rng::new(57);
+    let mut worst = 0.0f64;
+    for case in 0..40 {
+        let c = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
+        let eu = random_dir(&mut rng) * (0.2 + 2.0 * rng.next_f64());
+        let ev = (random_dir(&mut rng) * (0.2 + 2.0 * rng.next_f64())).reject_from(eu)
+            + eu * (0.3 * rng.next_f64());
+        let n = eu.cross(ev).normalize();
+        // Heights from 10⁻³ to 10 of the quad's size, above a point inside or
+        // outside it, on either side.
+        let height = 10f64.powf(-3.0 + 4.0 * rng.next_f64()) * eu.length();
+        let (a, b) = (1.6 * rng.next_f64() - 0.3, 1.6 * rng.next_f64() - 0.3);
+        let side = if case % 2 == 0 { 1.0 } else { -1.0 };
+        let p = c + eu * a + ev * b + n * (side * height);
+        let triangle = case % 4 == 3;
+        let want = area_projection(c, eu, ev, p, triangle);
+        let f = |v: DVec3| (v - p).as_vec3a();
+        let got: [f32; COEFFS] = if triangle {
+            sh::polygon_projection([f(c), f(c + eu), f(c + eu + ev)])
+        } else {
+            sh::polygon_projection([f(c), f(c + eu), f(c + eu + ev), f(c + ev)])
+        };
+        let err = (0..COEFFS)
+            .map(|i| (f64::from(got[i]) - want[i]).abs())
+            .fold(0.0, f64::max);
+        let scale = want.iter().map(|x| x.abs()).fold(0.0, f64::max).max(1e-3);
+        worst = worst.max(err / scale);
+        assert!(
+            err < 2e-5 * scale + 1e-6,
+            "case {case} (height {height:.3e}, {a:.2}, {b:.2}, triangle {triangle}): error {err:.3e} of {scale:.3e}\n{got:?}\n{want:?}"
+        );
+        if !triangle {
+            let q = |u: f64, v: f64| {
+                let (e, g) = (eu * 0.5, ev * 0.5);
+                let o = c + eu * u + ev * v;
+                sh::polygon_projection([f(o), f(o + e), f(o + e + g), f(o + g)])
+            };
+            let parts = [q(0.0, 0.0), q(0.5, 0.0), q(0.0, 0.5), q(0.5, 0.5)];
+            for i in 0..COEFFS {
+                let sum: f32 = parts.iter().map(|x| x[i]).sum();
+                assert!(
+                    (sum - got[i]).abs() < 2e-5 * scale as f32 + 1e-6,
+                    "case {case}: quarters {sum} vs {}",
+                    got[i]
+                );
+            }
+        }
+    }
+    eprintln!("worst relative error {worst:.2e}");
+}
+
+/// The basis in f32 is the f64 basis rounded.
+#[test]
+fn f32_basis_is_the_f64_basis() {
+    let mut rng = Rng::new(9);
+    for _ in 0..100 {
+        let d = random_dir(&mut rng);
+        let (a, b) = (sh::eval(d), sh::eval_f32(d.as_vec3a()));
+        for i in 0..COEFFS {
+            assert!(
+                (f64::from(b[i]) - a[i]).abs() < 1e-6,
+                "{i}: {} vs {}",
+                b[i],
+                a[i]
+            );
+        }
+    }
+}

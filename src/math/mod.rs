@@ -101,6 +101,36 @@ impl Frame {
     }
 }
 
+/// atan2(y, x) within 1.2e-5 rad (a degree-11 odd minimax polynomial for atan
+/// on [0, 1], folded to the four quadrants), about 3× cheaper than libm's: for
+/// lookups that bin the angle (a cone map's azimuth), where that error moves no
+/// direction but the few within it of a bin edge. 0 at the origin.
+#[inline]
+pub fn atan2_approx(y: f32, x: f32) -> f32 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = if ax < ay { (ax, ay) } else { (ay, ax) };
+    if !(hi > 0.0) {
+        return 0.0;
+    }
+    let a = lo / hi;
+    let s = a * a;
+    let mut r = a
+        * (0.999_977_3
+            + s * (-0.332_623_5
+                + s * (0.193_543_5 + s * (-0.116_432_87 + s * (0.052_653_32 - s * 0.011_721_2)))));
+    if ay > ax {
+        r = std::f32::consts::FRAC_PI_2 - r;
+    }
+    if x < 0.0 {
+        r = std::f32::consts::PI - r;
+    }
+    if y < 0.0 {
+        -r
+    } else {
+        r
+    }
+}
+
 /// Rec.709 luminance of a linear RGB value.
 pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
@@ -170,6 +200,31 @@ pub fn icosahedron() -> (Vec<Vec3>, Vec<[u32; 3]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn atan2_approx_is_within_its_bound_everywhere() {
+        let mut worst = 0.0f64;
+        for i in 0..20_000 {
+            let phi = -std::f64::consts::PI + (i as f64 + 0.37) * std::f64::consts::TAU / 20_000.0;
+            let r = 1e-3 + (i % 7) as f64;
+            let (y, x) = ((r * phi.sin()) as f32, (r * phi.cos()) as f32);
+            let want = f64::from(y).atan2(f64::from(x));
+            worst = worst.max((f64::from(atan2_approx(y, x)) - want).abs());
+        }
+        for (y, x) in [
+            (0.0, 1.0),
+            (1.0, 0.0),
+            (0.0, -1.0),
+            (-1.0, 0.0),
+            (1.0, 1.0),
+            (-1.0, -1.0),
+        ] {
+            let want = f64::from(y).atan2(f64::from(x));
+            worst = worst.max((f64::from(atan2_approx(y, x)) - want).abs());
+        }
+        assert!(worst < 1.2e-5, "{worst:e}");
+        assert_eq!(atan2_approx(0.0, 0.0), 0.0);
+    }
 
     #[test]
     fn frame_is_orthonormal_for_all_octants() {

@@ -357,15 +357,20 @@ impl Combiner {
         // the method's: taken once, towards the light's centre.
         let mut scale = 1.0;
         let y_light = |v: &ShF| sh::dot_f32(v, &sh::eval_f32(frame.n)).clamp(0.0, 1.0);
-        let light_angle = cos_max.acos();
+        let sin_max = (1.0 - cos_max * cos_max).max(0.0).sqrt();
         for &(_, j) in nearer {
             let e = &self.entities[j as usize];
             let to_e = e.center - p;
             let d_e = to_e.length();
-            // Only an entity whose cone meets the light's can hide any of it.
-            let apart = (to_e.dot(frame.n) / d_e.max(1e-30)).clamp(-1.0, 1.0).acos();
-            if d_e > e.radius && apart > light_angle + (e.radius / d_e).asin() {
-                continue;
+            // Only an entity whose cone meets the light's can hide any of it:
+            // skip it where the angle between their axes exceeds the sum of the
+            // half-angles (which must be under π for that), compared by cosines.
+            if d_e > e.radius {
+                let (sin_e, cos_apart) = (e.radius / d_e, to_e.dot(frame.n) / d_e);
+                let cos_e = (1.0 - sin_e * sin_e).sqrt();
+                if cos_max > -cos_e && cos_apart < cos_max * cos_e - sin_max * sin_e {
+                    continue;
+                }
             }
             let q = e.to_rest * (p - e.center);
             if let Some(map) = &e.visibility {
@@ -439,63 +444,26 @@ fn above_horizon(r: &Rect, p: Vec3, n: Vec3) -> bool {
     .any(|c| n.dot(*c - p) > 0.0)
 }
 
-/// A sub-rectangle of a quad's occlusion quadrature is split in four while its
-/// size is more than this fraction of its distance from the receiver: the
-/// 2 × 2 Gauss rule then sees a smooth integrand (the harmonics and the
-/// solid-angle Jacobian both vary slowly across it).
-const QUAD_MAX_SPAN: f32 = 0.75;
-/// The most times a sub-rectangle is split.
-const QUAD_MAX_DEPTH: u32 = 12;
-
 /// The visibility SH a quad leaves a point `p`: 1 minus the projection of the
-/// quad's spherical rectangle, ∫ Y_lm dω = ∫ Y_lm(ω(x)) |n·(x − p)| / |x − p|³
-/// dA over the quad, by a 2 × 2 Gauss–Legendre rule on sub-rectangles split
-/// until each is small against its distance (`QUAD_MAX_SPAN`), so a receiver
-/// next to a floor is as right as one far from it. A half-space, which it
-/// replaced, hides the sky above a wall of finite height.
+/// spherical quadrilateral it subtends, exact ([`sh::polygon_projection`]), so
+/// a receiver next to a floor is as right as one far from it. A half-space,
+/// which it replaced, hides the sky above a wall of finite height.
 pub fn quad_visibility(r: &Rect, p: Vec3) -> ShF {
-    // Gauss–Legendre nodes on [0, 1] (weights ½ each).
-    const G: [f32; 2] = [0.211_324_9, 0.788_675_1];
+    let corners = [
+        r.corner,
+        r.corner + r.edge_u,
+        r.corner + r.edge_u + r.edge_v,
+        r.corner + r.edge_v,
+    ]
+    .map(|c| c - p);
     let normal = cross(r.edge_u, r.edge_v);
-    let area = normal.length();
-    if area.is_nan() || area <= 0.0 {
-        return visibility_from_occlusion(&[0.0; COEFFS]);
-    }
-    let n_hat = normal / area;
-    let height = n_hat.dot(r.corner - p).abs();
-    let extent = r.edge_u.length().max(r.edge_v.length());
-    let mut occ = [0.0f32; COEFFS];
-    if height.is_nan() || height <= 0.0 {
-        return visibility_from_occlusion(&occ);
-    }
-    let mut stack: Vec<(f32, f32, f32, u32)> = vec![(0.0, 0.0, 1.0, 0)];
-    while let Some((u, v, size, depth)) = stack.pop() {
-        let centre = r.corner + r.edge_u * (u + 0.5 * size) + r.edge_v * (v + 0.5 * size);
-        let span = extent * size;
-        if span > QUAD_MAX_SPAN * (centre - p).length() && depth < QUAD_MAX_DEPTH {
-            let h = 0.5 * size;
-            stack.extend([
-                (u, v, h, depth + 1),
-                (u + h, v, h, depth + 1),
-                (u, v + h, h, depth + 1),
-                (u + h, v + h, h, depth + 1),
-            ]);
-            continue;
-        }
-        let da = 0.25 * area * size * size;
-        for gu in G {
-            for gv in G {
-                let d = r.corner + r.edge_u * (u + gu * size) + r.edge_v * (v + gv * size) - p;
-                let r2 = d.length_squared();
-                let inv = r2.sqrt().recip();
-                let w = height * inv * inv * inv * da;
-                let y = sh::eval_f32(d * inv);
-                for k in 0..COEFFS {
-                    occ[k] += w * y[k];
-                }
-            }
-        }
-    }
+    let height = normal.dot(corners[0]);
+    // In the quad's plane (or a degenerate quad) it hides nothing.
+    let occ = if height.is_finite() && height != 0.0 {
+        sh::polygon_projection(corners)
+    } else {
+        [0.0; COEFFS]
+    };
     visibility_from_occlusion(&occ)
 }
 
@@ -505,9 +473,9 @@ mod tests {
 
     /// The quad's visibility against a brute-force projection (a fine sphere
     /// quadrature, each direction tested against the quad) from far, from just
-    /// above its middle, beside an edge and from behind; a half-space (what the
-    /// quad replaced) or sub-rectangles twice as large (`QUAD_MAX_SPAN` 2) fail
-    /// the close ones.
+    /// above its middle, beside an edge and from behind (its errors are the
+    /// brute force's own); a half-space, what the quad replaced, fails the close
+    /// ones. The projection's exactness is `tests/sh.rs`'s.
     #[test]
     fn quad_visibility_matches_brute_force_projection() {
         let r = Rect {
