@@ -921,3 +921,35 @@ fn light_in_view(radius: f32, name: &str) -> (ShadowFieldSummary, ShadowFieldSum
     let _ = std::fs::remove_dir_all(&dir);
     (one, four)
 }
+
+/// A scene the method cannot shade (a mirror) is refused with one error naming
+/// the file and the shape, before anything is written: it used to come out with
+/// the mirror black and figures that scored it.
+#[test]
+fn a_mirror_is_refused_by_name() {
+    let dir = out_dir("mirror-refused");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("mirror.toml");
+    std::fs::write(
+        &path,
+        "[camera]\nfrom = [0, 1, 4]\nto = [0, 0, 0]\nfov = 40\nresolution = [8, 8]\n\
+         [materials.m]\ntype = \"mirror\"\nreflectance = [0.9, 0.9, 0.9]\n\
+         [[shapes]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n\
+         [[lights]]\ntype = \"sphere\"\ncenter = [0, 3, 0]\nradius = 0.2\nradiance = [10, 10, 10]\n",
+    )
+    .unwrap();
+    let mut o = ShadowFieldOptions::new(&path);
+    o.out_dir = dir.join("out");
+    o.quiet = true;
+    let msg = run(&o).unwrap_err().to_string();
+    assert!(
+        msg.contains("mirror.toml") && msg.contains("`ball`") && msg.contains("mirror"),
+        "{msg}"
+    );
+    assert!(
+        !o.out_dir.exists(),
+        "wrote {} before refusing",
+        o.out_dir.display()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -15,8 +15,9 @@
 //!
 //! [`Options`]:
 //! * `diffuse_only`: lambert materials, no bumps, sphere lights only, no mirror,
-//!   no quad objects (what `preview shadow-field` models: it takes a lone quad for
-//!   a half-space, right for a floor or wall only); skies constant, image or none.
+//!   no quad objects besides the floor and wall (scenes kept as the bounds in
+//!   `tests/shadow_field_generated.rs` were measured on); skies constant, image or
+//!   none.
 //! * `glossy_only`: what `preview glossy` models: no lights, a constant or image
 //!   sky always, lambert, blinn_phong and cook_torrance materials of exponent
 //!   2–128 (the paper's range: low-frequency transfer) on the objects, a lambert

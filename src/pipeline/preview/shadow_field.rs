@@ -146,6 +146,13 @@ impl std::fmt::Display for ShadowFieldSummary {
 pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
     let mut scene = crate::scene::load(&opts.scene)?;
     crate::pipeline::memory::check_scene(&scene, "a shadow-field preview")?;
+    // What the method cannot shade (a mirror, an emitting mesh) would come out
+    // black or unlit without a word.
+    sf::check_shapes(&scene).map_err(|message| Error::Scene {
+        path: scene.path.clone(),
+        location: "shadow-field preview".into(),
+        message,
+    })?;
     if let Some((w, h)) = opts.resolution {
         scene.camera = scene
             .camera

@@ -102,6 +102,17 @@ pub fn precompute(
 /// that are spheres or rectangles (the light entities it integrates), and some
 /// light or an environment. Returns why not.
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
+    check_shapes(scene)?;
+    if scene.emitter_count() == 0 && scene.environment.is_none() {
+        return Err("nothing lights the scene (no light, no environment)".into());
+    }
+    Ok(())
+}
+
+/// What `preview shadow-field` refuses: a shape the method cannot shade (a
+/// mirror) or an emitter that is not a light entity. (An unlit scene it renders
+/// black, scored against a black reference.)
+pub fn check_shapes(scene: &Scene) -> Result<(), String> {
     let shaded = |m: u32, name: &str| match scene.materials.get(m as usize) {
         Some(m) if m.preview_parts().is_ok() => Ok(()),
         Some(_) => Err(format!(
@@ -123,9 +134,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     }
     for s in scene.spheres.iter().filter(|s| s.emission == Vec3::ZERO) {
         shaded(s.material, &s.name)?;
-    }
-    if scene.emitter_count() == 0 && scene.environment.is_none() {
-        return Err("nothing lights the scene (no light, no environment)".into());
     }
     Ok(())
 }
