@@ -97,64 +97,6 @@ pub fn square_to_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
 }
 
-/// Uniform direction in the cone of half-angle acos(cos_max) around +z by the
-/// concentric map (the disk's r² is the cone's s = (1 − cos θ)/(1 − cos_max)):
-/// equal-area cells that stay nearly square out to the rim, where the polar
-/// map's are 2π·sin θ wide for every (1 − cos θ) high.
-pub fn square_to_uniform_cone_concentric(u: Vec2, cos_max: f32) -> Vec3 {
-    let d = square_to_disk_concentric(u);
-    let r2 = d.length_squared();
-    let cos_t = 1.0 - r2 * (1.0 - cos_max);
-    // sin θ / r: the disk point's direction scaled to the cone's sin θ.
-    let k = if r2 > 0.0 {
-        ((1.0 - cos_t * cos_t).max(0.0) / r2).sqrt()
-    } else {
-        0.0
-    };
-    Vec3::new(d.x * k, d.y * k, cos_t)
-}
-
-/// The inverse of [`square_to_uniform_cone_concentric`] for a unit direction
-/// `v` around +z; `None` outside the cone.
-pub fn uniform_cone_concentric_to_square(v: Vec3, cos_max: f32) -> Option<Vec2> {
-    if !(v.z >= cos_max) {
-        return None;
-    }
-    let r = ((1.0 - v.z) / (1.0 - cos_max)).max(0.0).sqrt();
-    let rho = (v.x * v.x + v.y * v.y).sqrt();
-    let d = if rho > 0.0 {
-        Vec2::new(v.x, v.y) * (r / rho)
-    } else {
-        Vec2::ZERO
-    };
-    Some(disk_to_square_concentric(d))
-}
-
-/// The inverse of [`square_to_disk_concentric`]: in the wedge where |x| ≥ |y|
-/// the square's x is the signed radius and y the angle atan(y/x) in units of
-/// π/4 times it (the other wedge alike).
-pub fn disk_to_square_concentric(d: Vec2) -> Vec2 {
-    let r = d.length();
-    if !(r > 0.0) {
-        return Vec2::splat(0.5);
-    }
-    let quarter = |t: f32| t / std::f32::consts::FRAC_PI_4;
-    let (ox, oy) = if d.x.abs() >= d.y.abs() {
-        let ox = r.copysign(d.x);
-        (
-            ox,
-            ox * quarter(super::atan2_approx(d.y * d.x.signum(), d.x.abs())),
-        )
-    } else {
-        let oy = r.copysign(d.y);
-        (
-            oy * quarter(super::atan2_approx(d.x * d.y.signum(), d.y.abs())),
-            oy,
-        )
-    };
-    Vec2::new(0.5 * (ox + 1.0), 0.5 * (oy + 1.0))
-}
-
 pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
     1.0 / (2.0 * PI * (1.0 - cos_max))
 }
@@ -199,34 +141,6 @@ pub fn vmf_pdf(cos_theta: f32, kappa: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The cone's concentric warp and its inverse round-trip over a grid of the
-    /// square (the wedge diagonals and the centre included), and its image is
-    /// uniform: equal cells have equal solid angle (every cos θ band's share).
-    #[test]
-    fn concentric_cone_round_trips_and_is_uniform() {
-        for cos_max in [0.999f32, 0.9, 0.3, -0.5] {
-            let n = 41;
-            let mut below_half = 0;
-            for i in 0..n {
-                for j in 0..n {
-                    let u = Vec2::new(i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
-                    let v = square_to_uniform_cone_concentric(u, cos_max);
-                    assert!((v.length() - 1.0).abs() < 1e-5 && v.z >= cos_max - 1e-6);
-                    let back = uniform_cone_concentric_to_square(v, cos_max.min(v.z)).unwrap();
-                    assert!(
-                        (back - u).abs().max_element() < 2e-4,
-                        "{cos_max}: {u} → {v} → {back}"
-                    );
-                    // s = (1 − cos θ)/(1 − cos_max) is the disk's r², uniform in area.
-                    below_half += usize::from((1.0 - v.z) / (1.0 - cos_max) < 0.5);
-                }
-            }
-            let share = below_half as f32 / (n * n) as f32;
-            assert!((share - 0.5).abs() < 0.03, "{cos_max}: {share}");
-            assert!(uniform_cone_concentric_to_square(Vec3::new(0.0, 1.0, 0.0), 0.5).is_none());
-        }
-    }
 
     /// Monte Carlo check that a warp's density integrates to one over its image: a
     /// uniform-sphere estimate of ∫ pdf dω must be 1.

@@ -9,7 +9,7 @@ use super::{Fields, Settings};
 use crate::math::sh::{ShF, COEFFS};
 use crate::scene::Scene;
 
-const MAGIC: &[u8; 8] = b"GTSHFLD3";
+const MAGIC: &[u8; 8] = b"GTSHFLD2";
 
 fn put_block(out: &mut Vec<u8>, data: &[ShF]) {
     out.extend_from_slice(&(data.len() as u64).to_le_bytes());

@@ -156,11 +156,7 @@ impl Field {
 /// so that the samples at a pole (one point, n_φ azimuths) are interpolated in φ
 /// as everywhere else.
 pub fn cone_frame(dir: Vec3, phi: f32) -> crate::math::Frame {
-    cone_frame_at_azimuth(dir, phi.sin_cos())
-}
-
-/// [`cone_frame`] with the azimuth given by its sine and cosine.
-fn cone_frame_at_azimuth(dir: Vec3, (sin_p, cos_p): (f32, f32)) -> crate::math::Frame {
+    let (sin_p, cos_p) = phi.sin_cos();
     let sin_t = (dir.x * dir.x + dir.y * dir.y).sqrt();
     crate::math::Frame {
         s: Vec3::new(dir.z * cos_p, dir.z * sin_p, -sin_t),
@@ -181,9 +177,9 @@ pub fn cone_cos(d: f32, radius: f32) -> f32 {
 }
 
 /// The unblurred visibility of an entity: at every grid sample, one bit per ray
-/// (`side²` of them, at the centres of the cells of the concentric map of the
-/// cone of half-angle α the bounding sphere subtends, in [`cone_frame`]:
-/// equal-area cells, nearly square out to the rim). Order-4 SH blur a small light's shadow to half its depth
+/// (`side²` of them, stratified in (s, φ′) with s = (1 − cos θ′)/(1 − cos α)
+/// uniform over the cone of half-angle α the bounding sphere subtends, θ′ and φ′
+/// in [`cone_frame`]). Order-4 SH blur a small light's shadow to half its depth
 /// and spread it over tens of degrees, so sphere lights look the occluders up
 /// here instead; in cone coordinates neighbouring samples see the entity at the
 /// same place, so the lookup interpolates its shape, not two copies of it.
@@ -191,8 +187,8 @@ pub fn cone_cos(d: f32, radius: f32) -> f32 {
 pub struct ConeMap {
     pub grid: Grid,
     pub side: usize,
-    /// `words()` u64 per sample, bit a·side + b set where the ray of cell
-    /// (a, b) of the square hits the entity.
+    /// `words()` u64 per sample, bit a·side + b set where ray (s index a, φ′
+    /// index b) hits the entity.
     pub bits: Vec<u64>,
 }
 
@@ -206,55 +202,35 @@ impl ConeMap {
     /// the entity bounded by `radius`: what every direction's lookup there shares.
     pub fn at(&self, q: Vec3, radius: f32) -> ConeLookup {
         let d = q.length().max(1e-30);
-        // The azimuth atan2(q.y, q.x) by its sine and cosine (0 on the axis).
-        let r = (q.x * q.x + q.y * q.y).sqrt();
-        let azimuth = if r > 0.0 {
-            (q.y / r, q.x / r)
-        } else {
-            (0.0, 1.0)
-        };
         ConeLookup {
-            frame: cone_frame_at_azimuth(q / d, azimuth),
+            frame: cone_frame(q / d, q.y.atan2(q.x)),
             cos_max: cone_cos(d, radius),
             corners: self.grid.corners(q).0,
         }
     }
 
     /// Visibility in rest-frame direction `w` (unit) from where `at` was taken:
-    /// at each of the eight grid samples the rays' bits bilinearly interpolated
-    /// at w's cell coordinates (the rays sit at the centres of their cells),
-    /// then weighted trilinearly (1 outside the cone). Reading the one nearest
-    /// ray instead moves every shadow edge to a cell edge: jagged hard shadows.
+    /// the eight grid samples' bits at w's cone coordinates, weighted trilinearly
+    /// (1 outside the cone).
     pub fn visibility(&self, at: &ConeLookup, w: Vec3) -> f32 {
-        let local = at.frame.to_local(w);
-        let Some(u) = crate::math::warp::uniform_cone_concentric_to_square(local, at.cos_max)
-        else {
+        let c = w.dot(at.frame.n);
+        if c < at.cos_max {
             return 1.0;
-        };
+        }
+        let s = (1.0 - c) / (1.0 - at.cos_max);
+        let mut u = w.dot(at.frame.t).atan2(w.dot(at.frame.s)) / std::f32::consts::TAU;
+        if u < 0.0 {
+            u += 1.0;
+        }
         let n = self.side;
-        let cell = |x: f32| {
-            let x = (x * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
-            let i = (x as usize).min(n.saturating_sub(2));
-            (i, (i + 1).min(n - 1), x - i as f32)
-        };
-        let ((a0, a1, fa), (b0, b1, fb)) = (cell(u.x), cell(u.y));
-        let taps = [
-            (a0 * n + b0, (1.0 - fa) * (1.0 - fb)),
-            (a0 * n + b1, (1.0 - fa) * fb),
-            (a1 * n + b0, fa * (1.0 - fb)),
-            (a1 * n + b1, fa * fb),
-        ];
+        let a = ((s * n as f32) as usize).min(n - 1);
+        let b = ((u * n as f32) as usize).min(n - 1);
+        let bit = a * n + b;
         let words = Self::words(n);
         let mut hidden = 0.0;
         for (i, wt) in at.corners {
-            if wt == 0.0 {
-                continue;
-            }
-            let sample = &self.bits[i as usize * words..];
-            for (bit, tw) in taps {
-                if sample[bit / 64] >> (bit % 64) & 1 == 1 {
-                    hidden += wt * tw;
-                }
+            if wt != 0.0 && self.bits[i as usize * words + bit / 64] >> (bit % 64) & 1 == 1 {
+                hidden += wt;
             }
         }
         (1.0 - hidden).clamp(0.0, 1.0)

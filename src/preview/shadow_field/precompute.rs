@@ -230,7 +230,7 @@ impl EntityGeometry {
         for a in 0..n {
             for b in 0..n {
                 let u = Vec2::new((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
-                let dir = frame.to_world(warp::square_to_uniform_cone_concentric(u, cos_max));
+                let dir = frame.to_world(warp::square_to_uniform_cone(u, cos_max));
                 let Some(le) = self.trace(&Ray::new(p, dir)) else {
                     continue;
                 };
