@@ -156,7 +156,11 @@ impl Field {
 /// so that the samples at a pole (one point, n_φ azimuths) are interpolated in φ
 /// as everywhere else.
 pub fn cone_frame(dir: Vec3, phi: f32) -> crate::math::Frame {
-    let (sin_p, cos_p) = phi.sin_cos();
+    cone_frame_at_azimuth(dir, phi.sin_cos())
+}
+
+/// [`cone_frame`] with the azimuth given by its sine and cosine.
+fn cone_frame_at_azimuth(dir: Vec3, (sin_p, cos_p): (f32, f32)) -> crate::math::Frame {
     let sin_t = (dir.x * dir.x + dir.y * dir.y).sqrt();
     crate::math::Frame {
         s: Vec3::new(dir.z * cos_p, dir.z * sin_p, -sin_t),
@@ -202,8 +206,11 @@ impl ConeMap {
     /// the entity bounded by `radius`: what every direction's lookup there shares.
     pub fn at(&self, q: Vec3, radius: f32) -> ConeLookup {
         let d = q.length().max(1e-30);
+        // The azimuth atan2(q.y, q.x) by its sine and cosine (0 on the axis).
+        let r = (q.x * q.x + q.y * q.y).sqrt();
+        let azimuth = if r > 0.0 { (q.y / r, q.x / r) } else { (0.0, 1.0) };
         ConeLookup {
-            frame: cone_frame(q / d, q.y.atan2(q.x)),
+            frame: cone_frame_at_azimuth(q / d, azimuth),
             cos_max: cone_cos(d, radius),
             corners: self.grid.corners(q).0,
         }
@@ -218,7 +225,9 @@ impl ConeMap {
             return 1.0;
         }
         let s = (1.0 - c) / (1.0 - at.cos_max);
-        let mut u = w.dot(at.frame.t).atan2(w.dot(at.frame.s)) / std::f32::consts::TAU;
+        // The cell needs the angle to a small fraction of 1/side of a turn.
+        let mut u = crate::math::atan2_approx(w.dot(at.frame.t), w.dot(at.frame.s))
+            / std::f32::consts::TAU;
         if u < 0.0 {
             u += 1.0;
         }
