@@ -244,7 +244,8 @@ fn binary_render(scene: &Path, flags: &[&str], exr: &Path) -> Result<(), String>
 }
 
 /// Through the binary users run: a plain render, a `--gradients` render (4 rays
-/// per line, as the adaptive pipeline uses) and one adaptive render per scene, the
+/// per line, as the adaptive pipeline uses), a gradient-domain render (L1 or L2,
+/// with or without `--dense-adaptive`) and one adaptive render per scene, the
 /// adaptive runs cycling through every strategy × interpolation × budget.
 #[test]
 fn the_binary_writes_finite_layers_for_generated_scenes() {
@@ -262,9 +263,16 @@ fn the_binary_writes_finite_layers_for_generated_scenes() {
         let path = write_scene(&dir, seed);
         let (s, interp, budget) = combos[seed as usize % combos.len()];
         let budget = budget.to_string();
-        let runs: [(&str, Vec<&str>); 3] = [
+        // The gradient-domain solves, each with and without dense adaptive sampling.
+        let solve = ["poisson-l1", "poisson-l2"][seed as usize % 2];
+        let mut domain = vec!["--reconstruct", solve];
+        if seed % 4 >= 2 {
+            domain.push("--dense-adaptive");
+        }
+        let runs: [(&str, Vec<&str>); 4] = [
             ("plain", vec![]),
             ("gradients", vec!["--gradients", "--vis-samples", "4"]),
+            ("gradient-domain", domain),
             (
                 "adaptive",
                 vec![
