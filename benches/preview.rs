@@ -35,7 +35,7 @@ fn combination(c: &mut Criterion) {
         ..Settings::default()
     };
     let fields = sf::precompute(&scene, &settings, &|_, _| {});
-    let env = sf::environment_sh(scene.environment.as_ref());
+    let env = sf::peak::EnvironmentLight::new(scene.environment.as_ref());
     let (combiner, _) = fields.combiner(&[], env);
     // Receivers on the floor around the bunny and the ball (every entity in play).
     let points: Vec<Vec3> = (0..64)

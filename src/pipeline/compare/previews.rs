@@ -154,7 +154,7 @@ fn shadow_field(plan: &Plan) -> Result<Run> {
     };
     let (fields, precompute_s, cached) = sf_cmd::cached_fields(&scene, &opts)?;
     let start = Instant::now();
-    let env = sf::environment_sh(scene.environment.as_ref());
+    let env = sf::peak::EnvironmentLight::new(scene.environment.as_ref());
     let env_s = start.elapsed().as_secs_f64();
     let clock = Clock::start();
     let frame = sf_cmd::shade_frame(&scene, plan.accel, &fields, &[], &env, &opts.settings);

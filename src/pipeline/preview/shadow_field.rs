@@ -7,7 +7,6 @@
 //! by the scene's content hash, every precompute setting and the source's hash.
 
 use crate::accel::Accel;
-use crate::math::sh::ShF;
 use crate::math::Vec3;
 use crate::output::{self, metrics, OutputImage};
 use crate::pipeline::preview::figures::{self, Figures, Reference, Timing};
@@ -176,7 +175,7 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
         }
     };
     let (fields, precompute_s, cached) = cached_fields(&scene, opts)?;
-    let env = sf::environment_sh(scene.environment.as_ref());
+    let env = sf::peak::EnvironmentLight::new(scene.environment.as_ref());
     match frames {
         None => {
             let accel = Accel::build(&scene.meshes, &scene.spheres);
@@ -210,11 +209,11 @@ pub(crate) fn shade_frame(
     accel: &Accel,
     fields: &Fields,
     poses: &[Pose],
-    env: &[ShF; 3],
+    env: &sf::peak::EnvironmentLight,
     settings: &Settings,
 ) -> Frame {
     let (start, cpu) = (Instant::now(), crate::cpu_time::process_s());
-    let (combiner, mesh_self) = fields.combiner(poses, *env);
+    let (combiner, mesh_self) = fields.combiner(poses, env.clone());
     let receivers = Receivers::new(scene, accel, fields, &mesh_self);
     let shaded = sf::shade_image(&receivers, &combiner, settings.pixel_samples);
     Frame {
@@ -253,7 +252,7 @@ fn direct(spp: u32, seed: u32) -> RenderOptions {
 fn references(
     scene: &Scene,
     accel: &Accel,
-    env: &[ShF; 3],
+    env: &sf::peak::EnvironmentLight,
     preview: &sf::Shaded,
     opts: &ShadowFieldOptions,
 ) -> Result<References> {
@@ -279,7 +278,12 @@ fn references(
         Some(crate::scene::Environment::Constant { .. }) | None => reference.beauty.clone(),
         Some(_) => {
             let mut low = scene.clone();
-            low.environment = Some(sf::environment_lowfreq(env, 256, 128));
+            low.environment = Some(sf::environment_lowfreq(
+                env,
+                scene.environment.as_ref(),
+                256,
+                128,
+            ));
             render(&low, accel, &direct(reference.spp, 0x5eed_0002), &|_, _| {})?.beauty
         }
     };
@@ -437,7 +441,7 @@ fn run_frames(
     scene: &Scene,
     opts: &ShadowFieldOptions,
     fields: &Fields,
-    env: &[ShF; 3],
+    env: &sf::peak::EnvironmentLight,
     n: u32,
     (precompute_s, cached): (f64, bool),
 ) -> Result<ShadowFieldSummary> {

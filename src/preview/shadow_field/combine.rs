@@ -5,13 +5,15 @@
 //! the transfer accumulated so far — the OOFs of the entities nearer than it.
 //! The environment's SH, last, sees every occluder. A sphere light is the
 //! exception: a few degrees wide, it is not low-frequency, so it is integrated
-//! over its cap against the nearer entities' unblurred cone maps instead.
+//! over its cap against the nearer entities' unblurred cone maps instead; so is
+//! an environment's sun, split off its SH ([`super::peak`]).
 //!
 //! Multiplying the transfer rather than the lights' fields is the same integral
 //! ∫ L·V₁⋯V_n·T for band-limited factors; it needs one product per occluder for
 //! all lights together.
 
 use super::field::{cone_cos, ConeMap, Field};
+use super::peak::EnvironmentLight;
 use super::precompute::EntityKind;
 use crate::brdf::Material;
 use crate::math::sh::{self, ShF, COEFFS};
@@ -63,9 +65,7 @@ pub struct Shade {
     pub count: usize,
 }
 
-/// Directions per sphere light and receiver, uniform over its cap on a golden-angle
-/// spiral: a grid's rows of directions would enter an occluder's edge together
-/// and step the penumbra.
+/// Directions per sphere light (or environment peak) and receiver ([`cap_directions`]).
 pub const LIGHT_DIRS: usize = 32;
 /// 1/φ: the spiral's turn per direction, as a fraction of a full turn.
 const GOLDEN: f32 = 0.618_034;
@@ -74,8 +74,32 @@ const GOLDEN: f32 = 0.618_034;
 #[derive(Clone, Debug)]
 pub struct Combiner {
     pub entities: Vec<Placed>,
-    /// The environment's RGB SH (zero without an environment).
-    pub environment: [ShF; 3],
+    /// The environment: RGB SH, and its peak (a sun) if split off.
+    pub environment: EnvironmentLight,
+}
+
+/// A cone of light directions with what each carries ([`Combiner::cap_light`]).
+pub struct Cap<'a> {
+    pub axis: Vec3,
+    pub cos_max: f32,
+    pub dirs: &'a [Vec3; LIGHT_DIRS],
+    /// Radiance times the direction's share of the cap's solid angle.
+    pub power: &'a [Vec3; LIGHT_DIRS],
+    /// Beyond this distance along a direction nothing hides the light.
+    pub reach: f32,
+}
+
+/// `LIGHT_DIRS` directions uniform over the cap around `frame.n` on a
+/// golden-angle spiral: a grid's rows of directions would enter an occluder's
+/// edge together and step the penumbra.
+pub fn cap_directions(frame: &Frame, cos_max: f32) -> [Vec3; LIGHT_DIRS] {
+    std::array::from_fn(|k| {
+        let u = Vec2::new(
+            (k as f32 + 0.5) / LIGHT_DIRS as f32,
+            (k as f32 * GOLDEN).fract(),
+        );
+        frame.to_world(warp::square_to_uniform_cone(u, cos_max))
+    })
 }
 
 /// Receiver transfer of a Lambertian surface without the albedo: max(n·ω, 0)/π,
@@ -124,7 +148,7 @@ fn visibility_from_occlusion(o: &ShF) -> ShF {
 const ONE0: f32 = 3.544_907_7;
 
 impl Combiner {
-    pub fn new(entities: Vec<Placed>, environment: [ShF; 3]) -> Self {
+    pub fn new(entities: Vec<Placed>, environment: EnvironmentLight) -> Self {
         Self {
             entities,
             environment,
@@ -182,17 +206,19 @@ impl Combiner {
         let self_t = t;
         // The receiver's own (SH) shadowing is as blurred as the method's: the
         // share of a sphere light it leaves, by the light's SH field.
-        let own_share = |e: &Placed, q: Vec3| -> f32 {
-            let Some(rad) = e.radiance.as_ref().filter(|_| shadows_itself) else {
-                return 1.0;
-            };
-            let l = rad[1].lookup(q);
-            let (all, kept) = (sh::dot_f32(&bare, &l), sh::dot_f32(&self_t, &l));
-            if all > 1e-12 {
+        let share_of = |l: &ShF| -> f32 {
+            let (all, kept) = (sh::dot_f32(&bare, l), sh::dot_f32(&self_t, l));
+            if shadows_itself && all > 1e-12 {
                 (kept / all).clamp(0.0, 1.0)
             } else {
                 1.0
             }
+        };
+        let own_share = |e: &Placed, q: Vec3| -> f32 {
+            e.radiance
+                .as_ref()
+                .filter(|_| shadows_itself)
+                .map_or(1.0, |rad| share_of(&rad[1].lookup(q)))
         };
 
         // Near-to-far order of the entities that can matter (bounding sphere not
@@ -274,7 +300,21 @@ impl Combiner {
                 }
             }
         }
-        let env = &self.environment;
+        // The environment's peak sees every entity (it is farther than all).
+        if let Some(pk) = &self.environment.peak {
+            let share = share_of(&pk.sh);
+            let cap = Cap {
+                axis: pk.axis,
+                cos_max: pk.cos_max,
+                dirs: &pk.dirs,
+                power: &pk.power,
+                reach: f32::INFINITY,
+            };
+            let (d, g) = self.cap_light(p, n, &cap, order, own, glossy);
+            out += share * d;
+            out_g += share * g;
+        }
+        let env = &self.environment.sh;
         out += Vec3::new(
             sh::dot_f32(&t, &env[0]),
             sh::dot_f32(&t, &env[1]),
@@ -296,16 +336,10 @@ impl Combiner {
     }
 
     /// A sphere light's direct light at a Lambertian receiver per unit albedo,
-    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions;
-    /// with `glossy`, second, ∫ L·V·f_s(ω, ω_o)·max(n·ω, 0) by the same
-    /// directions, f_s the renderer's own `Material::eval` (a highlight is as
-    /// sharp as the lobe, not as order 4).
-    /// V is the product of the unblurred cone maps of the entities `nearer`
-    /// than the light (the paper's near-to-far rule), and for an entity without
-    /// a map its SH visibility towards the light's centre. The receiver's own
-    /// shadowing is the caller's (`own_share`). Order-4 SH cannot hold a light a
-    /// few degrees wide: its product with an occluder's field leaves about half
-    /// of the shadow lit and spreads the rest over tens of degrees (issue 57).
+    /// ∫ L·V·max(n·ω, 0)/π over the light's cap, by `LIGHT_DIRS` directions
+    /// ([`cap_light`](Self::cap_light)). Order-4 SH cannot hold a light a few
+    /// degrees wide: its product with an occluder's field leaves about half of
+    /// the shadow lit and spreads the rest over tens of degrees (issue 57).
     #[allow(clippy::too_many_arguments)]
     fn sphere_light(
         &self,
@@ -324,40 +358,61 @@ impl Combiner {
             return (Vec3::ZERO, Vec3::ZERO);
         }
         let frame = Frame::from_normal(to_l / d);
-        let mut dirs = [Vec3::ZERO; LIGHT_DIRS];
+        let dirs = cap_directions(&frame, cos_max);
+        let power = le * (std::f32::consts::TAU * (1.0 - cos_max) / LIGHT_DIRS as f32);
+        let cap = Cap {
+            axis: frame.n,
+            cos_max,
+            dirs: &dirs,
+            power: &[power; LIGHT_DIRS],
+            reach: d - light.radius,
+        };
+        self.cap_light(p, n, &cap, nearer, own, glossy)
+    }
+
+    /// Light from a cap of directions `cap` at a receiver: per unit diffuse
+    /// albedo Σ_k V_k·max(n·ω_k, 0)·P_k/π, and with `glossy`, second,
+    /// Σ_k V_k·f_s(ω_k, ω_o)·max(n·ω_k, 0)·P_k, f_s the renderer's own
+    /// `Material::eval` (a highlight is as sharp as the lobe, not as order 4).
+    /// P_k is direction k's radiance times its share of the cap's solid angle.
+    /// V is exact for quads (per direction), and for the entities `nearer`
+    /// than the light (the paper's near-to-far rule) the product of their
+    /// unblurred cone maps; an entity without a map (a field rebuilt each
+    /// frame) is as blurred as the method's: its SH visibility towards the
+    /// axis. The receiver's own shadowing is the caller's (`own_share`).
+    fn cap_light(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        cap: &Cap,
+        nearer: &[(f32, u32)],
+        own: Option<usize>,
+        glossy: Option<&GlossyReceiver>,
+    ) -> (Vec3, Vec3) {
         let mut vis = [0.0f32; LIGHT_DIRS];
         let mut any = false;
         for k in 0..LIGHT_DIRS {
-            let u = Vec2::new(
-                (k as f32 + 0.5) / LIGHT_DIRS as f32,
-                (k as f32 * GOLDEN).fract(),
-            );
-            let w = frame.to_world(warp::square_to_uniform_cone(u, cos_max));
-            dirs[k] = w;
-            vis[k] = n.dot(w).max(0.0);
+            vis[k] = n.dot(cap.dirs[k]).max(0.0);
             any |= vis[k] > 0.0;
         }
         if !any {
             return (Vec3::ZERO, Vec3::ZERO);
         }
         // Quads (floors, walls) hide the light direction by direction, exactly.
-        let reach = d - light.radius;
         for (i, e) in self.entities.iter().enumerate() {
             if let EntityKind::Quad(r) = e.kind {
                 if Some(i) != own {
                     for k in 0..LIGHT_DIRS {
-                        if vis[k] > 0.0 && quad_hit(&r, p, dirs[k], reach) {
+                        if vis[k] > 0.0 && quad_hit(&r, p, cap.dirs[k], cap.reach) {
                             vis[k] = 0.0;
                         }
                     }
                 }
             }
         }
-        // An entity without a map (a field rebuilt each frame) is as blurred as
-        // the method's: taken once, towards the light's centre.
         let mut scale = 1.0;
-        let y_light = |v: &ShF| sh::dot_f32(v, &sh::eval_f32(frame.n)).clamp(0.0, 1.0);
-        let sin_max = (1.0 - cos_max * cos_max).max(0.0).sqrt();
+        let y_light = |v: &ShF| sh::dot_f32(v, &sh::eval_f32(cap.axis)).clamp(0.0, 1.0);
+        let sin_max = (1.0 - cap.cos_max * cap.cos_max).max(0.0).sqrt();
         for &(_, j) in nearer {
             let e = &self.entities[j as usize];
             let to_e = e.center - p;
@@ -366,9 +421,9 @@ impl Combiner {
             // skip it where the angle between their axes exceeds the sum of the
             // half-angles (which must be under π for that), compared by cosines.
             if d_e > e.radius {
-                let (sin_e, cos_apart) = (e.radius / d_e, to_e.dot(frame.n) / d_e);
+                let (sin_e, cos_apart) = (e.radius / d_e, to_e.dot(cap.axis) / d_e);
                 let cos_e = (1.0 - sin_e * sin_e).sqrt();
-                if cos_max > -cos_e && cos_apart < cos_max * cos_e - sin_max * sin_e {
+                if cap.cos_max > -cos_e && cos_apart < cap.cos_max * cos_e - sin_max * sin_e {
                     continue;
                 }
             }
@@ -377,26 +432,28 @@ impl Combiner {
                 let at = map.at(q, e.radius);
                 for k in 0..LIGHT_DIRS {
                     if vis[k] > 0.0 {
-                        vis[k] *= map.visibility(&at, e.to_rest * dirs[k]);
+                        vis[k] *= map.visibility(&at, e.to_rest * cap.dirs[k]);
                     }
                 }
             } else if let Some(occ) = &e.occlusion {
                 scale *= y_light(&visibility_from_occlusion(&occ.lookup(q)));
             }
         }
-        let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
-        let sum: f32 = vis.iter().sum();
-        let diffuse = le * (scale * sum * solid_angle / (LIGHT_DIRS as f32 * std::f32::consts::PI));
+        let mut diffuse = Vec3::ZERO;
+        for k in 0..LIGHT_DIRS {
+            diffuse += vis[k] * cap.power[k];
+        }
+        let diffuse = diffuse * (scale / std::f32::consts::PI);
         let glossy = glossy.map_or(Vec3::ZERO, |g| {
             // vis holds cos·V already: the lobe's f is the only factor left.
             let mut f_sum = Vec3::ZERO;
             for k in 0..LIGHT_DIRS {
                 if vis[k] > 0.0 {
-                    let wi = g.frame.to_local(dirs[k]);
-                    f_sum += vis[k] * g.lobe.eval(g.wo_local, wi);
+                    let wi = g.frame.to_local(cap.dirs[k]);
+                    f_sum += vis[k] * g.lobe.eval(g.wo_local, wi) * cap.power[k];
                 }
             }
-            le * f_sum * (scale * solid_angle / LIGHT_DIRS as f32)
+            f_sum * scale
         });
         (diffuse, glossy)
     }

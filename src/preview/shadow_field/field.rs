@@ -208,7 +208,11 @@ impl ConeMap {
         let d = q.length().max(1e-30);
         // The azimuth atan2(q.y, q.x) by its sine and cosine (0 on the axis).
         let r = (q.x * q.x + q.y * q.y).sqrt();
-        let azimuth = if r > 0.0 { (q.y / r, q.x / r) } else { (0.0, 1.0) };
+        let azimuth = if r > 0.0 {
+            (q.y / r, q.x / r)
+        } else {
+            (0.0, 1.0)
+        };
         ConeLookup {
             frame: cone_frame_at_azimuth(q / d, azimuth),
             cos_max: cone_cos(d, radius),
@@ -226,8 +230,8 @@ impl ConeMap {
         }
         let s = (1.0 - c) / (1.0 - at.cos_max);
         // The cell needs the angle to a small fraction of 1/side of a turn.
-        let mut u = crate::math::atan2_approx(w.dot(at.frame.t), w.dot(at.frame.s))
-            / std::f32::consts::TAU;
+        let mut u =
+            crate::math::atan2_approx(w.dot(at.frame.t), w.dot(at.frame.s)) / std::f32::consts::TAU;
         if u < 0.0 {
             u += 1.0;
         }

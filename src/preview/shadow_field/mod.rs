@@ -16,6 +16,7 @@ pub mod combine;
 pub mod deform;
 pub mod field;
 pub mod glossy;
+pub mod peak;
 pub mod precompute;
 
 use crate::accel::{Accel, PrimRef};
@@ -178,17 +179,57 @@ pub fn environment_sh(env: Option<&Environment>) -> [ShF; 3] {
     })
 }
 
-/// Lat-long image of the environment's order-4 projection (negative lobes clamped
-/// to zero): the lighting the method can represent, for the low-frequency reference.
-pub fn environment_lowfreq(env_sh: &[ShF; 3], width: usize, height: usize) -> Environment {
+/// Lat-long image of the lighting the method can represent, for the
+/// low-frequency reference: the order-4 projection (negative lobes clamped to
+/// zero) plus the split-off peak of `env`, if any.
+pub fn environment_lowfreq(
+    light: &peak::EnvironmentLight,
+    env: Option<&Environment>,
+    width: usize,
+    height: usize,
+) -> Environment {
+    let Environment::Image { texels, .. } = lowfreq_sh(&light.sh, width, height) else {
+        unreachable!("lowfreq_sh writes an image")
+    };
+    let texels = match (&light.peak, env) {
+        (Some(pk), Some(env)) => texels
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let d = crate::scene::environment::latlong_to_direction(latlong_centre(
+                    i, width, height,
+                ));
+                *t + pk.part(d, env.eval(d))
+            })
+            .collect(),
+        _ => texels,
+    };
+    Environment::Image {
+        width,
+        height,
+        texels,
+        scale: 1.0,
+    }
+}
+
+/// Texel `i`'s (u, v) in a `width × height` lat-long image, rows from pole to pole.
+fn latlong_centre(i: usize, width: usize, height: usize) -> Vec2 {
+    Vec2::new(
+        ((i % width) as f32 + 0.5) / width as f32,
+        (i / width) as f32 / (height - 1) as f32,
+    )
+}
+
+/// Lat-long image of an order-4 projection (negative lobes clamped to zero).
+pub fn lowfreq_sh(env_sh: &[ShF; 3], width: usize, height: usize) -> Environment {
     let mut texels = Vec::with_capacity(width * height);
     for j in 0..height {
         for i in 0..width {
-            let uv = Vec2::new(
-                (i as f32 + 0.5) / width as f32,
-                j as f32 / (height - 1) as f32,
-            );
-            let d = crate::scene::environment::latlong_to_direction(uv);
+            let d = crate::scene::environment::latlong_to_direction(latlong_centre(
+                j * width + i,
+                width,
+                height,
+            ));
             let y = sh::eval_f32(d);
             texels.push(Vec3::new(
                 sh::dot_f32(&env_sh[0], &y).max(0.0),
@@ -209,7 +250,11 @@ impl Fields {
     /// The combiner for one frame: each entity at `poses[i]` (rest when missing),
     /// its fields' coefficients rotated once (not per receiver), and per-mesh
     /// self-visibility rotated likewise.
-    pub fn combiner(&self, poses: &[Pose], env: [ShF; 3]) -> (Combiner, Vec<Option<Vec<ShF>>>) {
+    pub fn combiner(
+        &self,
+        poses: &[Pose],
+        env: peak::EnvironmentLight,
+    ) -> (Combiner, Vec<Option<Vec<ShF>>>) {
         let mut placed = Vec::with_capacity(self.entities.len());
         let mut mesh_self: Vec<Option<Vec<ShF>>> = Vec::new();
         for (i, (e, f)) in self.entities.iter().zip(&self.fields).enumerate() {
