@@ -588,11 +588,35 @@ fn vertex_lobes_where(t: &Transfer, camera: &Camera, needed: Option<&[bool]>) ->
             }
             let mut wo = frame.to_local((camera.from - v.position).normalize_or(frame.n));
             wo.z = wo.z.abs();
-            let g = glossy_slice(&t.ico, vt, wo);
-            let d = &vt.diffuse;
-            [d[0], d[1], d[2], d[3], g[0], g[1], g[2], g[3]]
+            render_lobes(&vt.diffuse, &glossy_slice(&t.ico, vt, wo), v.normal)
         })
         .collect()
+}
+
+/// Where the render lobes of a vertex carry the open cosine lobe (see
+/// [`render_lobes`]): Td's slot of a second direct lobe, which Td never fills.
+pub const OPEN_COSINE: usize = slice::DIRECT_SECOND;
+
+/// A vertex's eight render lobes: Td's (diffuse `d`), then Tg's at the view
+/// (`g`). Td's direct lobe is the moment-matched vMF of kd cos/π over what is
+/// open (Eq. 13–15), and a vMF is not a clamped cosine: open, it reads the
+/// environment's vMF convolution where the truth is the cosine's. Its empty
+/// second slot carries the vertex `normal` with the direct α, so that shading
+/// adds α (E_cos(n) − E_vmf(n)): exact where nothing occludes, zero where all is
+/// blocked (α = 0), the paper's "any PRT technique could be used" for diffuse.
+pub fn render_lobes(d: &Slice, g: &Slice, normal: Vec3) -> [Lobe; 8] {
+    let open = Lobe {
+        mu: normal,
+        kappa: diffuse_kappa(),
+        alpha: d[0].alpha,
+    };
+    [d[0], d[1], d[2], open, g[0], g[1], g[2], g[3]]
+}
+
+/// κ of the unoccluded diffuse lobe, the one [`slice`]'s direct lobe has where
+/// nothing blocks it (Eq. 13 at r = 2/3: 46/15).
+fn diffuse_kappa() -> f32 {
+    fit::diffuse_lobe().kappa as f32
 }
 
 /// Renders one view (Sec. 6.2): per pixel centre, the hit triangle's lobes blended
@@ -715,9 +739,19 @@ pub fn shade_components(
             Vec3::ZERO
         }
     };
+    // α (E_cos(n) − E_vmf(n)) at the blended normal, see [`render_lobes`].
+    let open = {
+        let (k, n) = (OPEN_COSINE, [a, b, c]);
+        if n.iter().all(|l| l[k].alpha == Vec3::ZERO) {
+            Vec3::ZERO
+        } else {
+            let l = slice::blend(&[(a[k], w[0]), (b[k], w[1]), (c[k], w[2])]);
+            l.alpha * (env.lookup_cosine(l.mu) - env.lookup(l.mu, l.kappa))
+        }
+    };
     let second = slice::DIRECT_SECOND;
     [
-        lobe(0) + lobe(second),
+        (lobe(0) + open).max(Vec3::ZERO),
         lobe(1),
         lobe(2),
         lobe(4) + lobe(4 + second),
