@@ -642,7 +642,10 @@ fn mean_resultant(kappa: f32) -> f32 {
         }
         let dg = 3.0 * r * r - 2.0 * k * r - 3.0;
         let next = r - g / dg;
-        r = if next > lo && next < hi {
+        if next == r {
+            break;
+        }
+        r = if next >= lo && next <= hi {
             next
         } else {
             0.5 * (lo + hi)
