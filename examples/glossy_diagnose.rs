@@ -210,7 +210,7 @@ fn main() {
                     paths,
                     seed + 17 + c as u32,
                 );
-                vlobes[c] = [d[0], d[1], d[2], d[3], g[0], g[1], g[2], g[3]];
+                vlobes[c] = glossy::render_lobes(&d, &g, vx.normal, t.kd[vx.material as usize]);
             }
             let vv = glossy::shade_components(&vlobes, &env, [0, 1, 2], wts).map(luminance);
             let rf = reference

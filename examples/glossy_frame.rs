@@ -1,7 +1,7 @@
 //! Times glossy-preview frames from a cached transfer and scores the image, for
 //! measuring a rendering change without the full `preview glossy` run:
 //!
-//! cargo run --release --example glossy_frame -- SCENE CACHE.bin EXR [FRAMES]
+//! cargo run --release --example glossy_frame -- SCENE CACHE.bin EXR [FRAMES [OUT.exr]]
 //!
 //! CACHE.bin: the transfer `gradtrace preview glossy` cached under its out dir
 //! (default settings; opened under its stored key, so a source change since does
@@ -10,7 +10,7 @@
 //! resolution, the CPU time of blending every vertex's slices (a frame blends only
 //! the vertices it sees, about half), and the RMSE of the 2 × 2-supersampled
 //! frame against the reference over its mean luminance (what `preview.json`
-//! reports as `rmse_over_mean`).
+//! reports as `rmse_over_mean`). OUT.exr: that frame and the reference, as the run's EXR.
 
 use gradtrace::accel::Accel;
 use gradtrace::math::luminance;
@@ -64,6 +64,13 @@ fn main() {
     let image = glossy::render_supersampled(&t, &env, &scene, &accel, camera, 2);
     let rmse = gradtrace::output::metrics::rmse(&image, &reference).unwrap() as f64;
     let mean = reference.iter().map(|c| luminance(*c) as f64).sum::<f64>() / reference.len() as f64;
+    if let Some(out) = args.get(5) {
+        let mut img =
+            gradtrace::output::OutputImage::new(camera.width as usize, camera.height as usize);
+        img.push_vec3("", ["R", "G", "B"], &image);
+        img.push_vec3("reference.", ["R", "G", "B"], &reference);
+        gradtrace::output::write_exr(Path::new(out), &img).expect("write OUT.exr");
+    }
     let finite = image.iter().all(|c| c.is_finite());
     println!(
         "rmse {rmse:.6e} = {:.4}% of the mean; all finite: {finite}",

@@ -8,8 +8,9 @@
 //! transfer, interpolated between vertices. At these cheap settings (8 paths a
 //! slice, angular level ≤ 1, 400 vertices added, the floor tessellated to an
 //! eighth of the scene) and 40 × 30 pixels, seeds 0–19 measured a median RMSE of
-//! 12.1 % of the mean, 1.6 % at best and 35.6 % at worst (seed 11, a flat-shaded
-//! model; not investigated); 330 s on 2 shared cores (load 6–9). The test asks for a median within 20 % and every
+//! 9.0 % of the mean, 1.6 % at best and 28.4 % at worst (seed 17; 12.1 % and 35.6 %
+//! before Td's direct light read the cosine-convolved sky); 274 s on 2 shared cores
+//! (load 4). The test asks for a median within 20 % and every
 //! scene within 50 %. Glossy floors are left out: a large glossy plane's
 //! highlight moves within faces the criterion does not split (132 % on one).
 

@@ -133,6 +133,18 @@ pub struct Transfer {
     pub frames: Vec<Frame>,
     pub ico: Icosphere,
     pub stats: PrecomputeStats,
+    /// Each material's diffuse albedo kd (black without a diffuse part): the
+    /// open direct lobe [`render_lobes`] rebuilds Td's blocked part from.
+    pub kd: Vec<Vec3>,
+}
+
+/// Every material's diffuse albedo as [`fit::MaterialFit`] reads it.
+fn diffuse_albedos(scene: &Scene) -> Vec<Vec3> {
+    scene
+        .materials
+        .iter()
+        .map(|m| m.preview_parts().map_or(Vec3::ZERO, |p| p.kd))
+        .collect()
 }
 
 /// Progress: (phase, done, total).
@@ -446,6 +458,7 @@ pub fn precompute(
             vertices_initial,
             ..Default::default()
         },
+        kd: diffuse_albedos(scene),
     };
     compute_new_vertices(&ctx, settings, &mut t, "initial vertices", progress);
     if settings.spatial {
@@ -588,11 +601,98 @@ fn vertex_lobes_where(t: &Transfer, camera: &Camera, needed: Option<&[bool]>) ->
             }
             let mut wo = frame.to_local((camera.from - v.position).normalize_or(frame.n));
             wo.z = wo.z.abs();
-            let g = glossy_slice(&t.ico, vt, wo);
-            let d = &vt.diffuse;
-            [d[0], d[1], d[2], d[3], g[0], g[1], g[2], g[3]]
+            let kd = t.kd.get(v.material as usize).copied().unwrap_or(Vec3::ZERO);
+            render_lobes(&vt.diffuse, &glossy_slice(&t.ico, vt, wo), v.normal, kd)
         })
         .collect()
+}
+
+/// Where the render lobes of a vertex carry the open cosine lobe (see
+/// [`render_lobes`]): Td's slot of a second direct lobe, which Td never fills.
+pub const OPEN_COSINE: usize = slice::DIRECT_SECOND;
+
+/// A vertex's eight render lobes: Td's (diffuse `d`), then Tg's at the view
+/// (`g`). Td's direct lobe is the moment-matched vMF of kd cos/π over what is
+/// open (Eq. 13–15), and a vMF is not a clamped cosine: open, it reads the
+/// environment's vMF convolution where the truth is the cosine's (issue 57's
+/// floor, 16 % dark). Td's empty second slot carries the open lobe instead —
+/// the vertex `normal` and `kd`, the moments the slice's control variate
+/// started from — so that shading can also read Td's direct part as
+/// kd E_cos(n) minus the blocked lobe ([`diffuse_direct`]).
+pub fn render_lobes(d: &Slice, g: &Slice, normal: Vec3, kd: Vec3) -> [Lobe; 8] {
+    let open = Lobe {
+        mu: normal,
+        kappa: diffuse_kappa(),
+        alpha: kd,
+    };
+    [d[0], d[1], d[2], open, g[0], g[1], g[2], g[3]]
+}
+
+/// r for κ by Eq. 13, κ = (3r − r³)/(1 − r²), increasing on [0, 1): safeguarded
+/// Newton steps on r³ − κr² − 3r + κ = 0.
+fn mean_resultant(kappa: f32) -> f32 {
+    let k = kappa.max(0.0) as f64;
+    let (mut lo, mut hi, mut r) = (0.0f64, 1.0f64, (k / (k + 2.0)).min(0.999));
+    for _ in 0..16 {
+        let g = r * r * r - k * r * r - 3.0 * r + k;
+        if g > 0.0 {
+            lo = r;
+        } else {
+            hi = r;
+        }
+        let dg = 3.0 * r * r - 2.0 * k * r - 3.0;
+        let next = r - g / dg;
+        if next == r {
+            break;
+        }
+        r = if next >= lo && next <= hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+    }
+    r as f32
+}
+
+/// Td's direct radiance from its blended stored lobe `s` and open lobe `open`
+/// (kd, normal n). Two readings, each exact at one end: the stored lobe as it is,
+/// α E_vmf(μ, κ), exact where all is blocked (α = 0); and kd E_cos(n) minus the
+/// blocked lobe (the open lobe's Eq. 13 moments minus the stored ones), exact
+/// where nothing is — and right in a shadow, where a vMF of what is open cannot
+/// hold the hole the occluder cuts around the sun. Weighted by the blocked
+/// fraction f, (1 − f) · open-minus-blocked + f · stored, each reading's error
+/// (of order its own lobe's weight) is O(f (1 − f)).
+fn diffuse_direct(s: &Lobe, open: &Lobe, env: &PrefilteredEnv) -> Vec3 {
+    let (kd, n) = (open.alpha, open.mu);
+    let w_open = luminance(kd);
+    let w_s = luminance(s.alpha);
+    let stored = if w_s > 0.0 {
+        s.alpha * env.lookup(s.mu, s.kappa)
+    } else {
+        Vec3::ZERO
+    };
+    if w_open <= 0.0 {
+        return stored;
+    }
+    let f = (1.0 - w_s / w_open).clamp(0.0, 1.0);
+    let mut unblocked = kd * env.lookup_cosine(n);
+    let w_b = w_open - w_s;
+    if w_b > 0.0 {
+        let resultant = n * (w_open * 2.0 / 3.0) - s.mu * (w_s * mean_resultant(s.kappa));
+        let r = (resultant.length() / w_b).min(1.0 - 1e-6);
+        let b = crate::math::vmf::Vmf::from_mean_resultant(
+            resultant.as_dvec3().normalize_or(n.as_dvec3()) * r as f64,
+        );
+        let rgb = (kd - s.alpha).max(Vec3::ZERO);
+        unblocked -= rgb * env.lookup(b.mu.as_vec3a(), b.kappa as f32);
+    }
+    ((1.0 - f) * unblocked + f * stored).max(Vec3::ZERO)
+}
+
+/// κ of the unoccluded diffuse lobe, the one [`slice`]'s direct lobe has where
+/// nothing blocks it (Eq. 13 at r = 2/3: 46/15).
+fn diffuse_kappa() -> f32 {
+    fit::diffuse_lobe().kappa as f32
 }
 
 /// Renders one view (Sec. 6.2): per pixel centre, the hit triangle's lobes blended
@@ -715,9 +815,15 @@ pub fn shade_components(
             Vec3::ZERO
         }
     };
+    let blended = |k: usize| slice::blend(&[(a[k], w[0]), (b[k], w[1]), (c[k], w[2])]);
+    let direct = if [a, b, c].iter().all(|l| l[OPEN_COSINE].alpha == Vec3::ZERO) {
+        lobe(0)
+    } else {
+        diffuse_direct(&blended(0), &blended(OPEN_COSINE), env)
+    };
     let second = slice::DIRECT_SECOND;
     [
-        lobe(0) + lobe(second),
+        direct,
         lobe(1),
         lobe(2),
         lobe(4) + lobe(4 + second),
@@ -790,6 +896,22 @@ impl Transfer {
             frames,
             ico,
             stats,
+            kd: diffuse_albedos(scene),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_resultant_inverts_eq_13() {
+        for k in 0..=200 {
+            let r = k as f64 / 201.0;
+            let kappa = crate::math::vmf::Vmf::from_mean_resultant(glam::DVec3::Z * r).kappa;
+            let got = mean_resultant(kappa as f32) as f64;
+            assert!((got - r).abs() < 1e-5, "κ {kappa}: r {got} vs {r}");
+        }
     }
 }
