@@ -109,7 +109,7 @@ impl Frame {
 pub fn atan2_approx(y: f32, x: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = if ax < ay { (ax, ay) } else { (ay, ax) };
-    if !(hi > 0.0) {
+    if hi.is_nan() || hi <= 0.0 {
         return 0.0;
     }
     let a = lo / hi;

@@ -97,7 +97,7 @@ pub fn polygon_projection<const N: usize>(corners: [Vec3; N]) -> ShF {
         let (a, b) = (v[i], v[(i + 1) % N]);
         let m = crate::math::cross(a, b);
         let (s, c) = (m.length(), a.dot(b));
-        if !(s > 1e-12) {
+        if s.is_nan() || s <= 1e-12 {
             continue; // a degenerate edge bounds nothing
         }
         let m = m / s;

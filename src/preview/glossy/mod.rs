@@ -618,7 +618,7 @@ pub const OPEN_COSINE: usize = slice::DIRECT_SECOND;
 /// floor, 16 % dark). Td's empty second slot carries the open lobe instead —
 /// the vertex `normal` and `kd`, the moments the slice's control variate
 /// started from — so that shading can also read Td's direct part as
-/// kd E_cos(n) minus the blocked lobe ([`diffuse_direct`]).
+/// kd E_cos(n) minus the blocked lobe (`diffuse_direct`).
 pub fn render_lobes(d: &Slice, g: &Slice, normal: Vec3, kd: Vec3) -> [Lobe; 8] {
     let open = Lobe {
         mu: normal,

@@ -78,7 +78,7 @@ pub struct Combiner {
     pub environment: EnvironmentLight,
 }
 
-/// A cone of light directions with what each carries ([`Combiner::cap_light`]).
+/// A cone of light directions with what each carries (`Combiner::cap_light`).
 pub struct Cap<'a> {
     pub axis: Vec3,
     pub cos_max: f32,

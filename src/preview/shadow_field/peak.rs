@@ -170,7 +170,7 @@ impl EnvironmentLight {
             .zip(&part)
             .map(|((_, w), p)| w * f64::from(luminance(*p)))
             .sum();
-        if axis == Vec3::ZERO || !(taken > PEAK_MIN_SHARE * total) {
+        if axis == Vec3::ZERO || taken.is_nan() || taken <= PEAK_MIN_SHARE * total {
             return whole();
         }
         let residual: Vec<Vec3> = values.iter().zip(&part).map(|(v, p)| *v - *p).collect();
