@@ -485,11 +485,9 @@ fn vertices_are_shaded_like_pixels() {
     };
     let fields = sf::precompute(&scene, &settings, &|_, _| {});
     let accel = gradtrace::accel::Accel::build(&scene.meshes, &scene.spheres);
-    let (combiner, mesh_self) = fields.combiner(
-        &[],
-        sf::peak::EnvironmentLight::new(scene.environment.as_ref()),
-    );
-    let receivers = Receivers::new(&scene, &accel, &fields, &mesh_self);
+    let shading = sf::Shading::new(&scene);
+    let (combiner, mesh_self) = fields.combiner(&[], shading.env.clone());
+    let receivers = Receivers::new(&scene, &accel, &fields, &mesh_self, &shading.glossy);
     let bunny = scene
         .meshes
         .iter()

@@ -143,7 +143,8 @@ fn preview_run(
 }
 
 /// The shadow-field preview: fields from the cache (or precomputed and stored),
-/// the environment's SH projection counted with them, one shaded frame.
+/// the environment's split and the glossy tables ([`sf::Shading`]) counted with
+/// them, one shaded frame.
 fn shadow_field(plan: &Plan) -> Result<Run> {
     let scene = at_size(plan.scene, plan.size)?;
     let opts = ShadowFieldOptions {
@@ -154,16 +155,16 @@ fn shadow_field(plan: &Plan) -> Result<Run> {
     };
     let (fields, precompute_s, cached) = sf_cmd::cached_fields(&scene, &opts)?;
     let start = Instant::now();
-    let env = sf::peak::EnvironmentLight::new(scene.environment.as_ref());
-    let env_s = start.elapsed().as_secs_f64();
+    let shading = sf::Shading::new(&scene);
+    let shading_s = start.elapsed().as_secs_f64();
     let clock = Clock::start();
-    let frame = sf_cmd::shade_frame(&scene, plan.accel, &fields, &[], &env, &opts.settings);
+    let frame = sf_cmd::shade_frame(&scene, plan.accel, &fields, &[], &shading, &opts.settings);
     let cost = clock.cost();
     Ok(preview_run(
         Method::ShadowField,
         frame.shaded.rgb,
         cost,
-        precompute_s + env_s,
+        precompute_s + shading_s,
         cached,
     ))
 }

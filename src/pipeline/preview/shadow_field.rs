@@ -175,12 +175,13 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
         }
     };
     let (fields, precompute_s, cached) = cached_fields(&scene, opts)?;
-    let env = sf::peak::EnvironmentLight::new(scene.environment.as_ref());
+    // Set up once per run, as the BVH is: in neither the precompute nor a frame.
+    let shading = sf::Shading::new(&scene);
     match frames {
         None => {
             let accel = Accel::build(&scene.meshes, &scene.spheres);
-            let frame = shade_frame(&scene, &accel, &fields, &[], &env, &opts.settings);
-            let refs = references(&scene, &accel, &env, &frame.shaded, opts)?;
+            let frame = shade_frame(&scene, &accel, &fields, &[], &shading, &opts.settings);
+            let refs = references(&scene, &accel, &shading.env, &frame.shaded, opts)?;
             let stem = opts.out_dir.join(&name);
             let mut set = PreviewSet::default();
             add_images(&mut set, &stem, &frame.shaded, &refs.reference.beauty);
@@ -190,7 +191,7 @@ pub fn run(opts: &ShadowFieldOptions) -> Result<ShadowFieldSummary> {
             write_set(set, &opts.out_dir.join("preview.json"), &summary, &header)?;
             Ok(summary)
         }
-        Some(n) => run_frames(&scene, opts, &fields, &env, n, (precompute_s, cached)),
+        Some(n) => run_frames(&scene, opts, &fields, &shading, n, (precompute_s, cached)),
     }
 }
 
@@ -209,12 +210,12 @@ pub(crate) fn shade_frame(
     accel: &Accel,
     fields: &Fields,
     poses: &[Pose],
-    env: &sf::peak::EnvironmentLight,
+    shading: &sf::Shading,
     settings: &Settings,
 ) -> Frame {
     let (start, cpu) = (Instant::now(), crate::cpu_time::process_s());
-    let (combiner, mesh_self) = fields.combiner(poses, env.clone());
-    let receivers = Receivers::new(scene, accel, fields, &mesh_self);
+    let (combiner, mesh_self) = fields.combiner(poses, shading.env.clone());
+    let receivers = Receivers::new(scene, accel, fields, &mesh_self, &shading.glossy);
     let shaded = sf::shade_image(&receivers, &combiner, settings.pixel_samples);
     Frame {
         shaded,
@@ -441,7 +442,7 @@ fn run_frames(
     scene: &Scene,
     opts: &ShadowFieldOptions,
     fields: &Fields,
-    env: &sf::peak::EnvironmentLight,
+    shading: &sf::Shading,
     n: u32,
     (precompute_s, cached): (f64, bool),
 ) -> Result<ShadowFieldSummary> {
@@ -508,7 +509,7 @@ fn run_frames(
                 visibility: None,
             };
         }
-        let frame = shade_frame(&posed, &accel, &frame_fields, &poses, env, settings);
+        let frame = shade_frame(&posed, &accel, &frame_fields, &poses, shading, settings);
         let stem = opts.out_dir.join(format!("{}-f{f:03}", scene.name()));
         if let Some((_, refs, _)) = &first {
             // The later frames' references at the spp the first one settled on.
@@ -517,7 +518,7 @@ fn run_frames(
             add_images(&mut set, &stem, &frame.shaded, &reference.beauty);
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &reference.beauty)? as f64);
         } else {
-            let refs = references(&posed, &accel, env, &frame.shaded, opts)?;
+            let refs = references(&posed, &accel, &shading.env, &frame.shaded, opts)?;
             add_images(&mut set, &stem, &frame.shaded, &refs.reference.beauty);
             worst = worst.max(metrics::rmse(&frame.shaded.rgb, &refs.reference.beauty)? as f64);
             first = Some((frame, refs, stem));

@@ -352,7 +352,29 @@ pub struct Receivers<'a> {
     /// Per scene mesh: visibility SH at each vertex (self-shadowing), if any.
     pub mesh_self: &'a [Option<Vec<ShF>>],
     /// Per scene material: its glossy lobe's transfer table, if it has one.
+    pub glossy: &'a [Option<glossy::GlossyLobe>],
+}
+
+/// What every frame shades with and no pose changes, built once per run: the
+/// environment (its SH and its sun) and each material's glossy transfer table
+/// (milliseconds per glossy material: precomputation, not frame time).
+#[derive(Clone, Debug)]
+pub struct Shading {
+    pub env: peak::EnvironmentLight,
     pub glossy: Vec<Option<glossy::GlossyLobe>>,
+}
+
+impl Shading {
+    pub fn new(scene: &Scene) -> Self {
+        Self {
+            env: peak::EnvironmentLight::new(scene.environment.as_ref()),
+            glossy: scene
+                .materials
+                .iter()
+                .map(glossy::GlossyLobe::new)
+                .collect(),
+        }
+    }
 }
 
 impl<'a> Receivers<'a> {
@@ -361,6 +383,7 @@ impl<'a> Receivers<'a> {
         accel: &'a Accel,
         fields: &Fields,
         mesh_self: &'a [Option<Vec<ShF>>],
+        glossy: &'a [Option<glossy::GlossyLobe>],
     ) -> Self {
         let max_id = fields
             .entities
@@ -377,11 +400,7 @@ impl<'a> Receivers<'a> {
             accel,
             entity_of_object,
             mesh_self,
-            glossy: scene
-                .materials
-                .iter()
-                .map(glossy::GlossyLobe::new)
-                .collect(),
+            glossy,
         }
     }
 
