@@ -165,18 +165,29 @@ pub fn environment_sh(env: Option<&Environment>) -> [ShF; 3] {
         let one = sh::one();
         return std::array::from_fn(|c| one.map(|x| (x * f64::from(radiance[c])) as f32));
     }
+    let (rule, values) = environment_samples(env);
+    project_rgb(&rule, &values)
+}
+
+/// The environment's radiance on the projection's quadrature rule.
+pub(crate) fn environment_samples(env: &Environment) -> (Vec<(glam::DVec3, f64)>, Vec<Vec3>) {
     let rule = sh::sphere_quadrature(96, 192);
-    let values: Vec<Vec3> = rule.iter().map(|(d, _)| env.eval(d.as_vec3a())).collect();
-    std::array::from_fn(|c| {
-        let mut out = [0.0f64; COEFFS];
-        for ((d, w), v) in rule.iter().zip(&values) {
-            let y = sh::eval(*d);
+    let values = rule.iter().map(|(d, _)| env.eval(d.as_vec3a())).collect();
+    (rule, values)
+}
+
+/// The order-4 RGB projection of radiance `values` sampled on `rule`.
+pub(crate) fn project_rgb(rule: &[(glam::DVec3, f64)], values: &[Vec3]) -> [ShF; 3] {
+    let mut out = [[0.0f64; COEFFS]; 3];
+    for ((d, w), v) in rule.iter().zip(values) {
+        let y = sh::eval(*d);
+        for c in 0..3 {
             for k in 0..COEFFS {
-                out[k] += w * f64::from(v[c]) * y[k];
+                out[c][k] += w * f64::from(v[c]) * y[k];
             }
         }
-        out.map(|x| x as f32)
-    })
+    }
+    out.map(|c| c.map(|x| x as f32))
 }
 
 /// Lat-long image of the lighting the method can represent, for the
@@ -188,54 +199,41 @@ pub fn environment_lowfreq(
     width: usize,
     height: usize,
 ) -> Environment {
-    let Environment::Image { texels, .. } = lowfreq_sh(&light.sh, width, height) else {
-        unreachable!("lowfreq_sh writes an image")
-    };
-    let texels = match (&light.peak, env) {
-        (Some(pk), Some(env)) => texels
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let d = crate::scene::environment::latlong_to_direction(latlong_centre(
-                    i, width, height,
-                ));
-                *t + pk.part(d, env.eval(d))
-            })
-            .collect(),
-        _ => texels,
-    };
-    Environment::Image {
-        width,
-        height,
-        texels,
-        scale: 1.0,
-    }
-}
-
-/// Texel `i`'s (u, v) in a `width × height` lat-long image, rows from pole to pole.
-fn latlong_centre(i: usize, width: usize, height: usize) -> Vec2 {
-    Vec2::new(
-        ((i % width) as f32 + 0.5) / width as f32,
-        (i / width) as f32 / (height - 1) as f32,
-    )
+    let peak = light.peak.as_ref().zip(env);
+    lowfreq_image(width, height, |d| {
+        let low = sh_radiance(&light.sh, d);
+        peak.map_or(low, |(pk, env)| low + pk.part(d, env.eval(d)))
+    })
 }
 
 /// Lat-long image of an order-4 projection (negative lobes clamped to zero).
 pub fn lowfreq_sh(env_sh: &[ShF; 3], width: usize, height: usize) -> Environment {
+    lowfreq_image(width, height, |d| sh_radiance(env_sh, d))
+}
+
+/// RGB radiance of an order-4 projection in direction `d`, negative lobes clamped.
+fn sh_radiance(env_sh: &[ShF; 3], d: Vec3) -> Vec3 {
+    let y = sh::eval_f32(d);
+    Vec3::new(
+        sh::dot_f32(&env_sh[0], &y).max(0.0),
+        sh::dot_f32(&env_sh[1], &y).max(0.0),
+        sh::dot_f32(&env_sh[2], &y).max(0.0),
+    )
+}
+
+/// A `width × height` lat-long image of `radiance` at its texels' directions
+/// (rows from pole to pole).
+fn lowfreq_image(width: usize, height: usize, radiance: impl Fn(Vec3) -> Vec3) -> Environment {
     let mut texels = Vec::with_capacity(width * height);
     for j in 0..height {
         for i in 0..width {
-            let d = crate::scene::environment::latlong_to_direction(latlong_centre(
-                j * width + i,
-                width,
-                height,
-            ));
-            let y = sh::eval_f32(d);
-            texels.push(Vec3::new(
-                sh::dot_f32(&env_sh[0], &y).max(0.0),
-                sh::dot_f32(&env_sh[1], &y).max(0.0),
-                sh::dot_f32(&env_sh[2], &y).max(0.0),
-            ));
+            let uv = Vec2::new(
+                (i as f32 + 0.5) / width as f32,
+                j as f32 / (height - 1) as f32,
+            );
+            texels.push(radiance(crate::scene::environment::latlong_to_direction(
+                uv,
+            )));
         }
     }
     Environment::Image {

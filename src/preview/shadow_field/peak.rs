@@ -9,7 +9,7 @@
 //! only decide where the per-direction work is spent.
 
 use super::combine::{cap_directions, LIGHT_DIRS};
-use crate::math::sh::{self, ShF, COEFFS};
+use crate::math::sh::{ShF, COEFFS};
 use crate::math::{luminance, Frame, Vec3};
 use crate::scene::Environment;
 
@@ -83,15 +83,17 @@ impl EnvironmentLight {
         let Some(env) = env else {
             return Self::none();
         };
+        if matches!(env, Environment::Constant { .. }) {
+            return Self {
+                sh: super::environment_sh(Some(env)),
+                peak: None,
+            };
+        }
+        let (rule, values) = super::environment_samples(env);
         let whole = || Self {
-            sh: super::environment_sh(Some(env)),
+            sh: super::project_rgb(&rule, &values),
             peak: None,
         };
-        if matches!(env, Environment::Constant { .. }) {
-            return whole();
-        }
-        let rule = sh::sphere_quadrature(96, 192);
-        let values: Vec<Vec3> = rule.iter().map(|(d, _)| env.eval(d.as_vec3a())).collect();
         let lum: Vec<f32> = values.iter().map(|v| luminance(*v)).collect();
         // T: the luminance above which lie the brightest directions holding
         // PEAK_SOLID_ANGLE_SHARE of the sphere.
@@ -174,19 +176,10 @@ impl EnvironmentLight {
             return whole();
         }
         let residual: Vec<Vec3> = values.iter().zip(&part).map(|(v, p)| *v - *p).collect();
-        let project = |f: &dyn Fn(usize) -> f32| -> ShF {
-            let mut out = [0.0f64; COEFFS];
-            for (i, (d, w)) in rule.iter().enumerate() {
-                let y = sh::eval(*d);
-                let x = f64::from(f(i));
-                for k in 0..COEFFS {
-                    out[k] += w * x * y[k];
-                }
-            }
-            out.map(|x| x as f32)
-        };
-        let sh = [0, 1, 2].map(|c| project(&|i| residual[i][c]));
-        peak.sh = project(&|i| luminance(part[i]));
+        let sh = super::project_rgb(&rule, &residual);
+        // Luminance is linear: its projection is the channels' combined.
+        let [r, g, b] = super::project_rgb(&rule, &part);
+        peak.sh = std::array::from_fn(|k| luminance(Vec3::new(r[k], g[k], b[k])));
         // The cap's directions, each with its excess; scaled to the excess's
         // integral by the quadrature (a sun narrower than the directions' spacing
         // is then a uniform disc of the cap, not lost).
